@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package far needs to build, test and run. Idempotent: packages already
+# present are left alone, and apt is asked only for what is missing.
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git clang-format
+  # geometry and math
+  libeigen3-dev libgmp-dev libfcl-dev
+  # headless GL: EGL + GL headers and Mesa's software rasterizer (llvmpipe). Nothing pulls
+  # libgl1-mesa-dri in otherwise, and without it EGL finds no driver at all.
+  libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev
+  # protocol and IPC
+  liblcm-dev liblcm-bin libboost-dev libsodium-dev
+  # files, command lines, logs
+  nlohmann-json3-dev libcli11-dev libspdlog-dev
+  # tests, benchmarks, plots
+  libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
+  # private network namespaces for the LCM (udpm) tests
+  iproute2 util-linux
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo"
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,28 @@
+#pragma once
+
+#include <Eigen/Core>
+
+namespace far {
+
+/// A triangle given by its three corners (world frame unless said otherwise).
+struct TrianglePoints {
+  Eigen::Vector3d a, b, c;
+};
+
+/// Returns true iff the closed triangles `s` and `t` share at least one point (touching counts).
+/// Exact for the double input: every decision is an orientation predicate evaluated with a
+/// floating-point filter and an exact fallback, so coplanar pairs, shared vertices and edges,
+/// vertex-on-face and degenerate triangles (treated as the segment or point they are) are
+/// answered exactly. @pre all coordinates finite. Thread-safe (pure function).
+bool TrianglesIntersect(const TrianglePoints& s, const TrianglePoints& t);
+
+/// Returns the Euclidean distance between the closed triangles `s` and `t` (0 if they
+/// intersect), computed in double. Stable for near-parallel and degenerate triangles.
+/// @pre all coordinates finite. Thread-safe.
+double TriangleDistance(const TrianglePoints& s, const TrianglePoints& t);
+
+/// Returns true iff distance(s, t) <= max_distance, up to the error bound documented in
+/// triangle_distance.cc (intersecting triangles are always within). @pre max_distance >= 0.
+bool TrianglesWithinDistance(const TrianglePoints& s, const TrianglePoints& t, double max_distance);
+
+}  // namespace far

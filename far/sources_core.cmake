@@ -1,0 +1,1 @@
+target_sources(far_core PRIVATE src/error.cc)

@@ -1,0 +1,1 @@
+# far_add_test(<name> <label> <sources...>) for this area.
