@@ -1,1 +1,1 @@
-# Sources of this area are added here with target_sources(far_core PRIVATE ...).
+# far_add_area(offsets <sources...>) and this area's dependencies.

@@ -1,1 +1,2 @@
-# far_add_test(<name> <label> <sources...>) for this area.
+far_add_test(far_base_test unit far/thread_pool_test.cc)
+target_link_libraries(far_base_test PRIVATE far::base)

@@ -1,1 +1,0 @@
-target_sources(far_core PRIVATE src/error.cc)
