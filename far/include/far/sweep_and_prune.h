@@ -2,6 +2,8 @@
 
 #include <cstdint>
 #include <span>
+#include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -30,13 +32,27 @@ class SweepAndPrune {
   size_t last_swaps() const { return last_swaps_; }
 
  private:
+  // One endpoint of one object's grown interval on one axis.
   struct Endpoint {
     double value;
     uint32_t slot;
     bool is_max;
   };
-  std::vector<Endpoint> axes_[3];
-  std::vector<uint32_t> slot_ids_;
+  // A tracked object: its id, its grown box and when it was last seen.
+  struct Slot {
+    uint32_t id = 0;
+    bool live = false;
+    bool empty = false;  // empty or non-finite input box: pairs with nothing
+    uint64_t stamp = 0;  // the Update that last saw it
+    double lo[3] = {0, 0, 0};
+    double hi[3] = {0, 0, 0};
+  };
+  std::vector<Endpoint> axes_[3];  // sorted by (value, min before max)
+  std::vector<Slot> slots_;
+  std::vector<uint32_t> free_slots_;
+  std::unordered_map<uint32_t, uint32_t> id_slots_;  // id -> slot
+  std::unordered_set<uint64_t> overlaps_;  // slot pairs (low << 32 | high) overlapping on all axes
+  uint64_t stamp_ = 0;
   size_t last_swaps_ = 0;
 };
 

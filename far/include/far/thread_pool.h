@@ -19,7 +19,8 @@ class ThreadPool {
   ThreadPool(const ThreadPool&) = delete;
   ThreadPool& operator=(const ThreadPool&) = delete;
 
-  int num_threads() const { return static_cast<int>(workers_.size()); }
+  /// Threads that run a ParallelFor: the workers plus the calling thread.
+  int num_threads() const { return static_cast<int>(workers_.size()) + 1; }
 
   /// Runs body(begin, end) over [0, count) split into chunks of at most `grain` indices, on the
   /// workers and the calling thread; returns when all chunks are done. `body` must not throw.
