@@ -22,6 +22,10 @@ struct PipelineOptions {
   GlPlatform platform = GlPlatform::kAuto;
   int num_threads = 0;  ///< CPU pool for exact tests (0: hardware concurrency)
   bool use_gl = true;   ///< false: only the CPU methods (aabb, fcl, exact) are available
+  /// Use the GL context already current on this thread (owned by the caller, who keeps it
+  /// current and alive while the pipeline lives) instead of making one: how a daemon serves
+  /// many scenes from one context.
+  bool use_current_context = false;
 };
 
 /// Time and work of one stage of a step.
@@ -69,8 +73,9 @@ struct SceneCounters {
 /// must come from that thread (see GlContext).
 class Pipeline {
  public:
-  /// Makes the GL context (when use_gl), the renderer and the pool. Errors: kUnavailable when
-  /// no GL context can be made (the message lists what was tried).
+  /// Makes the GL context (when use_gl and not use_current_context) and the pool; renderers
+  /// are made on first use. Errors: kUnavailable when no GL context can be made (the message
+  /// lists what was tried).
   static Result<std::unique_ptr<Pipeline>> Create(const PipelineOptions& options = {});
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
 #include "gl_program.h"
@@ -180,6 +181,12 @@ std::array<float, 3> ToFloat(const Eigen::Vector3d& v) {
 }
 
 }  // namespace
+
+std::string CurrentGlRenderer() {
+  if (epoxy_egl_version(eglGetCurrentDisplay()) == 0 || eglGetCurrentContext() == EGL_NO_CONTEXT) return "";
+  const auto* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  return name != nullptr ? name : "";
+}
 
 int InstancesPerTriangle(PieceSet set) { return set == PieceSet::kEdgeBoxes ? 3 : 1; }
 
@@ -432,6 +439,11 @@ Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
 
   glViewport(0, 0, raster_.width, raster_.height);
   glEnable(GL_DEPTH_TEST);
+  // The projection bounds contain every offset grown by r, but each object's float rounding
+  // margin (FloatRoundingBound) can reach a hair beyond them. Clamping depth instead of
+  // clipping keeps a front fragment in front of, and a back fragment behind, every point of
+  // the primitive, which is all Theorem 1 needs; both mechanisms clamp alike.
+  glEnable(GL_DEPTH_CLAMP);
   glDisable(GL_BLEND);
   // Orthographic views along the axes are rotations of the world frame (cyclic permutations)
   // followed by a depth axis pointing away from the viewer, which mirrors the image: faces

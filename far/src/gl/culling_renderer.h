@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -33,6 +34,9 @@ struct PieceInstance {
   uint32_t slot = 0;      ///< the object's slot in the renderer
 };
 static_assert(sizeof(PieceInstance) == 56);
+
+/// GL_RENDERER of the context current on this thread, or "" when none is current.
+std::string CurrentGlRenderer();
 
 /// Instances per triangle of each set.
 int InstancesPerTriangle(PieceSet set);

@@ -94,7 +94,9 @@ struct ObjectState {
 
 struct Pipeline::Impl {
   PipelineOptions options;
-  std::unique_ptr<GlContext> gl;
+  std::unique_ptr<GlContext> gl;  // owned context, unless the caller's current one is used
+  bool has_gl = false;
+  std::string renderer_name = "none";
   ThreadPool pool;
   std::map<uint32_t, ObjectState> objects;  // by id: deterministic order
   std::vector<uint32_t> free_slots;
@@ -147,7 +149,7 @@ struct Pipeline::Impl {
   }
 
   Result<RendererEntry*> RendererFor(const StepRequest& request) {
-    if (!gl) return MakeError(ErrorCode::kUnavailable, "method '" + std::string(ToString(request.method)) +
+    if (!has_gl) return MakeError(ErrorCode::kUnavailable, "method '" + std::string(ToString(request.method)) +
                                                            "' needs the GPU, and this pipeline has no GL context");
     const RasterFormat raster{request.resolution, request.resolution, request.depth_format};
     auto key = std::make_tuple(raster.width, raster.height, static_cast<int>(raster.depth));
@@ -464,11 +466,18 @@ Pipeline::~Pipeline() = default;
 
 Result<std::unique_ptr<Pipeline>> Pipeline::Create(const PipelineOptions& options) {
   auto impl = std::make_unique<Impl>(options);
-  if (options.use_gl) {
+  if (options.use_gl && !options.use_current_context) {
     auto gl = GlContext::Create(options.platform);
     if (!gl.ok()) return gl.error();
     impl->gl = std::move(*gl);
+    impl->renderer_name = impl->gl->renderer();
+  } else if (options.use_gl) {
+    impl->renderer_name = internal::CurrentGlRenderer();
+    if (impl->renderer_name.empty()) {
+      return MakeError(ErrorCode::kUnavailable, "use_current_context: no GL context is current on this thread");
+    }
   }
+  impl->has_gl = options.use_gl;
   return std::unique_ptr<Pipeline>(new Pipeline(std::move(impl)));
 }
 
@@ -563,6 +572,6 @@ Result<void> Pipeline::LoadScene(const Scene& scene) {
 Result<StepResult> Pipeline::Step(const StepRequest& request) { return impl_->Step(request); }
 int Pipeline::num_objects() const { return static_cast<int>(impl_->objects.size()); }
 const SceneCounters& Pipeline::counters() const { return impl_->counters; }
-std::string Pipeline::gl_renderer() const { return impl_->gl ? impl_->gl->renderer() : "none"; }
+std::string Pipeline::gl_renderer() const { return impl_->renderer_name; }
 
 }  // namespace far
