@@ -5,4 +5,4 @@ target_link_libraries(far_test_scenes PUBLIC far::pairs far::io PRIVATE far_warn
 
 # GPU tests: headless GL (llvmpipe in CI). Label gpu.
 far_add_test(far_gl_test gpu far/gl/gl_context_test.cc far/gl/pipeline_culling_test.cc)
-target_link_libraries(far_gl_test PRIVATE far::gl far_test_scenes)
+target_link_libraries(far_gl_test PRIVATE far::gl far_test_scenes far_hard_cases)

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "far/pipeline.h"
+#include "hard_cases.h"
 #include "test_scenes.h"
 
 namespace far {
@@ -186,6 +187,38 @@ TEST_F(PipelineCullingTest, HardCasesFarFromOriginAndTinyFeatures) {
       }
     }
   }
+}
+
+TEST_F(PipelineCullingTest, ReliableMethodsGetEveryHardCaseRight) {
+  // The exact-geometry hard-case suite (coplanar, touching, slivers, collinear, points,
+  // coordinates at 1e5/1e6, 1e-9 separations), each pair as two one-triangle objects.
+  const auto cases = reference::MakeHardCases();
+  ASSERT_GT(cases.size(), 100u);
+  int checked = 0;
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const auto& hard = cases[i];
+    std::vector<SceneObject> objects(2);
+    objects[0].id = 1;
+    objects[0].mesh.p_MV = {hard.s.a, hard.s.b, hard.s.c};
+    objects[1].id = 2;
+    objects[1].mesh.p_MV = {hard.t.a, hard.t.b, hard.t.c};
+    for (auto& object : objects) object.mesh.triangles = {{0, 1, 2}};
+    Load(objects);
+    StepRequest request;
+    request.resolution = kResolutions[i % 7];
+    request.depth_format = kDepths[i % 3];
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+      request.method = method;
+      const StepResult result = Run(request);
+      const bool found = !result.contacts.empty();
+      ASSERT_EQ(found, hard.intersect) << hard.name << " " << ToString(method) << " res " << request.resolution;
+      if (hard.intersect) {
+        EXPECT_EQ(result.pcs_objects, (std::vector<uint32_t>{1, 2})) << hard.name;
+      }
+      ++checked;
+    }
+  }
+  std::printf("%d hard-case runs, all right\n", checked);
 }
 
 TEST_F(PipelineCullingTest, OneHugeObjectWithManyTinyOnes) {

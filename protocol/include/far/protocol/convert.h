@@ -1,0 +1,57 @@
+#pragma once
+
+// Building far_lcm messages from far's types and back: step requests (client), step replies
+// and error messages (daemon), and the checked conversion of a step reply (client).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "far/pipeline.h"
+#include "far/protocol/message.h"
+#include "far/result.h"
+#include "far/step_request.h"
+
+namespace far::protocol {
+
+/// Status codes on the wire: 0 is ok, far::ErrorCode values are 1 + their enumerator index
+/// (1 invalid_argument, 2 parse_error, 3 io_error, 4 not_found, 5 limit_exceeded,
+/// 6 unavailable, 7 busy, 8 permission_denied, 9 timeout, 10 version_mismatch, 11 internal).
+inline constexpr int32_t kWireOk = 0;
+int32_t ToWireStatus(ErrorCode code);
+/// Returns the ErrorCode of a non-zero wire status; unknown values map to kInternal.
+ErrorCode FromWireStatus(int32_t status);
+
+/// Builds a step request (auth zero: sign it with EncodeSigned).
+far_lcm::step_request_t MakeStepRequest(int64_t session_id, int64_t request_id, int64_t step_id,
+                                        uint64_t ring_commit_sequence, const StepRequest& request);
+
+/// The identifiers a step reply echoes.
+struct StepReplyIds {
+  int64_t session_id = 0;
+  int64_t request_id = 0;
+  int64_t step_id = 0;
+  uint64_t ring_applied_sequence = 0;  ///< last update ring record applied
+};
+
+/// Builds the full reply of a successful step (auth zero). Object ids and triangle indices
+/// must be <= INT32_MAX (the update ring guarantees it). Errors: kLimitExceeded when a count
+/// exceeds INT32_MAX or the encoding would exceed kMaxStepReplyBytes; kInternal when an id is
+/// over INT32_MAX.
+Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output output,
+                                            const StepResult& result);
+
+/// Builds the reply of a failed step: status and message from `error`, every array empty.
+far_lcm::step_reply_t MakeStepErrorReply(const StepReplyIds& ids, const Error& error);
+
+/// Builds an error_t (auth zero).
+far_lcm::error_t MakeErrorMessage(int64_t session_id, int64_t request_id, const Error& error,
+                                  bool session_closed);
+
+/// Client side: turns a (full, not a stub) step reply into a StepResult. When status != 0,
+/// returns the Error it carries (code from FromWireStatus, the daemon's message). Errors:
+/// kParseError for inconsistent arrays (negative ids, counts that do not add up), naming the
+/// field; kInvalidArgument when called with a stub (reply_in_shm).
+Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply);
+
+}  // namespace far::protocol

@@ -1,0 +1,57 @@
+#pragma once
+
+// Meaning checks of decoded client messages (after DecodeMessage and, for session messages,
+// VerifyEncoded). Every error names the field and the bad value, e.g.
+// "step_request_t.resolution: 5 is outside [8, 8192]". Nothing here trusts the client: the
+// results are the only form in which client values reach the rest of the daemon.
+
+#include <cstdint>
+#include <string>
+
+#include "far/protocol/message.h"
+#include "far/result.h"
+#include "far/step_request.h"
+
+namespace far::protocol {
+
+/// Ranges of client values (the same as far::Pipeline checks, so a request that passes here
+/// is not rejected there for its shape).
+inline constexpr int kMinResolution = 8;
+inline constexpr int kMaxResolution = 8192;
+inline constexpr int kMaxSubobjectSize = 1 << 20;
+inline constexpr double kMaxDistance = 1e12;
+inline constexpr size_t kMaxClientNameLength = 64;
+
+/// A checked open_session_t.
+struct OpenSessionParams {
+  int64_t request_id = 0;
+  std::string client_name;         ///< 1..64 printable ASCII characters
+  std::string reply_channel;       ///< IsValidOpenReplyChannel
+  uint64_t update_ring_bytes = 0;  ///< 0 (daemon default) or a valid ring capacity
+  uint64_t reply_ring_bytes = 0;   ///< 0 (daemon default) or a valid ring capacity
+};
+
+/// Checks an open_session_t. Errors: kInvalidArgument naming the field.
+Result<OpenSessionParams> ValidateOpenSession(const far_lcm::open_session_t& message);
+
+/// A checked step_request_t, converted to far's types.
+struct StepCommand {
+  int64_t session_id = 0;
+  int64_t request_id = 0;
+  int64_t step_id = 0;
+  uint64_t ring_commit_sequence = 0;  ///< drain the update ring up to this record sequence
+  StepRequest request;
+};
+
+/// Checks a step_request_t: session_id > 0, request_id, step_id, ring_commit_sequence >= 0,
+/// known method/mechanism/output/depth_format names (the message lists the known names),
+/// resolution in [8, 8192], subobject_size in [1, 2^20], has_distance with a finite distance
+/// in [0, 1e12] (and distance 0 without), output "distance" only with a distance, method
+/// "fcl" only without. Errors: kInvalidArgument naming the field.
+Result<StepCommand> ValidateStepRequest(const far_lcm::step_request_t& message);
+
+/// Checks the common part of a session message: session_id > 0 and request_id >= 0.
+/// Errors: kInvalidArgument naming the field.
+Result<void> ValidateSessionIds(MessageType type, int64_t session_id, int64_t request_id);
+
+}  // namespace far::protocol

@@ -1,0 +1,70 @@
+#pragma once
+
+// Authentication of session messages. The daemon makes a random 32-byte key per session and
+// writes it into the session's shared-memory segment header (owner-only, 0600); the key never
+// travels over LCM. Every session message (close_session_t, heartbeat_t, step_request_t,
+// step_reply_t, error_t) starts with
+//   int32_t protocol_version; int64_t session_id; byte auth[32]; int64_t request_id; ...
+// and `auth` is the HMAC-SHA-512-256 tag (libsodium crypto_auth) of the message's whole LCM
+// encoding with the 32 auth bytes zeroed. A plain token in every message would be readable by
+// every process on the host (LCM udpm is multicast, and any local user can subscribe to any
+// channel); a tag proves knowledge of the key without revealing it. Replays are stopped by
+// the receiver: request_id must grow strictly per session and direction.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "far/protocol/message.h"
+#include "far/result.h"
+
+namespace far::protocol {
+
+inline constexpr size_t kSessionKeyBytes = 32;
+using SessionKey = std::array<uint8_t, kSessionKeyBytes>;
+
+/// Byte offset and length of `auth` in the encoding of every session message:
+/// fingerprint (8) + protocol_version (4) + session_id (8).
+inline constexpr size_t kAuthOffset = 20;
+inline constexpr size_t kAuthBytes = 32;
+
+/// Returns a fresh key from libsodium's CSPRNG (randombytes_buf). Thread-safe.
+SessionKey NewSessionKey();
+
+/// Fills `bytes` (@pre at least `count` bytes) with CSPRNG output. Thread-safe.
+void RandomBytes(uint8_t* bytes, size_t count);
+
+/// Returns the BLAKE2b-256 hash (crypto_generichash, no key) of `bytes`. Thread-safe.
+std::array<uint8_t, 32> HashBytes(std::span<const uint8_t> bytes);
+
+/// True for the message types that carry session_id and auth at the fixed offsets.
+bool IsSessionMessage(MessageType type);
+
+/// Writes the tag into the encoding of a session message in place (zeroes the auth bytes,
+/// computes the tag, writes it). Errors: kInvalidArgument when `encoded` is shorter than
+/// kAuthOffset + kAuthBytes.
+Result<void> SignEncoded(std::span<uint8_t> encoded, const SessionKey& key);
+
+/// Checks the tag of an encoded session message in constant time, without copying it.
+/// Errors: kPermissionDenied ("auth: the tag does not match the session key"),
+/// kParseError when `encoded` is too short.
+Result<void> VerifyEncoded(std::span<const uint8_t> encoded, const SessionKey& key);
+
+/// Encodes a session message and signs it. Errors: as EncodeMessage.
+template <typename T>
+Result<std::vector<uint8_t>> EncodeSigned(const T& message, const SessionKey& key) {
+  static_assert(
+      requires {
+        message.session_id;
+        message.auth;
+      },
+      "EncodeSigned is for session messages");
+  auto bytes = EncodeMessage(message);
+  if (!bytes) return bytes.error();
+  if (auto ok = SignEncoded(*bytes, key); !ok) return ok.error();
+  return bytes;
+}
+
+}  // namespace far::protocol

@@ -1,0 +1,74 @@
+#pragma once
+
+// Large step replies through the segment's reply ring instead of LCM.
+//
+// LCM over udpm splits a message into ~64 KB datagrams and drops the whole message when one
+// fragment is lost; the kernel drops datagrams when the receive buffer overflows, and a reply
+// larger than the socket buffer never arrives (docs/protocol.md has the measurements). Above
+// kShmReplyThresholdBytes the daemon writes the full encoded step_reply_t into the reply ring
+// (a kStepReply record) and publishes a small stub on LCM that names the record (sequence,
+// index, size) and its BLAKE2b-256 hash; the stub is signed, so the hash binds the payload to
+// the session key. The client reads the record, checks it against the stub and decodes it.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "far/protocol/message.h"
+#include "far/protocol/ring.h"
+#include "far/protocol/session_auth.h"
+#include "far/result.h"
+
+namespace far::protocol {
+
+/// Encoded step replies larger than this go through the reply ring. LCM 1.3.1's udpm sends a
+/// message whose channel name + 1 + payload is at most 65499 bytes as one datagram and splits
+/// larger ones into fragments that are lost as a whole when one is dropped; 63 KiB keeps every
+/// inline reply in one datagram with room for the channel name. Measured in docs/protocol.md:
+/// above this size the ring is never slower and never loses a reply.
+inline constexpr size_t kShmReplyThresholdBytes = size_t{63} << 10;
+
+/// True when an encoded step reply of `encoded_bytes` should go through the reply ring.
+bool ShouldUseShmReply(size_t encoded_bytes);
+
+/// Where a reply went in the reply ring, as the stub names it.
+struct ShmReplyRef {
+  uint64_t sequence = 0;           ///< reply ring record sequence
+  uint64_t index = 0;              ///< reply ring byte index of the record
+  uint64_t bytes = 0;              ///< size of the encoded step_reply_t
+  std::array<uint8_t, 32> hash{};  ///< HashBytes of the encoded step_reply_t
+};
+
+/// Daemon: writes an encoded step reply into the reply ring. Errors: kBusy (the client has
+/// not read enough earlier replies), kLimitExceeded (larger than the ring), kParseError (the
+/// client's read index is inconsistent, segment truncated).
+Result<ShmReplyRef> WriteShmReply(RingWriter& reply_ring, std::span<const uint8_t> encoded);
+
+/// Client: reads the record `ref` names, skipping older records (replies whose stubs were
+/// lost), and returns its payload after checking type, index, size and hash. Errors:
+/// kNotFound (not in the ring, or already read past), kParseError (mismatch, ring corrupt).
+Result<std::vector<uint8_t>> ReadShmReply(RingReader& reply_ring, const ShmReplyRef& ref);
+
+/// Returns the stub for `full`: the same ids and status, reply_in_shm true, the shm_reply_*
+/// fields from `ref`, every array empty and every count 0 (auth zero: sign it).
+far_lcm::step_reply_t MakeShmReplyStub(const far_lcm::step_reply_t& full, const ShmReplyRef& ref);
+
+/// Daemon, one call per reply: encodes `full`; when ShouldUseShmReply, writes it into the
+/// reply ring and makes a stub; returns the signed bytes to publish on the session's reply
+/// channel. Errors: those of EncodeMessage and WriteShmReply (the caller then publishes
+/// MakeStepErrorReply with the error instead).
+Result<std::vector<uint8_t>> EncodeStepReplyForTransport(const far_lcm::step_reply_t& full,
+                                                         RingWriter& reply_ring,
+                                                         const SessionKey& key);
+
+/// Client, one call per received step_reply_t message: decodes it (cap kMaxStepReplyBytes),
+/// verifies its tag, and when it is a stub reads, checks and decodes the full reply from the
+/// reply ring (its ids must match the stub's). Returns the full reply; its status may say the
+/// step failed (ParseStepReply turns it into a StepResult or an Error). Errors: those of
+/// DecodeMessage, VerifyEncoded and ReadShmReply.
+Result<far_lcm::step_reply_t> ReceiveStepReply(const void* data, size_t size, const SessionKey& key,
+                                               RingReader& reply_ring);
+
+}  // namespace far::protocol

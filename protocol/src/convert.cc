@@ -1,0 +1,346 @@
+#include "far/protocol/convert.h"
+
+#include <climits>
+#include <cstring>
+
+#include "far/protocol/version.h"
+
+namespace far::protocol {
+namespace {
+
+constexpr int kNumErrorCodes = static_cast<int>(ErrorCode::kInternal) + 1;
+
+// Sets status, status_name and message of any reply-like message.
+template <typename M>
+void SetStatus(M& message, const Error* error) {
+  if (error == nullptr) {
+    message.status = kWireOk;
+    message.status_name = "ok";
+    message.message.clear();
+  } else {
+    message.status = ToWireStatus(error->code);
+    message.status_name = ToString(error->code);
+    message.message = error->message;
+  }
+}
+
+far_lcm::step_reply_t EmptyReply(const StepReplyIds& ids) {
+  far_lcm::step_reply_t reply{};
+  reply.protocol_version = kProtocolVersion;
+  reply.session_id = ids.session_id;
+  std::memset(reply.auth, 0, sizeof(reply.auth));
+  reply.request_id = ids.request_id;
+  reply.step_id = ids.step_id;
+  reply.ring_applied_sequence = static_cast<int64_t>(ids.ring_applied_sequence);
+  reply.reply_in_shm = false;
+  reply.shm_reply_sequence = 0;
+  reply.shm_reply_index = 0;
+  reply.shm_reply_bytes = 0;
+  std::memset(reply.shm_reply_hash, 0, sizeof(reply.shm_reply_hash));
+  reply.num_pcs_objects = 0;
+  reply.num_object_pairs = 0;
+  reply.num_pcs_primitive_objects = 0;
+  reply.num_pcs_primitives = 0;
+  reply.num_contacts = 0;
+  reply.num_distance_pairs = 0;
+  reply.num_stages = 0;
+  reply.total_ms = 0;
+  reply.primitives_rendered = 0;
+  reply.draws = 0;
+  reply.queries = 0;
+  reply.bytes_uploaded = 0;
+  reply.object_pairs_considered = 0;
+  reply.pairs_considered = 0;
+  reply.pairs_tested = 0;
+  reply.object_radius = 0;
+  reply.primitive_radius = 0;
+  return reply;
+}
+
+Error TooMany(std::string_view what, size_t count) {
+  return MakeError(ErrorCode::kLimitExceeded, "step_reply_t." + std::string(what) + ": " +
+                                                  std::to_string(count) +
+                                                  " entries exceed the wire limit");
+}
+
+Error BadReply(std::string_view field, const std::string& what) {
+  return MakeError(ErrorCode::kParseError, "step_reply_t." + std::string(field) + ": " + what);
+}
+
+}  // namespace
+
+int32_t ToWireStatus(ErrorCode code) { return static_cast<int32_t>(code) + 1; }
+
+ErrorCode FromWireStatus(int32_t status) {
+  if (status < 1 || status > kNumErrorCodes) return ErrorCode::kInternal;
+  return static_cast<ErrorCode>(status - 1);
+}
+
+far_lcm::step_request_t MakeStepRequest(int64_t session_id, int64_t request_id, int64_t step_id,
+                                        uint64_t ring_commit_sequence, const StepRequest& request) {
+  far_lcm::step_request_t message{};
+  message.protocol_version = kProtocolVersion;
+  message.session_id = session_id;
+  std::memset(message.auth, 0, sizeof(message.auth));
+  message.request_id = request_id;
+  message.step_id = step_id;
+  message.ring_commit_sequence = static_cast<int64_t>(ring_commit_sequence);
+  message.method = ToString(request.method);
+  message.mechanism = ToString(request.mechanism);
+  message.output = ToString(request.output);
+  message.depth_format = ToString(request.depth_format);
+  message.resolution = request.resolution;
+  message.subobject_size = request.subobject_size;
+  message.has_distance = request.distance.has_value();
+  message.distance = request.distance.value_or(0.0);
+  return message;
+}
+
+Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output output,
+                                            const StepResult& result) {
+  far_lcm::step_reply_t reply = EmptyReply(ids);
+  SetStatus(reply, nullptr);
+  reply.output = ToString(output);
+
+  // Bytes of the arrays, checked before anything is allocated.
+  size_t primitive_total = 0;
+  for (const auto& [id, triangles] : result.pcs_primitives) primitive_total += triangles.size();
+  const uint64_t array_bytes =
+      4 * uint64_t{result.pcs_objects.size()} + 8 * uint64_t{result.object_pairs.size()} +
+      8 * uint64_t{result.pcs_primitives.size()} + 4 * uint64_t{primitive_total} +
+      16 * uint64_t{result.contacts.size()} + 24 * uint64_t{result.distance_pairs.size()};
+  if (array_bytes > kMaxStepReplyBytes - 4096) {
+    return MakeError(ErrorCode::kLimitExceeded, "step_reply_t: " + std::to_string(array_bytes) +
+                                                    " bytes of results exceed the " +
+                                                    std::to_string(kMaxStepReplyBytes) +
+                                                    "-byte reply cap");
+  }
+  for (const auto& [what, count] :
+       {std::pair<const char*, size_t>{"pcs_objects", result.pcs_objects.size()},
+        {"object_pairs", result.object_pairs.size()},
+        {"pcs_primitive_object", result.pcs_primitives.size()},
+        {"pcs_primitive_triangle", primitive_total},
+        {"contacts", result.contacts.size()},
+        {"distance_pairs", result.distance_pairs.size()},
+        {"stages", result.stats.stages.size()}}) {
+    if (count > INT32_MAX) return TooMany(what, count);
+  }
+
+  // Ids and indices travel as int32; every one is <= INT32_MAX when it came through the ring.
+  bool id_overflow = false;
+  auto wire = [&id_overflow](uint32_t value) {
+    if (value > INT32_MAX) id_overflow = true;
+    return static_cast<int32_t>(value);
+  };
+
+  reply.num_pcs_objects = static_cast<int32_t>(result.pcs_objects.size());
+  reply.pcs_objects.reserve(result.pcs_objects.size());
+  for (const uint32_t id : result.pcs_objects) reply.pcs_objects.push_back(wire(id));
+
+  reply.num_object_pairs = static_cast<int32_t>(result.object_pairs.size());
+  reply.object_pair_a.reserve(result.object_pairs.size());
+  reply.object_pair_b.reserve(result.object_pairs.size());
+  for (const ObjectPair& pair : result.object_pairs) {
+    reply.object_pair_a.push_back(wire(pair.object_a));
+    reply.object_pair_b.push_back(wire(pair.object_b));
+  }
+
+  reply.num_pcs_primitive_objects = static_cast<int32_t>(result.pcs_primitives.size());
+  reply.num_pcs_primitives = static_cast<int32_t>(primitive_total);
+  reply.pcs_primitive_triangle.reserve(primitive_total);
+  for (const auto& [id, triangles] : result.pcs_primitives) {
+    reply.pcs_primitive_object.push_back(wire(id));
+    reply.pcs_primitive_count.push_back(static_cast<int32_t>(triangles.size()));
+    for (const uint32_t t : triangles) reply.pcs_primitive_triangle.push_back(wire(t));
+  }
+
+  const size_t contacts = result.contacts.size();
+  reply.num_contacts = static_cast<int32_t>(contacts);
+  reply.contact_object_a.reserve(contacts);
+  reply.contact_triangle_a.reserve(contacts);
+  reply.contact_object_b.reserve(contacts);
+  reply.contact_triangle_b.reserve(contacts);
+  for (const ContactPair& pair : result.contacts) {
+    reply.contact_object_a.push_back(wire(pair.object_a));
+    reply.contact_triangle_a.push_back(wire(pair.triangle_a));
+    reply.contact_object_b.push_back(wire(pair.object_b));
+    reply.contact_triangle_b.push_back(wire(pair.triangle_b));
+  }
+
+  const size_t distances = result.distance_pairs.size();
+  reply.num_distance_pairs = static_cast<int32_t>(distances);
+  reply.distance_object_a.reserve(distances);
+  reply.distance_triangle_a.reserve(distances);
+  reply.distance_object_b.reserve(distances);
+  reply.distance_triangle_b.reserve(distances);
+  reply.distance.reserve(distances);
+  for (const DistancePair& pair : result.distance_pairs) {
+    reply.distance_object_a.push_back(wire(pair.pair.object_a));
+    reply.distance_triangle_a.push_back(wire(pair.pair.triangle_a));
+    reply.distance_object_b.push_back(wire(pair.pair.object_b));
+    reply.distance_triangle_b.push_back(wire(pair.pair.triangle_b));
+    reply.distance.push_back(pair.distance);
+  }
+  if (id_overflow) {
+    return MakeError(ErrorCode::kInternal,
+                     "step_reply_t: an object id or triangle index is over INT32_MAX");
+  }
+
+  const StepStats& stats = result.stats;
+  reply.num_stages = static_cast<int32_t>(stats.stages.size());
+  for (const StageStats& stage : stats.stages) {
+    reply.stage_name.push_back(stage.name);
+    reply.stage_ms.push_back(stage.ms);
+  }
+  reply.total_ms = stats.total_ms;
+  reply.primitives_rendered = stats.primitives_rendered;
+  reply.draws = stats.draws;
+  reply.queries = stats.queries;
+  reply.bytes_uploaded = stats.bytes_uploaded;
+  reply.object_pairs_considered = stats.object_pairs;
+  reply.pairs_considered = stats.pairs_considered;
+  reply.pairs_tested = stats.pairs_tested;
+  reply.object_radius = stats.object_radius;
+  reply.primitive_radius = stats.primitive_radius;
+  return reply;
+}
+
+far_lcm::step_reply_t MakeStepErrorReply(const StepReplyIds& ids, const Error& error) {
+  far_lcm::step_reply_t reply = EmptyReply(ids);
+  SetStatus(reply, &error);
+  reply.output = "";
+  return reply;
+}
+
+far_lcm::error_t MakeErrorMessage(int64_t session_id, int64_t request_id, const Error& error,
+                                  bool session_closed) {
+  far_lcm::error_t message{};
+  message.protocol_version = kProtocolVersion;
+  message.session_id = session_id;
+  std::memset(message.auth, 0, sizeof(message.auth));
+  message.request_id = request_id;
+  SetStatus(message, &error);
+  message.session_closed = session_closed;
+  return message;
+}
+
+Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply) {
+  if (reply.reply_in_shm) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "step_reply_t.reply_in_shm: this is a stub; read the full reply from the "
+                     "reply ring first (ReceiveStepReply)");
+  }
+  if (reply.status != kWireOk) {
+    return MakeError(FromWireStatus(reply.status), reply.message);
+  }
+  // A decoded reply has every array sized by its count; a hand-built one may not.
+  const auto sized = [](size_t size, int32_t count) {
+    return count >= 0 && size == static_cast<size_t>(count);
+  };
+  if (!sized(reply.pcs_objects.size(), reply.num_pcs_objects) ||
+      !sized(reply.object_pair_a.size(), reply.num_object_pairs) ||
+      !sized(reply.object_pair_b.size(), reply.num_object_pairs) ||
+      !sized(reply.pcs_primitive_object.size(), reply.num_pcs_primitive_objects) ||
+      !sized(reply.pcs_primitive_count.size(), reply.num_pcs_primitive_objects) ||
+      !sized(reply.pcs_primitive_triangle.size(), reply.num_pcs_primitives) ||
+      !sized(reply.contact_object_a.size(), reply.num_contacts) ||
+      !sized(reply.contact_triangle_a.size(), reply.num_contacts) ||
+      !sized(reply.contact_object_b.size(), reply.num_contacts) ||
+      !sized(reply.contact_triangle_b.size(), reply.num_contacts) ||
+      !sized(reply.distance_object_a.size(), reply.num_distance_pairs) ||
+      !sized(reply.distance_triangle_a.size(), reply.num_distance_pairs) ||
+      !sized(reply.distance_object_b.size(), reply.num_distance_pairs) ||
+      !sized(reply.distance_triangle_b.size(), reply.num_distance_pairs) ||
+      !sized(reply.distance.size(), reply.num_distance_pairs) ||
+      !sized(reply.stage_name.size(), reply.num_stages) ||
+      !sized(reply.stage_ms.size(), reply.num_stages)) {
+    return BadReply("num_*", "an array's size differs from its count");
+  }
+  // Check the values and the sums.
+  auto check_ids = [](std::string_view field, const std::vector<int32_t>& values) -> Result<void> {
+    for (size_t i = 0; i < values.size(); ++i) {
+      if (values[i] < 0) {
+        return BadReply(
+            field, "[" + std::to_string(i) + "] = " + std::to_string(values[i]) + " is negative");
+      }
+    }
+    return {};
+  };
+  for (const auto& [field, values] :
+       {std::pair<const char*, const std::vector<int32_t>*>{"pcs_objects", &reply.pcs_objects},
+        {"object_pair_a", &reply.object_pair_a},
+        {"object_pair_b", &reply.object_pair_b},
+        {"pcs_primitive_object", &reply.pcs_primitive_object},
+        {"pcs_primitive_count", &reply.pcs_primitive_count},
+        {"pcs_primitive_triangle", &reply.pcs_primitive_triangle},
+        {"contact_object_a", &reply.contact_object_a},
+        {"contact_triangle_a", &reply.contact_triangle_a},
+        {"contact_object_b", &reply.contact_object_b},
+        {"contact_triangle_b", &reply.contact_triangle_b},
+        {"distance_object_a", &reply.distance_object_a},
+        {"distance_triangle_a", &reply.distance_triangle_a},
+        {"distance_object_b", &reply.distance_object_b},
+        {"distance_triangle_b", &reply.distance_triangle_b}}) {
+    if (auto ok = check_ids(field, *values); !ok) return ok.error();
+  }
+  int64_t primitive_sum = 0;
+  for (const int32_t count : reply.pcs_primitive_count) primitive_sum += count;
+  if (primitive_sum != reply.num_pcs_primitives) {
+    return BadReply("pcs_primitive_count", "counts add up to " + std::to_string(primitive_sum) +
+                                               ", num_pcs_primitives is " +
+                                               std::to_string(reply.num_pcs_primitives));
+  }
+
+  StepResult result;
+  result.pcs_objects.assign(reply.pcs_objects.begin(), reply.pcs_objects.end());
+  for (int32_t i = 0; i < reply.num_object_pairs; ++i) {
+    result.object_pairs.push_back({static_cast<uint32_t>(reply.object_pair_a[i]),
+                                   static_cast<uint32_t>(reply.object_pair_b[i])});
+  }
+  size_t next = 0;
+  for (int32_t i = 0; i < reply.num_pcs_primitive_objects; ++i) {
+    const auto id = static_cast<uint32_t>(reply.pcs_primitive_object[i]);
+    if (result.pcs_primitives.count(id) != 0) {
+      return BadReply("pcs_primitive_object", "object " + std::to_string(id) + " appears twice");
+    }
+    auto& triangles = result.pcs_primitives[id];
+    const auto count = static_cast<size_t>(reply.pcs_primitive_count[i]);
+    triangles.assign(reply.pcs_primitive_triangle.begin() + static_cast<ptrdiff_t>(next),
+                     reply.pcs_primitive_triangle.begin() + static_cast<ptrdiff_t>(next + count));
+    next += count;
+  }
+  result.contacts.reserve(static_cast<size_t>(reply.num_contacts));
+  for (int32_t i = 0; i < reply.num_contacts; ++i) {
+    result.contacts.push_back({static_cast<uint32_t>(reply.contact_object_a[i]),
+                               static_cast<uint32_t>(reply.contact_triangle_a[i]),
+                               static_cast<uint32_t>(reply.contact_object_b[i]),
+                               static_cast<uint32_t>(reply.contact_triangle_b[i])});
+  }
+  result.distance_pairs.reserve(static_cast<size_t>(reply.num_distance_pairs));
+  for (int32_t i = 0; i < reply.num_distance_pairs; ++i) {
+    DistancePair pair;
+    pair.pair = {static_cast<uint32_t>(reply.distance_object_a[i]),
+                 static_cast<uint32_t>(reply.distance_triangle_a[i]),
+                 static_cast<uint32_t>(reply.distance_object_b[i]),
+                 static_cast<uint32_t>(reply.distance_triangle_b[i])};
+    pair.distance = reply.distance[i];
+    result.distance_pairs.push_back(pair);
+  }
+  StepStats& stats = result.stats;
+  for (int32_t i = 0; i < reply.num_stages; ++i) {
+    stats.stages.push_back({reply.stage_name[i], reply.stage_ms[i]});
+  }
+  stats.total_ms = reply.total_ms;
+  stats.primitives_rendered = reply.primitives_rendered;
+  stats.draws = reply.draws;
+  stats.queries = reply.queries;
+  stats.bytes_uploaded = reply.bytes_uploaded;
+  stats.object_pairs = reply.object_pairs_considered;
+  stats.pairs_considered = reply.pairs_considered;
+  stats.pairs_tested = reply.pairs_tested;
+  stats.object_radius = reply.object_radius;
+  stats.primitive_radius = reply.primitive_radius;
+  return result;
+}
+
+}  // namespace far::protocol

@@ -1,0 +1,378 @@
+#include "far/protocol/message.h"
+
+#include <algorithm>
+#include <array>
+#include <cinttypes>
+#include <cstdio>
+#include <cstring>
+#include <span>
+
+namespace far::protocol {
+namespace {
+
+// How one field of an LCM type is encoded (LCM 1.3.1, big-endian):
+//   kScalar       `width` bytes (booleans and bytes 1, int32 4, int64 and double 8, byte[32] 32)
+//   kCount        an int32 that other fields use as their length
+//   kArray        `count` elements of `width` bytes; `count` is the index of its kCount field
+//   kString       int32 length (including the NUL), then the bytes and the NUL
+//   kStringArray  `count` strings
+enum class FieldKind : uint8_t { kScalar, kCount, kArray, kString, kStringArray };
+
+struct FieldSpec {
+  const char* name;
+  FieldKind kind;
+  uint8_t width = 0;
+  uint8_t count = 0;
+};
+
+constexpr FieldSpec Scalar(const char* name, uint8_t width) {
+  return {name, FieldKind::kScalar, width, 0};
+}
+constexpr FieldSpec Count(const char* name) { return {name, FieldKind::kCount, 4, 0}; }
+constexpr FieldSpec Array(const char* name, uint8_t width, uint8_t count_field) {
+  return {name, FieldKind::kArray, width, count_field};
+}
+constexpr FieldSpec String(const char* name) { return {name, FieldKind::kString, 0, 0}; }
+constexpr FieldSpec StringArray(const char* name, uint8_t count_field) {
+  return {name, FieldKind::kStringArray, 0, count_field};
+}
+
+// The schemas mirror protocol/lcm/*.lcm field by field. A drift makes the round-trip tests in
+// tests/protocol/message_test.cc fail (the pre-scan must consume exactly the encoded bytes of
+// messages with every array and string filled).
+constexpr std::array kOpenSession{
+    Scalar("protocol_version", 4), Scalar("request_id", 8),        String("client_name"),
+    String("reply_channel"),       Scalar("update_ring_bytes", 8), Scalar("reply_ring_bytes", 8),
+};
+constexpr std::array kOpenSessionReply{
+    Scalar("protocol_version", 4),
+    Scalar("request_id", 8),
+    Scalar("status", 4),
+    String("status_name"),
+    String("message"),
+    Scalar("session_id", 8),
+    String("shm_name"),
+    Scalar("shm_bytes", 8),
+    Scalar("ring_layout_version", 4),
+    Scalar("update_ring_bytes", 8),
+    Scalar("reply_ring_bytes", 8),
+    String("request_channel"),
+    String("session_reply_channel"),
+    Scalar("heartbeat_timeout_ms", 8),
+    Scalar("max_objects", 4),
+    Scalar("max_vertices_per_object", 4),
+    Scalar("max_triangles_per_object", 4),
+};
+constexpr std::array kCloseSession{
+    Scalar("protocol_version", 4),
+    Scalar("session_id", 8),
+    Scalar("auth", 32),
+    Scalar("request_id", 8),
+};
+constexpr std::array kHeartbeat{
+    Scalar("protocol_version", 4), Scalar("session_id", 8),   Scalar("auth", 32),
+    Scalar("request_id", 8),       Scalar("sent_time_ns", 8), Scalar("last_applied_sequence", 8),
+    Scalar("last_step_id", 8),
+};
+constexpr std::array kStepRequest{
+    Scalar("protocol_version", 4),
+    Scalar("session_id", 8),
+    Scalar("auth", 32),
+    Scalar("request_id", 8),
+    Scalar("step_id", 8),
+    Scalar("ring_commit_sequence", 8),
+    String("method"),
+    String("mechanism"),
+    String("output"),
+    String("depth_format"),
+    Scalar("resolution", 4),
+    Scalar("subobject_size", 4),
+    Scalar("has_distance", 1),
+    Scalar("distance", 8),
+};
+constexpr std::array kStepReply{
+    Scalar("protocol_version", 4),           // 0
+    Scalar("session_id", 8),                 // 1
+    Scalar("auth", 32),                      // 2
+    Scalar("request_id", 8),                 // 3
+    Scalar("step_id", 8),                    // 4
+    Scalar("ring_applied_sequence", 8),      // 5
+    Scalar("status", 4),                     // 6
+    String("status_name"),                   // 7
+    String("message"),                       // 8
+    String("output"),                        // 9
+    Scalar("reply_in_shm", 1),               // 10
+    Scalar("shm_reply_sequence", 8),         // 11
+    Scalar("shm_reply_index", 8),            // 12
+    Scalar("shm_reply_bytes", 8),            // 13
+    Scalar("shm_reply_hash", 32),            // 14
+    Count("num_pcs_objects"),                // 15
+    Array("pcs_objects", 4, 15),             // 16
+    Count("num_object_pairs"),               // 17
+    Array("object_pair_a", 4, 17),           // 18
+    Array("object_pair_b", 4, 17),           // 19
+    Count("num_pcs_primitive_objects"),      // 20
+    Array("pcs_primitive_object", 4, 20),    // 21
+    Array("pcs_primitive_count", 4, 20),     // 22
+    Count("num_pcs_primitives"),             // 23
+    Array("pcs_primitive_triangle", 4, 23),  // 24
+    Count("num_contacts"),                   // 25
+    Array("contact_object_a", 4, 25),        // 26
+    Array("contact_triangle_a", 4, 25),      // 27
+    Array("contact_object_b", 4, 25),        // 28
+    Array("contact_triangle_b", 4, 25),      // 29
+    Count("num_distance_pairs"),             // 30
+    Array("distance_object_a", 4, 30),       // 31
+    Array("distance_triangle_a", 4, 30),     // 32
+    Array("distance_object_b", 4, 30),       // 33
+    Array("distance_triangle_b", 4, 30),     // 34
+    Array("distance", 8, 30),                // 35
+    Count("num_stages"),                     // 36
+    StringArray("stage_name", 36),           // 37
+    Array("stage_ms", 8, 36),                // 38
+    Scalar("total_ms", 8),                   // 39
+    Scalar("primitives_rendered", 8),        // 40
+    Scalar("draws", 8),                      // 41
+    Scalar("queries", 8),                    // 42
+    Scalar("bytes_uploaded", 8),             // 43
+    Scalar("object_pairs_considered", 8),    // 44
+    Scalar("pairs_considered", 8),           // 45
+    Scalar("pairs_tested", 8),               // 46
+    Scalar("object_radius", 8),              // 47
+    Scalar("primitive_radius", 8),           // 48
+};
+constexpr std::array kError{
+    Scalar("protocol_version", 4),
+    Scalar("session_id", 8),
+    Scalar("auth", 32),
+    Scalar("request_id", 8),
+    Scalar("status", 4),
+    String("status_name"),
+    String("message"),
+    Scalar("session_closed", 1),
+};
+constexpr std::array kStatusRequest{
+    Scalar("protocol_version", 4),
+    Scalar("request_id", 8),
+};
+constexpr std::array kStatusReply{
+    Scalar("protocol_version", 4),          // 0
+    Scalar("request_id", 8),                // 1
+    String("daemon_version"),               // 2
+    String("gl_renderer"),                  // 3
+    Scalar("uptime_ms", 8),                 // 4
+    Scalar("max_sessions", 4),              // 5
+    Scalar("steps_total", 8),               // 6
+    Scalar("errors_total", 8),              // 7
+    Scalar("rejected_messages_total", 8),   // 8
+    Count("num_sessions"),                  // 9
+    Array("session_id", 8, 9),              // 10
+    StringArray("session_client_name", 9),  // 11
+    Array("session_steps", 8, 9),           // 12
+    Array("session_objects", 4, 9),         // 13
+};
+
+struct TypeInfo {
+  MessageType type;
+  std::string_view name;
+  int64_t (*hash)();
+  std::span<const FieldSpec> schema;
+};
+
+const std::array<TypeInfo, 9>& Types() {
+  static const std::array<TypeInfo, 9> types{{
+      {MessageType::kOpenSession, "open_session_t", &far_lcm::open_session_t::getHash,
+       kOpenSession},
+      {MessageType::kOpenSessionReply, "open_session_reply_t",
+       &far_lcm::open_session_reply_t::getHash, kOpenSessionReply},
+      {MessageType::kCloseSession, "close_session_t", &far_lcm::close_session_t::getHash,
+       kCloseSession},
+      {MessageType::kHeartbeat, "heartbeat_t", &far_lcm::heartbeat_t::getHash, kHeartbeat},
+      {MessageType::kStepRequest, "step_request_t", &far_lcm::step_request_t::getHash,
+       kStepRequest},
+      {MessageType::kStepReply, "step_reply_t", &far_lcm::step_reply_t::getHash, kStepReply},
+      {MessageType::kError, "error_t", &far_lcm::error_t::getHash, kError},
+      {MessageType::kStatusRequest, "status_request_t", &far_lcm::status_request_t::getHash,
+       kStatusRequest},
+      {MessageType::kStatusReply, "status_reply_t", &far_lcm::status_reply_t::getHash,
+       kStatusReply},
+  }};
+  return types;
+}
+
+const TypeInfo& InfoOf(MessageType type) {
+  for (const TypeInfo& info : Types()) {
+    if (info.type == type) return info;
+  }
+  return Types()[0];  // unreachable: every enumerator has an entry
+}
+
+int64_t ReadBigEndian(const uint8_t* p, int bytes) {
+  uint64_t value = 0;
+  for (int i = 0; i < bytes; ++i) value = (value << 8) | p[i];
+  if (bytes == 4) return static_cast<int32_t>(static_cast<uint32_t>(value));
+  return static_cast<int64_t>(value);
+}
+
+std::string Hex(int64_t value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "0x%016" PRIx64, static_cast<uint64_t>(value));
+  return text;
+}
+
+Error ParseError(std::string_view type, const FieldSpec& field, const std::string& what) {
+  return MakeError(ErrorCode::kParseError, std::string(type) + "." + field.name + ": " + what);
+}
+
+// Walks the encoding after the fingerprint and proves that every length fits.
+Result<void> PreScan(const TypeInfo& info, const uint8_t* data, size_t size) {
+  std::array<int64_t, 64> counts{};
+  size_t pos = 8;  // after the fingerprint
+  auto left = [&] { return size - pos; };
+  auto string_at = [&](const FieldSpec& field, std::string_view element) -> Result<void> {
+    if (left() < 4) {
+      return ParseError(info.name, field,
+                        std::string(element) + "string length needs 4 bytes, " +
+                            std::to_string(left()) + " left");
+    }
+    const int64_t length = ReadBigEndian(data + pos, 4);
+    pos += 4;
+    if (length < 1) {
+      return ParseError(info.name, field,
+                        std::string(element) + "string length " + std::to_string(length) +
+                            " is less than 1 (LCM strings include their NUL)");
+    }
+    if (static_cast<uint64_t>(length) > left()) {
+      return ParseError(info.name, field,
+                        std::string(element) + "string length " + std::to_string(length) +
+                            " runs past the end (" + std::to_string(left()) + " bytes left)");
+    }
+    const auto* text = reinterpret_cast<const char*>(data + pos);
+    if (text[length - 1] != '\0') {
+      return ParseError(info.name, field, std::string(element) + "string lacks its final NUL");
+    }
+    if (std::memchr(text, '\0', static_cast<size_t>(length - 1)) != nullptr) {
+      return ParseError(info.name, field, std::string(element) + "string contains a NUL");
+    }
+    pos += static_cast<size_t>(length);
+    return {};
+  };
+
+  for (size_t i = 0; i < info.schema.size(); ++i) {
+    const FieldSpec& field = info.schema[i];
+    switch (field.kind) {
+      case FieldKind::kScalar:
+      case FieldKind::kCount: {
+        if (left() < field.width) {
+          return ParseError(info.name, field,
+                            "needs " + std::to_string(field.width) + " bytes, " +
+                                std::to_string(left()) + " left (truncated)");
+        }
+        if (field.kind == FieldKind::kCount) {
+          const int64_t count = ReadBigEndian(data + pos, 4);
+          if (count < 0) {
+            return ParseError(info.name, field, std::to_string(count) + " is negative");
+          }
+          counts[i] = count;
+        }
+        pos += field.width;
+        break;
+      }
+      case FieldKind::kArray: {
+        // 64-bit arithmetic: count < 2^31 and width <= 8, no overflow.
+        const uint64_t count = static_cast<uint64_t>(counts[field.count]);
+        const uint64_t bytes = count * field.width;
+        if (bytes > left()) {
+          return ParseError(info.name, field,
+                            std::to_string(count) + " elements of " + std::to_string(field.width) +
+                                " bytes need " + std::to_string(bytes) + " bytes, " +
+                                std::to_string(left()) + " left (" + info.schema[field.count].name +
+                                " is too large)");
+        }
+        pos += static_cast<size_t>(bytes);
+        break;
+      }
+      case FieldKind::kString:
+        if (auto ok = string_at(field, ""); !ok) return ok.error();
+        break;
+      case FieldKind::kStringArray: {
+        const int64_t count = counts[field.count];
+        // Each string takes at least 5 bytes; check before walking so a huge count fails fast.
+        if (static_cast<uint64_t>(count) * 5 > left()) {
+          return ParseError(info.name, field,
+                            std::to_string(count) + " strings need at least " +
+                                std::to_string(count * 5) + " bytes, " + std::to_string(left()) +
+                                " left (" + info.schema[field.count].name + " is too large)");
+        }
+        for (int64_t k = 0; k < count; ++k) {
+          if (auto ok = string_at(field, "[" + std::to_string(k) + "] "); !ok) return ok.error();
+        }
+        break;
+      }
+    }
+  }
+  if (pos != size) {
+    return MakeError(ErrorCode::kParseError, std::string(info.name) + ": " +
+                                                 std::to_string(size - pos) +
+                                                 " trailing bytes after the last field");
+  }
+  return {};
+}
+
+}  // namespace
+
+std::string_view ToString(MessageType type) { return InfoOf(type).name; }
+
+Result<MessageType> IdentifyMessage(const void* data, size_t size) {
+  if (data == nullptr || size < 8) {
+    return MakeError(ErrorCode::kParseError, "message: " + std::to_string(size) +
+                                                 " bytes is too short for an LCM fingerprint");
+  }
+  const int64_t fingerprint = ReadBigEndian(static_cast<const uint8_t*>(data), 8);
+  for (const TypeInfo& info : Types()) {
+    if (info.hash() == fingerprint) return info.type;
+  }
+  return MakeError(ErrorCode::kParseError,
+                   "message: fingerprint " + Hex(fingerprint) + " is not a far_lcm type");
+}
+
+namespace internal {
+
+Result<void> CheckEncoding(MessageType type, const void* data, size_t size, size_t max_size) {
+  const TypeInfo& info = InfoOf(type);
+  const std::string name(info.name);
+  // 1. The size, before anything else looks at the bytes.
+  const size_t cap = std::min<size_t>(max_size, static_cast<size_t>(INT32_MAX));
+  if (size > cap) {
+    return MakeError(ErrorCode::kLimitExceeded, name + ": " + std::to_string(size) +
+                                                    " bytes is over the " + std::to_string(cap) +
+                                                    "-byte cap");
+  }
+  if (data == nullptr || size < 8) {
+    return MakeError(ErrorCode::kParseError,
+                     name + ": " + std::to_string(size) + " bytes is too short (truncated)");
+  }
+  // 2. The fingerprint.
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  const int64_t fingerprint = ReadBigEndian(bytes, 8);
+  if (fingerprint != info.hash()) {
+    return MakeError(ErrorCode::kParseError, name + ": fingerprint " + Hex(fingerprint) +
+                                                 " does not match " + name + "'s " +
+                                                 Hex(info.hash()));
+  }
+  // 3. Every length against the bytes that are there.
+  return PreScan(info, bytes, size);
+}
+
+Result<void> CheckProtocolVersion(MessageType type, int32_t version) {
+  if (version != kProtocolVersion) {
+    return MakeError(ErrorCode::kVersionMismatch, std::string(ToString(type)) +
+                                                      ".protocol_version: got " +
+                                                      std::to_string(version) + ", expected " +
+                                                      std::to_string(kProtocolVersion));
+  }
+  return {};
+}
+
+}  // namespace internal
+}  // namespace far::protocol

@@ -1,0 +1,183 @@
+#include "far/internal/predicates.h"
+
+#include <gmpxx.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "exact_reference.h"
+#include <Eigen/Geometry>
+
+namespace far::internal {
+namespace {
+
+using Eigen::Vector3d;
+using reference::ExactOrient2d;
+using reference::ExactOrient3d;
+
+Vector3d RandomPoint(std::mt19937_64& rng, double scale, const Vector3d& offset) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  return offset + scale * Vector3d(u(rng), u(rng), u(rng));
+}
+
+// A point on the plane of a, b, c, rounded to double: almost always a tiny nonzero determinant,
+// sometimes exactly zero.
+Vector3d NearlyCoplanar(std::mt19937_64& rng, const Vector3d& a, const Vector3d& b,
+                        const Vector3d& c) {
+  std::uniform_real_distribution<double> u(-1.0, 2.0);
+  return a + u(rng) * (b - a) + u(rng) * (c - a);
+}
+
+TEST(PredicatesTest, Orient3dMatchesExactOnRandomPoints) {
+  std::mt19937_64 rng(11);
+  for (int i = 0; i < 20000; ++i) {
+    const Vector3d a = RandomPoint(rng, 1.0, Vector3d::Zero());
+    const Vector3d b = RandomPoint(rng, 1.0, Vector3d::Zero());
+    const Vector3d c = RandomPoint(rng, 1.0, Vector3d::Zero());
+    const Vector3d d = RandomPoint(rng, 1.0, Vector3d::Zero());
+    ASSERT_EQ(Orient3d(a, b, c, d), ExactOrient3d(a, b, c, d)) << "case " << i;
+  }
+}
+
+TEST(PredicatesTest, Orient3dMatchesExactOnNearlyCoplanarPoints) {
+  std::mt19937_64 rng(12);
+  int zeros = 0;
+  int near_zero = 0;
+  for (double scale : {1e-6, 1.0, 1e3}) {
+    for (const Vector3d& offset :
+         {Vector3d(0, 0, 0), Vector3d(1e5, -1e5, 1e5), Vector3d(1e6, 1e6, -1e6)}) {
+      for (int i = 0; i < 4000; ++i) {
+        const Vector3d a = RandomPoint(rng, scale, offset);
+        const Vector3d b = RandomPoint(rng, scale, offset);
+        const Vector3d c = RandomPoint(rng, scale, offset);
+        // Every tenth case a repeated point: exactly zero, through the filter.
+        const Vector3d d = i % 10 == 0 ? b : NearlyCoplanar(rng, a, b, c);
+        const int exact = ExactOrient3d(a, b, c, d);
+        zeros += exact == 0;
+        ASSERT_EQ(Orient3d(a, b, c, d), exact) << "scale " << scale << " case " << i;
+        ASSERT_EQ(Orient3dExact(a, b, c, d), exact);
+        // Relabelings change the sign as the permutation's parity.
+        ASSERT_EQ(Orient3d(b, a, c, d), -exact);
+        ASSERT_EQ(Orient3d(d, a, b, c), -exact);
+        ASSERT_EQ(PlaneSide(a, b, c).Side(d), exact);
+        // The floating-point value is tiny: the case exercises the filter's boundary.
+        const Vector3d n = (b - a).cross(c - a);
+        near_zero += std::abs(n.dot(d - a)) < 1e-10 * scale * scale * scale;
+      }
+    }
+  }
+  EXPECT_GT(zeros, 3000) << "repeated points must give exact zeros";
+  EXPECT_GT(near_zero, 10000);
+}
+
+TEST(PredicatesTest, Orient3dIsZeroOnGridCoplanarPoints) {
+  // Points on the plane z = x/2 + y/4 with dyadic coordinates: exactly coplanar.
+  std::mt19937_64 rng(13);
+  std::uniform_int_distribution<int> k(-64, 64);
+  for (int i = 0; i < 2000; ++i) {
+    std::vector<Vector3d> p;
+    for (int j = 0; j < 4; ++j) {
+      const double x = k(rng) / 8.0;
+      const double y = k(rng) / 8.0;
+      p.emplace_back(1e6 + x, -1e6 + y, 1e5 + x / 2 + y / 4);
+    }
+    ASSERT_EQ(Orient3d(p[0], p[1], p[2], p[3]), 0) << "case " << i;
+    const Vector3d above(p[3].x(), p[3].y(), std::nextafter(p[3].z(), 2e5));
+    ASSERT_EQ(Orient3d(p[0], p[1], p[2], above), ExactOrient3d(p[0], p[1], p[2], above));
+  }
+}
+
+TEST(PredicatesTest, Orient3dSeesOneUlpAtLargeCoordinates) {
+  const Vector3d a(1e6, 1e6, 1e6);
+  const Vector3d b(1e6 + 1, 1e6, 1e6);
+  const Vector3d c(1e6, 1e6 + 1, 1e6);
+  const Vector3d on(1e6 + 0.25, 1e6 + 0.25, 1e6);
+  const Vector3d above(1e6 + 0.25, 1e6 + 0.25, std::nextafter(1e6, 2e6));
+  const Vector3d below(1e6 + 0.25, 1e6 + 0.25, std::nextafter(1e6, 0.0));
+  EXPECT_EQ(Orient3d(a, b, c, on), 0);
+  EXPECT_EQ(Orient3d(a, b, c, above), 1);
+  EXPECT_EQ(Orient3d(a, b, c, below), -1);
+}
+
+TEST(PredicatesTest, Orient2dMatchesExact) {
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> t(-1.0, 2.0);
+  std::uniform_int_distribution<int> k(-8, 8);
+  int zeros = 0;
+  for (double offset : {0.0, 1e5, 1e6}) {
+    for (int i = 0; i < 10000; ++i) {
+      double ax = offset + u(rng), ay = offset + u(rng);
+      double bx = offset + u(rng), by = offset + u(rng);
+      double cx, cy;
+      if (i % 5 == 0) {  // exactly collinear: integer steps from an integer point
+        ax = std::round(ax);
+        ay = std::round(ay);
+        const int dx = k(rng), dy = k(rng), m = k(rng);
+        bx = ax + dx;
+        by = ay + dy;
+        cx = ax + m * dx;
+        cy = ay + m * dy;
+        if (i % 10 == 0) cy = std::nextafter(cy, 0.0);  // and one ulp off the line
+      } else if (i % 2 == 0) {
+        cx = offset + u(rng);
+        cy = offset + u(rng);
+      } else {  // nearly collinear
+        const double s = t(rng);
+        cx = ax + s * (bx - ax);
+        cy = ay + s * (by - ay);
+      }
+      const int exact = ExactOrient2d(ax, ay, bx, by, cx, cy);
+      zeros += exact == 0;
+      ASSERT_EQ(Orient2d(ax, ay, bx, by, cx, cy), exact) << "case " << i;
+      ASSERT_EQ(Orient2dExact(ax, ay, bx, by, cx, cy), exact);
+      ASSERT_EQ(Orient2d(bx, by, ax, ay, cx, cy), -exact);
+    }
+  }
+  EXPECT_GT(zeros, 1000);
+}
+
+TEST(PredicatesTest, Collinear3dMatchesExactCrossProduct) {
+  std::mt19937_64 rng(15);
+  std::uniform_int_distribution<int> k(-3, 3);
+  for (int i = 0; i < 5000; ++i) {
+    const Vector3d a(k(rng), k(rng), k(rng));
+    const Vector3d b(k(rng), k(rng), k(rng));
+    const Vector3d c(k(rng), k(rng), k(rng));
+    const bool collinear = (b - a).cross(c - a).isZero(0.0);  // exact for small integers
+    ASSERT_EQ(Collinear3d(a, b, c), collinear);
+    const Vector3d shifted = c + Vector3d(0, 0, 1e-12);
+    ASSERT_EQ(Collinear3d(a, b, shifted),
+              ExactOrient2d(a.x(), a.y(), b.x(), b.y(), shifted.x(), shifted.y()) == 0 &&
+                  ExactOrient2d(a.y(), a.z(), b.y(), b.z(), shifted.y(), shifted.z()) == 0 &&
+                  ExactOrient2d(a.z(), a.x(), b.z(), b.x(), shifted.z(), shifted.x()) == 0);
+  }
+}
+
+TEST(PredicatesTest, RoundedCrossIsWithinTwoUlpsOfExact) {
+  std::mt19937_64 rng(16);
+  const mpq_class tolerance = mpq_class(1, 1) / (mpq_class(1) << 52);  // 2^-52 relative
+  for (int i = 0; i < 5000; ++i) {
+    const Vector3d offset = i % 2 ? Vector3d(1e6, -1e5, 3e5) : Vector3d::Zero();
+    const Vector3d a = RandomPoint(rng, 1.0, offset);
+    const Vector3d b = RandomPoint(rng, 1.0, offset);
+    // Nearly parallel second edge: c, d near the line through a, b.
+    const Vector3d c = a + 0.3 * (b - a) + Vector3d(1e-9, -2e-9, 0);
+    const Vector3d d = a + 0.9 * (b - a);
+    const Vector3d n = RoundedCross(a, b, c, d);
+    const reference::QVec qa = reference::ToQ(a), qb = reference::ToQ(b);
+    const reference::QVec qc = reference::ToQ(c), qd = reference::ToQ(d);
+    const mpq_class ux = qb.x - qa.x, uy = qb.y - qa.y, uz = qb.z - qa.z;
+    const mpq_class vx = qd.x - qc.x, vy = qd.y - qc.y, vz = qd.z - qc.z;
+    const mpq_class exact[3] = {uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx};
+    for (int k = 0; k < 3; ++k) {
+      const mpq_class error = abs(mpq_class(n[k]) - exact[k]);
+      ASSERT_LE(error, tolerance * abs(exact[k])) << "case " << i << " component " << k;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace far::internal

@@ -1,0 +1,181 @@
+#pragma once
+
+// Filled-in far_lcm messages for the protocol tests: every array and string non-empty, so a
+// round trip exercises every field of every schema.
+
+#include <cstring>
+
+#include "far/protocol/message.h"
+#include "far/protocol/version.h"
+
+namespace far::protocol::testing {
+
+inline void FillAuth(uint8_t (&auth)[32], uint8_t value) { std::memset(auth, value, 32); }
+
+inline far_lcm::open_session_t SampleOpenSession() {
+  far_lcm::open_session_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.request_id = 11;
+  m.client_name = "simulator-1";
+  m.reply_channel = "FAR_OPEN_REPLY_sim1";
+  m.update_ring_bytes = 1 << 20;
+  m.reply_ring_bytes = 0;
+  return m;
+}
+
+inline far_lcm::open_session_reply_t SampleOpenSessionReply() {
+  far_lcm::open_session_reply_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.request_id = 11;
+  m.status = 0;
+  m.status_name = "ok";
+  m.message = "fine";
+  m.session_id = 3;
+  m.shm_name = "/far-1-3-0123456789abcdef0123456789abcdef";
+  m.shm_bytes = 4096 + (2 << 20);
+  m.ring_layout_version = 1;
+  m.update_ring_bytes = 1 << 20;
+  m.reply_ring_bytes = 1 << 20;
+  m.request_channel = "FAR_S3_REQ";
+  m.session_reply_channel = "FAR_S3_REPLY";
+  m.heartbeat_timeout_ms = 5000;
+  m.max_objects = 1000;
+  m.max_vertices_per_object = 1 << 22;
+  m.max_triangles_per_object = 1 << 22;
+  return m;
+}
+
+inline far_lcm::close_session_t SampleCloseSession() {
+  far_lcm::close_session_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.session_id = 3;
+  FillAuth(m.auth, 0);
+  m.request_id = 99;
+  return m;
+}
+
+inline far_lcm::heartbeat_t SampleHeartbeat() {
+  far_lcm::heartbeat_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.session_id = 3;
+  FillAuth(m.auth, 0);
+  m.request_id = 5;
+  m.sent_time_ns = 123456789;
+  m.last_applied_sequence = 0;
+  m.last_step_id = 0;
+  return m;
+}
+
+inline far_lcm::step_request_t SampleStepRequest() {
+  far_lcm::step_request_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.session_id = 3;
+  FillAuth(m.auth, 0);
+  m.request_id = 7;
+  m.step_id = 42;
+  m.ring_commit_sequence = 17;
+  m.method = "far";
+  m.mechanism = "id-buffer";
+  m.output = "distance";
+  m.depth_format = "depth24";
+  m.resolution = 1024;
+  m.subobject_size = 4;
+  m.has_distance = true;
+  m.distance = 0.25;
+  return m;
+}
+
+inline far_lcm::step_reply_t SampleStepReply() {
+  far_lcm::step_reply_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.session_id = 3;
+  FillAuth(m.auth, 0);
+  m.request_id = 7;
+  m.step_id = 42;
+  m.ring_applied_sequence = 17;
+  m.status = 0;
+  m.status_name = "ok";
+  m.message = "";
+  m.output = "distance";
+  m.reply_in_shm = false;
+  m.shm_reply_sequence = 0;
+  m.shm_reply_index = 0;
+  m.shm_reply_bytes = 0;
+  FillAuth(m.shm_reply_hash, 0);
+  m.num_pcs_objects = 3;
+  m.pcs_objects = {1, 2, 5};
+  m.num_object_pairs = 2;
+  m.object_pair_a = {1, 2};
+  m.object_pair_b = {2, 5};
+  m.num_pcs_primitive_objects = 2;
+  m.pcs_primitive_object = {1, 2};
+  m.pcs_primitive_count = {2, 1};
+  m.num_pcs_primitives = 3;
+  m.pcs_primitive_triangle = {4, 9, 0};
+  m.num_contacts = 1;
+  m.contact_object_a = {1};
+  m.contact_triangle_a = {4};
+  m.contact_object_b = {2};
+  m.contact_triangle_b = {0};
+  m.num_distance_pairs = 2;
+  m.distance_object_a = {1, 1};
+  m.distance_triangle_a = {4, 9};
+  m.distance_object_b = {2, 2};
+  m.distance_triangle_b = {0, 0};
+  m.distance = {0.0, 0.125};
+  m.num_stages = 2;
+  m.stage_name = {"update", "object_cull"};
+  m.stage_ms = {0.5, 1.25};
+  m.total_ms = 1.75;
+  m.primitives_rendered = 100;
+  m.draws = 6;
+  m.queries = 0;
+  m.bytes_uploaded = 4096;
+  m.object_pairs_considered = 2;
+  m.pairs_considered = 3;
+  m.pairs_tested = 3;
+  m.object_radius = 0.01;
+  m.primitive_radius = 0.001;
+  return m;
+}
+
+inline far_lcm::error_t SampleError() {
+  far_lcm::error_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.session_id = 3;
+  FillAuth(m.auth, 0);
+  m.request_id = 7;
+  m.status = 1;
+  m.status_name = "invalid_argument";
+  m.message = "step_request_t.resolution: 5 is outside [8, 8192]";
+  m.session_closed = false;
+  return m;
+}
+
+inline far_lcm::status_request_t SampleStatusRequest() {
+  far_lcm::status_request_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.request_id = 1;
+  return m;
+}
+
+inline far_lcm::status_reply_t SampleStatusReply() {
+  far_lcm::status_reply_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.request_id = 1;
+  m.daemon_version = "0.1.0";
+  m.gl_renderer = "llvmpipe";
+  m.uptime_ms = 1000;
+  m.max_sessions = 16;
+  m.steps_total = 5;
+  m.errors_total = 1;
+  m.rejected_messages_total = 2;
+  m.num_sessions = 2;
+  m.session_id = {3, 4};
+  m.session_client_name = {"a", "bb"};
+  m.session_steps = {5, 0};
+  m.session_objects = {10, 0};
+  return m;
+}
+
+}  // namespace far::protocol::testing
