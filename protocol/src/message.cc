@@ -170,6 +170,16 @@ constexpr std::array kStatusReply{
     StringArray("session_client_name", 9),  // 11
     Array("session_steps", 8, 9),           // 12
     Array("session_objects", 4, 9),         // 13
+    Scalar("latency_p50_ms", 8),            // 14
+    Scalar("latency_p90_ms", 8),            // 15
+    Scalar("latency_p99_ms", 8),            // 16
+    Scalar("latency_max_ms", 8),            // 17
+    Scalar("latency_samples", 8),           // 18
+    Array("session_latency_p50_ms", 8, 9),  // 19
+    Array("session_latency_p99_ms", 8, 9),  // 20
+    Count("num_error_kinds"),               // 21
+    StringArray("error_kind", 21),          // 22
+    Array("error_count", 8, 21),            // 23
 };
 
 struct TypeInfo {

@@ -1,7 +1,7 @@
 # Scene generators shared by the GPU tests and the studies.
 add_library(far_test_scenes STATIC support/test_scenes.cc)
 target_include_directories(far_test_scenes PUBLIC support)
-target_link_libraries(far_test_scenes PUBLIC far::pairs far::io PRIVATE far_warnings)
+target_link_libraries(far_test_scenes PUBLIC far::pairs far::scenes PRIVATE far_warnings)
 
 # GPU tests: headless GL (llvmpipe in CI). Label gpu.
 far_add_test(far_gl_test gpu far/gl/gl_context_test.cc far/gl/pipeline_culling_test.cc)

@@ -88,7 +88,7 @@ TEST(MessageTest, FingerprintsArePinned) {
   EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0x5f9c87824a3ce364ull));
   EXPECT_EQ(far_lcm::error_t::getHash(), static_cast<int64_t>(0xb22a7284ae722a4full));
   EXPECT_EQ(far_lcm::status_request_t::getHash(), static_cast<int64_t>(0x232a6c3597e1b397ull));
-  EXPECT_EQ(far_lcm::status_reply_t::getHash(), static_cast<int64_t>(0xd1d6d8b50bd7af02ull));
+  EXPECT_EQ(far_lcm::status_reply_t::getHash(), static_cast<int64_t>(0x6cf89a8321868d65ull));
   EXPECT_EQ(kProtocolVersion, 1);
 }
 

@@ -175,6 +175,16 @@ inline far_lcm::status_reply_t SampleStatusReply() {
   m.session_client_name = {"a", "bb"};
   m.session_steps = {5, 0};
   m.session_objects = {10, 0};
+  m.latency_p50_ms = 1.5;
+  m.latency_p90_ms = 2.5;
+  m.latency_p99_ms = 4.0;
+  m.latency_max_ms = 9.0;
+  m.latency_samples = 5;
+  m.session_latency_p50_ms = {1.5, 0.0};
+  m.session_latency_p99_ms = {4.0, 0.0};
+  m.num_error_kinds = 2;
+  m.error_kind = {"busy", "invalid_argument"};
+  m.error_count = {1, 3};
   return m;
 }
 

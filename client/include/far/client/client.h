@@ -1,0 +1,95 @@
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <future>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "far/mesh.h"
+#include "far/pipeline.h"
+#include "far/result.h"
+#include "far/scene.h"
+#include "far/step_request.h"
+
+namespace far::client {
+
+/// How to reach the daemon and what to ask of it.
+struct ClientOptions {
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
+  std::string client_name = "far-client";  ///< shown in the daemon's status and logs
+  std::chrono::milliseconds timeout{3000};  ///< for opening a session and for Step
+  bool heartbeat = true;  ///< send heartbeats from a background thread (else call Heartbeat)
+};
+
+/// The daemon's status, as far-client status prints it.
+struct DaemonStatus {
+  std::string daemon_version, gl_renderer;
+  int64_t uptime_ms = 0, steps_total = 0, errors_total = 0, rejected_messages_total = 0;
+  int max_sessions = 0;
+  double latency_p50_ms = 0, latency_p90_ms = 0, latency_p99_ms = 0, latency_max_ms = 0;
+  int64_t latency_samples = 0;
+  struct Session {
+    int64_t id = 0;
+    std::string client_name;
+    int64_t steps = 0;
+    int objects = 0;
+    double latency_p50_ms = 0, latency_p99_ms = 0;
+  };
+  std::vector<Session> sessions;
+  std::vector<std::pair<std::string, int64_t>> errors_by_kind;
+};
+
+/// One session with far-daemon: a shared-memory ring for mesh updates and LCM for control.
+/// Updates (AddObject, ...) are written to the ring at once and take effect at the next Step.
+///
+/// Thread safety: one thread at a time per Client (a background thread of its own receives
+/// replies and sends heartbeats). Errors are far::Error: kUnavailable "no far-daemon answered"
+/// when none runs, kTimeout when a reply does not come, the daemon's own error otherwise.
+class Client {
+ public:
+  /// Opens a session. Errors: kUnavailable (LCM cannot start, or no daemon answered within
+  /// options.timeout), the daemon's refusal (kLimitExceeded when it has too many sessions),
+  /// kPermissionDenied/kVersionMismatch when the shared memory cannot be trusted.
+  static Result<std::unique_ptr<Client>> Connect(const ClientOptions& options = {});
+  /// Closes the session (Close) if still open.
+  ~Client();
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
+
+  Result<void> AddObject(uint32_t id, const Mesh& mesh, Motion motion, const Pose& X_WO = {});
+  Result<void> RemoveObject(uint32_t id);
+  Result<void> SetPose(uint32_t id, const Pose& X_WO);
+  Result<void> SetVertices(uint32_t id, std::span<const Eigen::Vector3d> p_MV);
+  /// Adds every object of a scene.
+  Result<void> LoadScene(const Scene& scene);
+  /// Applies one animation frame: removals, additions, poses, vertices.
+  Result<void> ApplyFrame(const FrameUpdate& frame);
+
+  /// Runs one step of this session's scene and waits for its reply (options.timeout).
+  Result<StepResult> Step(const StepRequest& request);
+  /// Sends a step and returns at once; the future holds the reply or the error.
+  std::future<Result<StepResult>> StepAsync(const StepRequest& request);
+
+  /// Sends a heartbeat (the background thread does this when options.heartbeat).
+  Result<void> Heartbeat();
+  /// Ends the session; later calls fail with kUnavailable.
+  Result<void> Close();
+
+  int64_t session_id() const;
+  const std::string& shm_name() const;
+
+  /// Asks the daemon for its status. Errors: kUnavailable when no daemon answered in time.
+  static Result<DaemonStatus> Status(const std::string& lcm_url, std::chrono::milliseconds timeout);
+
+ private:
+  struct Impl;
+  explicit Client(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace far::client

@@ -1,0 +1,51 @@
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "far/result.h"
+
+namespace far::protocol {
+
+/// A thin owner of an LCM instance through LCM's C API. The C++ wrapper's subscribe is avoided:
+/// its callback trampolines are miscompiled by GCC 12 under -fsanitize=vptr (docs/protocol.md),
+/// and its typed handlers decode without our size guards. Handlers get raw bytes.
+///
+/// Thread safety: Publish may be called from any thread (serialized here); Subscribe before
+/// the handling thread starts; Handle from one thread only, which runs the handlers.
+class LcmBus {
+ public:
+  using Handler = std::function<void(std::string_view channel, std::span<const uint8_t> bytes)>;
+
+  /// Connects to `url` (e.g. "udpm://239.255.76.67:7667?ttl=0", "memq://").
+  /// Errors: kUnavailable naming the URL (bad URL, no multicast route on loopback, ...).
+  static Result<std::unique_ptr<LcmBus>> Create(const std::string& url);
+  ~LcmBus();
+  LcmBus(const LcmBus&) = delete;
+  LcmBus& operator=(const LcmBus&) = delete;
+
+  /// Calls `handler` for every message on channels matching the regular expression `channel`.
+  void Subscribe(const std::string& channel, Handler handler);
+  /// Publishes bytes on `channel`. Errors: kUnavailable when LCM fails to send.
+  Result<void> Publish(const std::string& channel, std::span<const uint8_t> bytes);
+  /// Waits up to `timeout` for messages and runs their handlers. Returns false on an LCM error.
+  bool Handle(std::chrono::milliseconds timeout);
+
+  const std::string& url() const { return url_; }
+
+ private:
+  LcmBus() = default;
+  struct Subscription;
+  std::string url_;
+  void* lcm_ = nullptr;  // lcm_t*
+  std::mutex publish_mutex_;
+  std::vector<std::unique_ptr<Subscription>> subscriptions_;
+};
+
+}  // namespace far::protocol

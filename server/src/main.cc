@@ -1,0 +1,98 @@
+// far-daemon: the FAR collision-culling service. See README.md and docs/daemon.md.
+#include <csignal>
+#include <cstdio>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "daemon.h"
+#include "far/step_request.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+void OnSignal(int) { g_stop = true; }  // async-signal-safe: a lock-free atomic store
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using far::server::DaemonConfig;
+  CLI::App app{"far-daemon: GPU collision culling (FAR) for simulators over LCM + shared memory"};
+  std::string config_path, depth_format, gl_platform;
+  DaemonConfig flags;
+  app.add_option("--config", config_path, "JSON config file (docs/daemon.md); flags override it");
+  auto* url = app.add_option("--lcm-url", flags.lcm_url, "LCM URL")->capture_default_str();
+  auto* resolution = app.add_option("--resolution", flags.default_resolution, "default viewport size")->capture_default_str();
+  auto* depth = app.add_option("--depth-format", depth_format, "depth16, depth24 (default) or depth32f");
+  auto* platform = app.add_option("--gl-platform", gl_platform, "auto (default), device or surfaceless");
+  auto* sessions = app.add_option("--max-sessions", flags.max_sessions, "session limit")->capture_default_str();
+  auto* triangles = app.add_option("--max-triangles", flags.max_triangles_per_session, "triangles per session")->capture_default_str();
+  auto* objects = app.add_option("--max-objects", flags.max_objects_per_session, "objects per session")->capture_default_str();
+  auto* ring = app.add_option("--ring-bytes", flags.ring_bytes, "update ring bytes per session (power of two)")->capture_default_str();
+  auto* rate = app.add_option("--max-rate", flags.max_requests_per_second, "step requests per second per session")->capture_default_str();
+  auto* heartbeat = app.add_option("--heartbeat-timeout-ms", flags.heartbeat_timeout_ms, "close sessions silent this long")->capture_default_str();
+  auto* threads = app.add_option("--threads", flags.exact_threads, "CPU threads for exact tests (0: all)")->capture_default_str();
+  auto* level = app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  // The file first, then every flag given on the command line on top of it.
+  DaemonConfig config;
+  if (!config_path.empty()) {
+    auto loaded = far::server::LoadDaemonConfig(config_path);
+    if (!loaded) {
+      std::fprintf(stderr, "far-daemon: %s\n", far::ToString(loaded.error()).c_str());
+      return 2;
+    }
+    config = *loaded;
+  }
+  if (*url) config.lcm_url = flags.lcm_url;
+  if (*resolution) config.default_resolution = flags.default_resolution;
+  if (*depth) {
+    auto format = far::ParseDepthFormat(depth_format);
+    if (!format) {
+      std::fprintf(stderr, "far-daemon: --depth-format: unknown '%s'\n", depth_format.c_str());
+      return 2;
+    }
+    config.depth_format = *format;
+  }
+  if (*platform) {
+    if (gl_platform == "auto") config.gl_platform = far::GlPlatform::kAuto;
+    else if (gl_platform == "device") config.gl_platform = far::GlPlatform::kDevice;
+    else if (gl_platform == "surfaceless") config.gl_platform = far::GlPlatform::kSurfaceless;
+    else {
+      std::fprintf(stderr, "far-daemon: --gl-platform: unknown '%s'\n", gl_platform.c_str());
+      return 2;
+    }
+  }
+  if (*sessions) config.max_sessions = flags.max_sessions;
+  if (*triangles) config.max_triangles_per_session = flags.max_triangles_per_session;
+  if (*objects) config.max_objects_per_session = flags.max_objects_per_session;
+  if (*ring) config.ring_bytes = flags.ring_bytes;
+  if (*rate) config.max_requests_per_second = flags.max_requests_per_second;
+  if (*heartbeat) config.heartbeat_timeout_ms = flags.heartbeat_timeout_ms;
+  if (*threads) config.exact_threads = flags.exact_threads;
+  if (*level) config.log_level = flags.log_level;
+  if (auto ok = far::server::ValidateDaemonConfig(config); !ok) {
+    std::fprintf(stderr, "far-daemon: %s\n", far::ToString(ok.error()).c_str());
+    return 2;
+  }
+
+  // Structured logs: one line per event, key=value.
+  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e level=%l %v");
+  spdlog::set_level(spdlog::level::from_str(config.log_level));
+
+  auto daemon = far::server::Daemon::Create(config);
+  if (!daemon) {
+    std::fprintf(stderr, "far-daemon: %s\n", far::ToString(daemon.error()).c_str());
+    return 1;
+  }
+  std::signal(SIGTERM, OnSignal);
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGPIPE, SIG_IGN);
+  if (auto ran = (*daemon)->Run(&g_stop); !ran) {
+    std::fprintf(stderr, "far-daemon: %s\n", far::ToString(ran.error()).c_str());
+    return 1;
+  }
+  return 0;
+}
