@@ -164,6 +164,22 @@ struct Daemon::Impl {
   void OnOpen(std::string_view channel, std::span<const uint8_t> bytes) {
     auto message = protocol::DecodeMessage<wire::open_session_t>(bytes.data(), bytes.size(),
                                                                  protocol::kMaxControlMessageBytes);
+    if (!message && message.error().code == ErrorCode::kVersionMismatch) {
+      // A client of another protocol version: tell it so on its reply channel, if it named one.
+      auto any = protocol::DecodeMessageAnyVersion<wire::open_session_t>(bytes.data(), bytes.size(),
+                                                                          protocol::kMaxControlMessageBytes);
+      if (any && protocol::IsValidOpenReplyChannel(any->reply_channel)) {
+        wire::open_session_reply_t reply{};
+        reply.protocol_version = protocol::kProtocolVersion;
+        reply.request_id = any->request_id;
+        reply.status = protocol::ToWireStatus(ErrorCode::kVersionMismatch);
+        reply.status_name = far::ToString(ErrorCode::kVersionMismatch);
+        reply.message = message.error().message;
+        CountError(reply.status_name);
+        if (auto out = protocol::EncodeMessage(reply)) Publish(any->reply_channel, *out);
+        return;
+      }
+    }
     if (!message) return Reject(channel, message.error());
     auto params = protocol::ValidateOpenSession(*message);
     wire::open_session_reply_t reply{};

@@ -115,8 +115,10 @@ Result<void> CheckProtocolVersion(MessageType type, int32_t version);
 /// Errors: kLimitExceeded (size > max_size or an allocation failed), kParseError (fingerprint,
 /// malformed encoding, trailing bytes; the message names the field), kVersionMismatch
 /// ("step_request_t.protocol_version: got 2, expected 1"). Thread-safe; never throws.
+/// As DecodeMessage, without the protocol_version check: for answering a peer of another
+/// version in terms it can read (the bytes are still size-checked and pre-scanned).
 template <typename T>
-Result<T> DecodeMessage(const void* data, size_t size, size_t max_size) {
+Result<T> DecodeMessageAnyVersion(const void* data, size_t size, size_t max_size) {
   constexpr MessageType kType = internal::MessageTypeOf<T>::value;
   if (auto ok = internal::CheckEncoding(kType, data, size, max_size); !ok) return ok.error();
   T message;
@@ -132,7 +134,15 @@ Result<T> DecodeMessage(const void* data, size_t size, size_t max_size) {
     return MakeError(ErrorCode::kLimitExceeded,
                      std::string(ToString(kType)) + ": decoding failed: " + e.what());
   }
-  if (auto ok = internal::CheckProtocolVersion(kType, message.protocol_version); !ok) {
+  return message;
+}
+
+template <typename T>
+Result<T> DecodeMessage(const void* data, size_t size, size_t max_size) {
+  auto message = DecodeMessageAnyVersion<T>(data, size, max_size);
+  if (!message) return message;
+  if (auto ok = internal::CheckProtocolVersion(internal::MessageTypeOf<T>::value, message->protocol_version);
+      !ok) {
     return ok.error();
   }
   return message;
