@@ -171,7 +171,8 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
         fragment.motion = Motion::kRigid;
         fragment.mesh_path = "fragment.obj";
         fragment.mesh = SphereMesh(Eigen::Vector3d::Zero(), 0.22, 6, 10);
-        fragment.X_WO.translation = Eigen::Vector3d(0.3, 0.0, 0.6);
+        const double angle = std::numbers::pi / 2 * k;
+        fragment.X_WO.translation = Eigen::Vector3d(0.3 + 0.3 * std::cos(angle), 0.3 * std::sin(angle), 0.6);
         frame.additions.push_back(fragment);
       }
     } else {
@@ -180,7 +181,7 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
       for (int k = 0; k < num_fragments; ++k) {
         const double angle = std::numbers::pi / 2 * k;
         Pose pose;
-        pose.translation = Eigen::Vector3d(0.3 + 0.8 * t * std::cos(angle), 0.8 * t * std::sin(angle),
+        pose.translation = Eigen::Vector3d(0.3 + (0.3 + 0.8 * t) * std::cos(angle), (0.3 + 0.8 * t) * std::sin(angle),
                                            std::max(0.2, 0.6 + 0.5 * t - 1.2 * t * t));
         pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(3 * t + k, Eigen::Vector3d::UnitZ()));
         frame.poses.emplace_back(vase_id + 1 + static_cast<uint32_t>(k), pose);
