@@ -178,8 +178,12 @@ Result<RawRecord> RingReader::CopyRecord(uint64_t index, uint64_t write,
   }
   if (copy_hook_) copy_hook_(header);
   // The whole record into private memory; its header bytes are replaced by the checked copy.
-  record.bytes.resize(header.size);
-  CopyOut(region_, index, record.bytes.data(), header.size);
+  // (assign from the ring's bytes: no zero fill of a buffer about to be overwritten)
+  const uint64_t offset = index & (region_.capacity - 1);
+  const uint64_t first = std::min<uint64_t>(header.size, region_.capacity - offset);
+  record.bytes.reserve(header.size);
+  record.bytes.assign(region_.data + offset, region_.data + offset + first);
+  record.bytes.insert(record.bytes.end(), region_.data, region_.data + (header.size - first));
   std::memcpy(record.bytes.data(), &header, sizeof(RecordHeader));
   return record;
 }

@@ -142,11 +142,17 @@ Result<std::vector<Eigen::Vector3d>> LoadPositions(const RecordErrors& errors,
   std::vector<Eigen::Vector3d> positions(count);
   std::memcpy(static_cast<void*>(positions.data()), bytes.data() + offset,
               size_t{count} * sizeof(Eigen::Vector3d));
+  // Fast path, branch-free so that it vectorizes: |v| <= max is false for NaN and infinities
+  // too. Only when some value fails, find it and name it.
+  const double* values = positions.empty() ? nullptr : positions.data()->data();
+  const size_t num_values = size_t{count} * 3;
+  bool all_fine = true;
+  for (size_t i = 0; i < num_values; ++i) all_fine &= std::abs(values[i]) <= limits.max_abs_coordinate;
+  if (all_fine) return positions;
   static const char* const kAxis[3] = {"x", "y", "z"};
   for (uint32_t i = 0; i < count; ++i) {
     for (int k = 0; k < 3; ++k) {
       const double value = positions[i][k];
-      // Fast path: most values are fine; build the field name only on failure.
       if (std::isfinite(value) && std::abs(value) <= limits.max_abs_coordinate) continue;
       const std::string field = "p_MV[" + std::to_string(i) + "]." + kAxis[k];
       if (auto ok = CheckCoordinate(errors, field, value, limits); !ok) return ok.error();
