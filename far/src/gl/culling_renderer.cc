@@ -33,9 +33,24 @@ Shape ShapeOf(PieceSet set) {
   return Shape::kTriangle;
 }
 
-int CornersPerInstance(Shape shape) {
-  return shape == Shape::kBox ? 36 : shape == Shape::kPrism ? 24 : 3;
+// Triangle corners of one instance, as indices into its distinct corners (8 for a box, 6 for
+// a prism, 3 for a triangle). Indexed draws let the vertex cache shade each distinct corner
+// once: llvmpipe runs vertex shaders on one thread, so this is most of a view's vertex cost.
+std::span<const uint8_t> CornerIndices(Shape shape) {
+  static constexpr std::array<uint8_t, 3> kTriangle = {0, 1, 2};
+  if (shape == Shape::kBox) return kBoxTriangleCorners;
+  if (shape == Shape::kPrism) return kPrismTriangleCorners;
+  return kTriangle;
 }
+
+// glMultiDrawElementsIndirect's command layout.
+struct DrawCommand {
+  GLuint count;
+  GLuint instance_count;
+  GLuint first_index;
+  GLint base_vertex;
+  GLuint base_instance;
+};
 
 // The vertex shader builds each corner of an instance from the per-object data: its matrix
 // (anchor frame -> clip space, composed in double on the CPU) and its radius (r plus the
@@ -52,7 +67,6 @@ struct ObjectData { mat4 M; float radius; uint group; uint first_primitive; uint
 layout(std430, binding = 0) readonly buffer Objects { ObjectData objects[]; };
 layout(std430, binding = 1) readonly buffer Alive { uint alive[]; };
 
-uniform uint corners[36];
 uniform int triangles_per_primitive;  // 0: one primitive per object
 
 flat out uint v_group;
@@ -69,7 +83,7 @@ void main() {
     gl_Position = vec4(0.0, 0.0, 2.0, 1.0);
     return;
   }
-  uint k = corners[gl_VertexID];
+  uint k = uint(gl_VertexID);  // the corner: indexed draws over the distinct corners
   vec3 p;
 #if SHAPE_BOX
   vec3 s = vec3((k & 1u) != 0u ? 1.0 : -1.0, (k & 2u) != 0u ? 1.0 : -1.0, (k & 4u) != 0u ? 1.0 : -1.0);
@@ -236,6 +250,10 @@ struct CullingRenderer::Impl {
   GLuint fbo_id = 0, fbo_other = 0, fbo_nearest_only = 0;
   GLuint object_buffer = 0, alive_buffer = 0, flag_buffer = 0;
   std::vector<GLuint> queries;
+  GLuint index_buffers[3] = {};                // per shape: CornerIndices
+  GLuint indirect_buffers[kNumPieceSets] = {};  // per set: this view's draw commands
+  size_t view_commands[kNumPieceSets] = {};
+  uint64_t view_instances[kNumPieceSets] = {};
 
   ~Impl() {
     for (auto& store : stores) {
@@ -252,6 +270,8 @@ struct CullingRenderer::Impl {
     GLuint buffers[] = {object_buffer, alive_buffer, flag_buffer};
     glDeleteBuffers(3, buffers);
     if (!queries.empty()) glDeleteQueries(static_cast<GLsizei>(queries.size()), queries.data());
+    glDeleteBuffers(3, index_buffers);
+    glDeleteBuffers(kNumPieceSets, indirect_buffers);
   }
 
   // Uploads a set's dirty slots: only changed bytes when no slot changed size.
@@ -286,11 +306,6 @@ struct CullingRenderer::Impl {
     GLuint program = programs[static_cast<int>(shape)][static_cast<int>(role)];
     glUseProgram(program);
     glUniform1i(glGetUniformLocation(program, "triangles_per_primitive"), triangles_per_primitive);
-    GLuint corners[36] = {};
-    if (shape == Shape::kBox) std::copy(kBoxTriangleCorners.begin(), kBoxTriangleCorners.end(), corners);
-    if (shape == Shape::kPrism) std::copy(kPrismTriangleCorners.begin(), kPrismTriangleCorners.end(), corners);
-    if (shape == Shape::kTriangle) corners[0] = 0, corners[1] = 1, corners[2] = 2;
-    glUniform1uiv(glGetUniformLocation(program, "corners"), 36, corners);
   }
 
   // Draws instances [first, first + count) of a set.
@@ -298,10 +313,42 @@ struct CullingRenderer::Impl {
     if (count == 0) return;
     const PieceStore& store = stores[static_cast<int>(set)];
     glBindVertexArray(store.vao);
-    glDrawArraysInstancedBaseInstance(GL_TRIANGLES, 0, CornersPerInstance(ShapeOf(set)),
-                                      static_cast<GLsizei>(count), static_cast<GLuint>(first));
+    glDrawElementsInstancedBaseInstance(GL_TRIANGLES, static_cast<GLsizei>(CornerIndices(ShapeOf(set)).size()),
+                                        GL_UNSIGNED_BYTE, nullptr, static_cast<GLsizei>(count),
+                                        static_cast<GLuint>(first));
     counters->draws++;
     counters->instances += static_cast<int64_t>(count);
+  }
+
+  // Prepares one indirect command per object of the view (its instances in `set`), so that a
+  // pass draws only the view's objects with one call.
+  void PrepareViewDraws(PieceSet set, std::span<const ViewObject> objects, int64_t* bytes) {
+    const PieceStore& store = stores[static_cast<int>(set)];
+    std::vector<DrawCommand> commands;
+    for (const ViewObject& object : objects) {
+      if (object.slot >= store.slots.size() || store.slots[object.slot].empty()) continue;
+      commands.push_back({static_cast<GLuint>(CornerIndices(ShapeOf(set)).size()),
+                          static_cast<GLuint>(store.slots[object.slot].size()), 0, 0,
+                          static_cast<GLuint>(store.first[object.slot])});
+    }
+    view_commands[static_cast<int>(set)] = commands.size();
+    view_instances[static_cast<int>(set)] = 0;
+    for (const auto& c : commands) view_instances[static_cast<int>(set)] += c.instance_count;
+    glNamedBufferData(indirect_buffers[static_cast<int>(set)],
+                      static_cast<GLsizeiptr>(std::max<size_t>(commands.size(), 1) * sizeof(DrawCommand)),
+                      commands.data(), GL_STREAM_DRAW);
+    *bytes += static_cast<int64_t>(commands.size() * sizeof(DrawCommand));
+  }
+
+  // Draws every instance of the view's objects in `set` (PrepareViewDraws first).
+  void DrawView(PieceSet set, RenderCounters* counters) {
+    const int s = static_cast<int>(set);
+    if (view_commands[s] == 0) return;
+    glBindVertexArray(stores[s].vao);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buffers[s]);
+    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_BYTE, nullptr, static_cast<GLsizei>(view_commands[s]), 0);
+    counters->draws++;
+    counters->instances += static_cast<int64_t>(view_instances[s]);
   }
 };
 
@@ -325,10 +372,20 @@ Result<std::unique_ptr<CullingRenderer>> CullingRenderer::Create(const RasterFor
       impl->programs[static_cast<int>(shape)][role] = *program;
     }
   }
+  // Corner index lists, one per shape.
+  for (Shape shape : {Shape::kBox, Shape::kPrism, Shape::kTriangle}) {
+    const auto indices = CornerIndices(shape);
+    GLuint& buffer = impl->index_buffers[static_cast<int>(shape)];
+    glCreateBuffers(1, &buffer);
+    glNamedBufferStorage(buffer, static_cast<GLsizeiptr>(indices.size()), indices.data(), 0);
+  }
+  glCreateBuffers(kNumPieceSets, impl->indirect_buffers);
   // Piece buffers and their vertex layouts (one instance per draw instance).
-  for (auto& store : impl->stores) {
+  for (int set = 0; set < kNumPieceSets; ++set) {
+    PieceStore& store = impl->stores[static_cast<size_t>(set)];
     glCreateBuffers(1, &store.buffer);
     glCreateVertexArrays(1, &store.vao);
+    glVertexArrayElementBuffer(store.vao, impl->index_buffers[static_cast<int>(ShapeOf(static_cast<PieceSet>(set)))]);
     glVertexArrayVertexBuffer(store.vao, 0, store.buffer, 0, sizeof(PieceInstance));
     glVertexArrayBindingDivisor(store.vao, 0, 1);
     for (GLuint i = 0; i < 4; ++i) {
@@ -460,10 +517,11 @@ Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
       glDisable(GL_CULL_FACE);
     }
   };
+  for (PieceSet set : view.sets) gl.PrepareViewDraws(set, view.objects, &counters->bytes_uploaded);
   auto draw_all = [&](FragmentRole role) {
     for (PieceSet set : view.sets) {
       gl.UseProgram(ShapeOf(set), role, view.triangles_per_primitive);
-      gl.Draw(set, 0, gl.stores[static_cast<int>(set)].total, counters);
+      gl.DrawView(set, counters);
     }
   };
   // Instance range of sub-object `local` of `object` in `set` (the whole object when k = 0).
@@ -521,7 +579,7 @@ Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
         glUniform1i(glGetUniformLocation(gl.programs[static_cast<int>(ShapeOf(set))][2],
                                          "against_nearest"),
                     against_nearest ? 1 : 0);
-        gl.Draw(set, 0, gl.stores[static_cast<int>(set)].total, counters);
+        gl.DrawView(set, counters);
       }
     }
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
