@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "daemon.h"
+
 #include "far/client/client.h"
 #include "far/pipeline.h"
 #include "far/scenes.h"
@@ -71,7 +72,8 @@ int main(int argc, char** argv) {
     auto remote = client->Step(request);
     const double rt = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     if (!local || !remote) {
-      std::fprintf(stderr, "step failed: %s\n", far::ToString(local ? remote.error() : local.error()).c_str());
+      std::fprintf(stderr, "step failed: %s\n",
+                   far::ToString(local ? remote.error() : local.error()).c_str());
       return 1;
     }
     if (remote->contacts != local->contacts) std::fprintf(stderr, "step %d: contacts differ!\n", s);
@@ -81,15 +83,19 @@ int main(int argc, char** argv) {
     daemon_pipeline.push_back(remote->stats.total_ms);
     overhead.push_back(rt - remote->stats.total_ms);
   }
-  std::printf("scene: %zu objects, 10000 triangles, method far, id-buffer, 256x256, %d steps, GL_RENDERER %s\n",
-              objects.size(), steps, (*pipeline)->gl_renderer().c_str());
+  std::printf(
+      "scene: %zu objects, 10000 triangles, method far, id-buffer, 256x256, %d steps, GL_RENDERER "
+      "%s\n",
+      objects.size(), steps, (*pipeline)->gl_renderer().c_str());
   std::printf("| measure | median ms | p99 ms |\n| --- | ---: | ---: |\n");
-  std::printf("| in-process Pipeline::Step | %.3f | %.3f |\n", Quantile(in_process, 0.5), Quantile(in_process, 0.99));
-  std::printf("| daemon: client round trip | %.3f | %.3f |\n", Quantile(round_trip, 0.5), Quantile(round_trip, 0.99));
-  std::printf("| daemon: pipeline inside the daemon | %.3f | %.3f |\n", Quantile(daemon_pipeline, 0.5),
-              Quantile(daemon_pipeline, 0.99));
-  std::printf("| **daemon overhead** (round trip - pipeline) | **%.3f** | **%.3f** |\n", Quantile(overhead, 0.5),
-              Quantile(overhead, 0.99));
+  std::printf("| in-process Pipeline::Step | %.3f | %.3f |\n", Quantile(in_process, 0.5),
+              Quantile(in_process, 0.99));
+  std::printf("| daemon: client round trip | %.3f | %.3f |\n", Quantile(round_trip, 0.5),
+              Quantile(round_trip, 0.99));
+  std::printf("| daemon: pipeline inside the daemon | %.3f | %.3f |\n",
+              Quantile(daemon_pipeline, 0.5), Quantile(daemon_pipeline, 0.99));
+  std::printf("| **daemon overhead** (round trip - pipeline) | **%.3f** | **%.3f** |\n",
+              Quantile(overhead, 0.5), Quantile(overhead, 0.99));
   client.reset();
   (*daemon)->Stop();
   serving.join();

@@ -4,9 +4,9 @@
 // Bytes per second count the vertex payload (24 bytes per vertex). Same process, one thread:
 // the daemon-side cost is what bounds ingest (the writer is a memcpy).
 //   build/release/bench/far_ring_ingest_benchmark --benchmark_repetitions=10
-#include <vector>
-
 #include <benchmark/benchmark.h>
+
+#include <vector>
 
 #include "far/protocol/ring_records.h"
 #include "far/protocol/shm_segment.h"
@@ -50,7 +50,11 @@ void BM_RingIngest_SetVertices(benchmark::State& state) {
                           static_cast<int64_t>(vertices * 24));
 }
 // (vertices per record, records per step): leaves of 50 vertices, meshes of 10k and 100k.
-BENCHMARK(BM_RingIngest_SetVertices)->Args({50, 200})->Args({10'000, 8})->Args({100'000, 2})->UseRealTime();
+BENCHMARK(BM_RingIngest_SetVertices)
+    ->Args({50, 200})
+    ->Args({10'000, 8})
+    ->Args({100'000, 2})
+    ->UseRealTime();
 
 }  // namespace
 

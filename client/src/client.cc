@@ -7,6 +7,15 @@
 #include <optional>
 #include <thread>
 
+#include "far_lcm/close_session_t.hpp"
+#include "far_lcm/error_t.hpp"
+#include "far_lcm/heartbeat_t.hpp"
+#include "far_lcm/open_session_reply_t.hpp"
+#include "far_lcm/open_session_t.hpp"
+#include "far_lcm/status_reply_t.hpp"
+#include "far_lcm/status_request_t.hpp"
+#include "far_lcm/step_reply_t.hpp"
+
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/lcm_bus.h"
@@ -16,14 +25,6 @@
 #include "far/protocol/shm_reply.h"
 #include "far/protocol/shm_segment.h"
 #include "far/protocol/version.h"
-#include "far_lcm/close_session_t.hpp"
-#include "far_lcm/error_t.hpp"
-#include "far_lcm/heartbeat_t.hpp"
-#include "far_lcm/open_session_reply_t.hpp"
-#include "far_lcm/open_session_t.hpp"
-#include "far_lcm/status_reply_t.hpp"
-#include "far_lcm/status_request_t.hpp"
-#include "far_lcm/step_reply_t.hpp"
 
 namespace far::client {
 namespace {
@@ -120,8 +121,8 @@ struct Client::Impl {
   }
 
   void OnOpenReply(std::span<const uint8_t> bytes) {
-    auto reply = protocol::DecodeMessage<wire::open_session_reply_t>(bytes.data(), bytes.size(),
-                                                                     protocol::kMaxControlMessageBytes);
+    auto reply = protocol::DecodeMessage<wire::open_session_reply_t>(
+        bytes.data(), bytes.size(), protocol::kMaxControlMessageBytes);
     if (!reply) return;
     std::lock_guard lock(mutex);
     if (reply->request_id != open_request_id) return;
@@ -201,10 +202,13 @@ Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
   // reply channel (our id is not known yet; the handler keeps only ours).
   c.open_channel = std::string(protocol::kOpenReplyPrefix) + RandomHex(12);
   Impl* raw = impl.get();
-  c.bus->Subscribe(c.open_channel, [raw](std::string_view, std::span<const uint8_t> b) { raw->OnOpenReply(b); });
-  c.bus->Subscribe("FAR_S[0-9]+_REPLY", [raw](std::string_view channel, std::span<const uint8_t> b) {
-    if (raw->session_id != 0 && channel == raw->reply_channel) raw->OnSessionReply(b);
-  });
+  c.bus->Subscribe(c.open_channel,
+                   [raw](std::string_view, std::span<const uint8_t> b) { raw->OnOpenReply(b); });
+  c.bus->Subscribe("FAR_S[0-9]+_REPLY",
+                   [raw](std::string_view channel, std::span<const uint8_t> b) {
+                     if (raw->session_id != 0 && channel == raw->reply_channel)
+                       raw->OnSessionReply(b);
+                   });
   c.receiver = std::make_unique<BusThread>(c.bus.get());
 
   // Ask for a session and wait for the answer.
@@ -216,7 +220,8 @@ Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
   open.reply_channel = c.open_channel;
   auto bytes = protocol::EncodeMessage(open);
   if (!bytes) return bytes.error();
-  if (auto sent = c.bus->Publish(std::string(protocol::kOpenChannel), *bytes); !sent) return sent.error();
+  if (auto sent = c.bus->Publish(std::string(protocol::kOpenChannel), *bytes); !sent)
+    return sent.error();
   wire::open_session_reply_t reply;
   {
     std::unique_lock lock(c.mutex);
@@ -226,20 +231,24 @@ Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
     reply = *c.open_reply;
   }
   if (reply.status != protocol::kWireOk) {
-    return MakeError(protocol::FromWireStatus(reply.status), "far-daemon refused the session: " + reply.message);
+    return MakeError(protocol::FromWireStatus(reply.status),
+                     "far-daemon refused the session: " + reply.message);
   }
   // Map the session's segment (checks owner, mode and header) and take its key.
-  auto segment = protocol::ShmSegment::Open(reply.shm_name, static_cast<uint64_t>(reply.session_id));
+  auto segment =
+      protocol::ShmSegment::Open(reply.shm_name, static_cast<uint64_t>(reply.session_id));
   if (!segment) return segment.error();
   c.segment = std::move(*segment);
   c.key = c.segment->session_key();
   c.updates = std::make_unique<protocol::UpdateWriter>(c.segment->update_ring());
-  c.replies = std::make_unique<protocol::RingReader>(c.segment->reply_ring(), c.segment->layout().reply_ring_capacity);
+  c.replies = std::make_unique<protocol::RingReader>(c.segment->reply_ring(),
+                                                     c.segment->layout().reply_ring_capacity);
   c.request_channel = reply.request_channel;
   c.reply_channel = reply.session_reply_channel;
   c.session_id = reply.session_id;
   if (options.heartbeat) {
-    const auto period = std::chrono::milliseconds(std::max<int64_t>(50, reply.heartbeat_timeout_ms / 4));
+    const auto period =
+        std::chrono::milliseconds(std::max<int64_t>(50, reply.heartbeat_timeout_ms / 4));
     c.heartbeat_thread = std::thread([raw, period] {
       auto next = std::chrono::steady_clock::now();
       while (!raw->stopping) {
@@ -268,7 +277,8 @@ Result<void> Written(const Result<T>& written, const char* what) {
 
 Result<void> Client::AddObject(uint32_t id, const Mesh& mesh, Motion motion, const Pose& X_WO) {
   if (auto ok = impl_->CheckOpen(); !ok) return ok;
-  return Written(impl_->updates->AddObject(id, mesh, motion, X_WO, impl_->options.timeout), "add_object");
+  return Written(impl_->updates->AddObject(id, mesh, motion, X_WO, impl_->options.timeout),
+                 "add_object");
 }
 Result<void> Client::RemoveObject(uint32_t id) {
   if (auto ok = impl_->CheckOpen(); !ok) return ok;
@@ -321,9 +331,11 @@ std::future<Result<StepResult>> Client::StepAsync(const StepRequest& request) {
     std::lock_guard lock(c.mutex);
     c.pending[step_id] = Impl::Pending{request_id, std::move(promise)};
   }
-  auto message = protocol::MakeStepRequest(c.session_id, request_id, step_id, c.updates->last_sequence(), request);
+  auto message = protocol::MakeStepRequest(c.session_id, request_id, step_id,
+                                           c.updates->last_sequence(), request);
   auto bytes = protocol::EncodeSigned(message, c.key);
-  Result<void> sent = bytes ? c.bus->Publish(c.request_channel, *bytes) : Result<void>(bytes.error());
+  Result<void> sent =
+      bytes ? c.bus->Publish(c.request_channel, *bytes) : Result<void>(bytes.error());
   if (!sent) c.Fail(step_id, sent.error());
   return future;
 }
@@ -336,7 +348,8 @@ Result<StepResult> Client::Step(const StepRequest& request) {
   auto future = StepAsync(request);
   if (future.wait_for(impl_->options.timeout) != std::future_status::ready) {
     impl_->Fail(step_id, MakeError(ErrorCode::kTimeout, "timeout"));
-    return MakeError(ErrorCode::kTimeout, "no reply to step " + std::to_string(step_id) + " within " +
+    return MakeError(ErrorCode::kTimeout, "no reply to step " + std::to_string(step_id) +
+                                              " within " +
                                               std::to_string(impl_->options.timeout.count()) +
                                               " ms (far-daemon stopped or restarted?)");
   }
@@ -369,13 +382,15 @@ Result<DaemonStatus> Client::Status(const std::string& lcm_url, std::chrono::mil
   std::condition_variable changed;
   std::optional<wire::status_reply_t> reply;
   const int64_t request_id = RandomId();
-  (*bus)->Subscribe(std::string(protocol::kStatusReplyChannel), [&](std::string_view, std::span<const uint8_t> b) {
-    auto message = protocol::DecodeMessage<wire::status_reply_t>(b.data(), b.size(), protocol::kMaxStatusReplyBytes);
-    if (!message || message->request_id != request_id) return;
-    std::lock_guard lock(mutex);
-    reply = std::move(*message);
-    changed.notify_all();
-  });
+  (*bus)->Subscribe(std::string(protocol::kStatusReplyChannel),
+                    [&](std::string_view, std::span<const uint8_t> b) {
+                      auto message = protocol::DecodeMessage<wire::status_reply_t>(
+                          b.data(), b.size(), protocol::kMaxStatusReplyBytes);
+                      if (!message || message->request_id != request_id) return;
+                      std::lock_guard lock(mutex);
+                      reply = std::move(*message);
+                      changed.notify_all();
+                    });
   {
     BusThread receiver(bus->get());
     wire::status_request_t request{};
@@ -383,9 +398,11 @@ Result<DaemonStatus> Client::Status(const std::string& lcm_url, std::chrono::mil
     request.request_id = request_id;
     auto bytes = protocol::EncodeMessage(request);
     if (!bytes) return bytes.error();
-    if (auto sent = (*bus)->Publish(std::string(protocol::kStatusChannel), *bytes); !sent) return sent.error();
+    if (auto sent = (*bus)->Publish(std::string(protocol::kStatusChannel), *bytes); !sent)
+      return sent.error();
     std::unique_lock lock(mutex);
-    if (!changed.wait_for(lock, timeout, [&] { return reply.has_value(); })) return NoDaemon(lcm_url, timeout);
+    if (!changed.wait_for(lock, timeout, [&] { return reply.has_value(); }))
+      return NoDaemon(lcm_url, timeout);
   }
   DaemonStatus status;
   status.daemon_version = reply->daemon_version;
@@ -401,9 +418,9 @@ Result<DaemonStatus> Client::Status(const std::string& lcm_url, std::chrono::mil
   status.latency_max_ms = reply->latency_max_ms;
   status.latency_samples = reply->latency_samples;
   for (int i = 0; i < reply->num_sessions; ++i) {
-    status.sessions.push_back({reply->session_id[i], reply->session_client_name[i], reply->session_steps[i],
-                               reply->session_objects[i], reply->session_latency_p50_ms[i],
-                               reply->session_latency_p99_ms[i]});
+    status.sessions.push_back({reply->session_id[i], reply->session_client_name[i],
+                               reply->session_steps[i], reply->session_objects[i],
+                               reply->session_latency_p50_ms[i], reply->session_latency_p99_ms[i]});
   }
   for (int i = 0; i < reply->num_error_kinds; ++i) {
     status.errors_by_kind.emplace_back(reply->error_kind[i], reply->error_count[i]);

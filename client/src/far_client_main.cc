@@ -30,8 +30,10 @@ int Fail(const far::Error& error) {
 
 double Quantile(std::vector<double> samples, double q) {
   if (samples.empty()) return 0;
-  const size_t rank = std::min(samples.size() - 1, static_cast<size_t>(q * static_cast<double>(samples.size())));
-  std::nth_element(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(rank), samples.end());
+  const size_t rank =
+      std::min(samples.size() - 1, static_cast<size_t>(q * static_cast<double>(samples.size())));
+  std::nth_element(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(rank),
+                   samples.end());
   return samples[rank];
 }
 
@@ -42,25 +44,37 @@ struct StepFlags {
   double distance = -1;
 
   void Add(CLI::App* command) {
-    command->add_option("--method", method, "far, far-exact-offset, cullide, aabb, fcl or exact")->capture_default_str();
-    command->add_option("--mechanism", mechanism, "id-buffer or occlusion-query")->capture_default_str();
-    command->add_option("--resolution", resolution, "viewport size (8..8192)")->capture_default_str();
-    command->add_option("--depth-format", depth, "depth16, depth24 or depth32f")->capture_default_str();
-    command->add_option("--subobject-size", subobject_size, "triangles per sub-object")->capture_default_str();
-    command->add_option("--distance", distance, "distance D: report every triangle pair closer than D");
-    command->add_option("--output", output,
-                        "deepest output: pcs (object and primitive PCS), pairs (object pairs), contacts, "
-                        "distance (default: contacts, or distance when --distance is given)");
+    command->add_option("--method", method, "far, far-exact-offset, cullide, aabb, fcl or exact")
+        ->capture_default_str();
+    command->add_option("--mechanism", mechanism, "id-buffer or occlusion-query")
+        ->capture_default_str();
+    command->add_option("--resolution", resolution, "viewport size (8..8192)")
+        ->capture_default_str();
+    command->add_option("--depth-format", depth, "depth16, depth24 or depth32f")
+        ->capture_default_str();
+    command->add_option("--subobject-size", subobject_size, "triangles per sub-object")
+        ->capture_default_str();
+    command->add_option("--distance", distance,
+                        "distance D: report every triangle pair closer than D");
+    command->add_option(
+        "--output", output,
+        "deepest output: pcs (object and primitive PCS), pairs (object pairs), contacts, "
+        "distance (default: contacts, or distance when --distance is given)");
   }
 
   far::Result<far::StepRequest> Request() const {
     far::StepRequest request;
     auto m = far::ParseMethod(method);
-    if (!m) return far::MakeError(far::ErrorCode::kInvalidArgument, "--method: unknown '" + method + "'");
+    if (!m)
+      return far::MakeError(far::ErrorCode::kInvalidArgument, "--method: unknown '" + method + "'");
     auto k = far::ParseMechanism(mechanism);
-    if (!k) return far::MakeError(far::ErrorCode::kInvalidArgument, "--mechanism: unknown '" + mechanism + "'");
+    if (!k)
+      return far::MakeError(far::ErrorCode::kInvalidArgument,
+                            "--mechanism: unknown '" + mechanism + "'");
     auto d = far::ParseDepthFormat(depth);
-    if (!d) return far::MakeError(far::ErrorCode::kInvalidArgument, "--depth-format: unknown '" + depth + "'");
+    if (!d)
+      return far::MakeError(far::ErrorCode::kInvalidArgument,
+                            "--depth-format: unknown '" + depth + "'");
     request.method = *m;
     request.mechanism = *k;
     request.depth_format = *d;
@@ -69,7 +83,8 @@ struct StepFlags {
     if (distance >= 0) request.distance = distance;
     std::string out = output.empty() ? (distance >= 0 ? "distance" : "contacts") : output;
     auto o = far::ParseOutput(out);
-    if (!o) return far::MakeError(far::ErrorCode::kInvalidArgument, "--output: unknown '" + out + "'");
+    if (!o)
+      return far::MakeError(far::ErrorCode::kInvalidArgument, "--output: unknown '" + out + "'");
     request.output = *o;
     return request;
   }
@@ -78,21 +93,29 @@ struct StepFlags {
 json StatsJson(const far::StepStats& stats) {
   json stages = json::object();
   for (const auto& stage : stats.stages) stages[stage.name] = stage.ms;
-  return {{"total_ms", stats.total_ms},           {"stages_ms", stages},
+  return {{"total_ms", stats.total_ms},
+          {"stages_ms", stages},
           {"primitives_rendered", stats.primitives_rendered},
-          {"draws", stats.draws},                 {"queries", stats.queries},
-          {"bytes_uploaded", stats.bytes_uploaded}, {"object_pairs", stats.object_pairs},
-          {"pairs_considered", stats.pairs_considered}, {"pairs_tested", stats.pairs_tested},
-          {"object_radius", stats.object_radius}, {"primitive_radius", stats.primitive_radius}};
+          {"draws", stats.draws},
+          {"queries", stats.queries},
+          {"bytes_uploaded", stats.bytes_uploaded},
+          {"object_pairs", stats.object_pairs},
+          {"pairs_considered", stats.pairs_considered},
+          {"pairs_tested", stats.pairs_tested},
+          {"object_radius", stats.object_radius},
+          {"primitive_radius", stats.primitive_radius}};
 }
 
 json ResultJson(const far::StepResult& result) {
   json contacts = json::array(), distance_pairs = json::array(), pcs_primitives = json::object();
-  for (const auto& c : result.contacts) contacts.push_back({c.object_a, c.triangle_a, c.object_b, c.triangle_b});
+  for (const auto& c : result.contacts)
+    contacts.push_back({c.object_a, c.triangle_a, c.object_b, c.triangle_b});
   for (const auto& d : result.distance_pairs) {
-    distance_pairs.push_back({d.pair.object_a, d.pair.triangle_a, d.pair.object_b, d.pair.triangle_b, d.distance});
+    distance_pairs.push_back(
+        {d.pair.object_a, d.pair.triangle_a, d.pair.object_b, d.pair.triangle_b, d.distance});
   }
-  for (const auto& [id, triangles] : result.pcs_primitives) pcs_primitives[std::to_string(id)] = triangles;
+  for (const auto& [id, triangles] : result.pcs_primitives)
+    pcs_primitives[std::to_string(id)] = triangles;
   json pairs = json::array();
   for (const auto& p : result.object_pairs) pairs.push_back({p.object_a, p.object_b});
   return {{"contacts", contacts},
@@ -109,19 +132,29 @@ int Status(const std::string& url, int timeout_ms, bool as_json) {
   if (as_json) {
     json sessions = json::array();
     for (const auto& s : status->sessions) {
-      sessions.push_back({{"id", s.id}, {"client", s.client_name}, {"steps", s.steps}, {"objects", s.objects},
-                          {"latency_p50_ms", s.latency_p50_ms}, {"latency_p99_ms", s.latency_p99_ms}});
+      sessions.push_back({{"id", s.id},
+                          {"client", s.client_name},
+                          {"steps", s.steps},
+                          {"objects", s.objects},
+                          {"latency_p50_ms", s.latency_p50_ms},
+                          {"latency_p99_ms", s.latency_p99_ms}});
     }
     json errors = json::object();
     for (const auto& [kind, count] : status->errors_by_kind) errors[kind] = count;
-    std::cout << json{{"daemon_version", status->daemon_version}, {"gl_renderer", status->gl_renderer},
-                      {"uptime_ms", status->uptime_ms}, {"steps_total", status->steps_total},
-                      {"errors_total", status->errors_total}, {"errors_by_kind", errors},
+    std::cout << json{{"daemon_version", status->daemon_version},
+                      {"gl_renderer", status->gl_renderer},
+                      {"uptime_ms", status->uptime_ms},
+                      {"steps_total", status->steps_total},
+                      {"errors_total", status->errors_total},
+                      {"errors_by_kind", errors},
                       {"rejected_messages_total", status->rejected_messages_total},
                       {"max_sessions", status->max_sessions},
-                      {"latency_ms", {{"p50", status->latency_p50_ms}, {"p90", status->latency_p90_ms},
-                                      {"p99", status->latency_p99_ms}, {"max", status->latency_max_ms},
-                                      {"samples", status->latency_samples}}},
+                      {"latency_ms",
+                       {{"p50", status->latency_p50_ms},
+                        {"p90", status->latency_p90_ms},
+                        {"p99", status->latency_p99_ms},
+                        {"max", status->latency_max_ms},
+                        {"samples", status->latency_samples}}},
                       {"sessions", sessions}}
                      .dump(2)
               << "\n";
@@ -130,19 +163,20 @@ int Status(const std::string& url, int timeout_ms, bool as_json) {
   std::printf("far-daemon %s, up %.1f s\nGL_RENDERER: %s\n", status->daemon_version.c_str(),
               status->uptime_ms / 1000.0, status->gl_renderer.c_str());
   std::printf("steps: %lld  errors: %lld  rejected messages: %lld\n",
-              static_cast<long long>(status->steps_total), static_cast<long long>(status->errors_total),
+              static_cast<long long>(status->steps_total),
+              static_cast<long long>(status->errors_total),
               static_cast<long long>(status->rejected_messages_total));
-  std::printf("step latency ms: p50 %.3f  p90 %.3f  p99 %.3f  max %.3f  (%lld steps)\n", status->latency_p50_ms,
-              status->latency_p90_ms, status->latency_p99_ms, status->latency_max_ms,
-              static_cast<long long>(status->latency_samples));
+  std::printf("step latency ms: p50 %.3f  p90 %.3f  p99 %.3f  max %.3f  (%lld steps)\n",
+              status->latency_p50_ms, status->latency_p90_ms, status->latency_p99_ms,
+              status->latency_max_ms, static_cast<long long>(status->latency_samples));
   for (const auto& [kind, count] : status->errors_by_kind) {
     std::printf("errors %-20s %lld\n", kind.c_str(), static_cast<long long>(count));
   }
   std::printf("sessions: %zu of %d\n", status->sessions.size(), status->max_sessions);
   for (const auto& s : status->sessions) {
     std::printf("  session %lld  %-16s steps %-8lld objects %-6d p50 %.3f ms  p99 %.3f ms\n",
-                static_cast<long long>(s.id), s.client_name.c_str(), static_cast<long long>(s.steps), s.objects,
-                s.latency_p50_ms, s.latency_p99_ms);
+                static_cast<long long>(s.id), s.client_name.c_str(),
+                static_cast<long long>(s.steps), s.objects, s.latency_p50_ms, s.latency_p99_ms);
   }
   return 0;
 }
@@ -154,8 +188,8 @@ struct LoadStats {
   std::string first_error;
 };
 
-int Load(const ClientOptions& base, int clients, int steps, double seconds, const std::string& scene_path,
-         const far::StepRequest& request, bool as_json) {
+int Load(const ClientOptions& base, int clients, int steps, double seconds,
+         const std::string& scene_path, const far::StepRequest& request, bool as_json) {
   far::Scene scene;
   if (!scene_path.empty()) {
     auto loaded = far::ReadScene(scene_path);
@@ -165,7 +199,8 @@ int Load(const ClientOptions& base, int clients, int steps, double seconds, cons
   std::vector<LoadStats> stats(static_cast<size_t>(clients));
   std::atomic<int> ready{0};
   const auto deadline_of = [&](Clock::time_point start) {
-    return seconds > 0 ? start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds))
+    return seconds > 0 ? start + std::chrono::duration_cast<Clock::duration>(
+                                     std::chrono::duration<double>(seconds))
                        : Clock::time_point::max();
   };
   Clock::time_point start;
@@ -186,7 +221,8 @@ int Load(const ClientOptions& base, int clients, int steps, double seconds, cons
       }
       // Each client simulates its own scene: the given one, or a random soup of rigid objects.
       std::vector<far::SceneObject> objects =
-          scene_path.empty() ? far::scenes::RandomSoup(static_cast<uint64_t>(i), 24, 40, 3.0, 0.4) : scene.objects;
+          scene_path.empty() ? far::scenes::RandomSoup(static_cast<uint64_t>(i), 24, 40, 3.0, 0.4)
+                             : scene.objects;
       for (const auto& o : objects) {
         if (auto ok = (*client)->AddObject(o.id, o.mesh, o.motion, o.X_WO); !ok) fail(ok.error());
       }
@@ -206,7 +242,8 @@ int Load(const ClientOptions& base, int clients, int steps, double seconds, cons
           fail(result.error());
           continue;
         }
-        mine.latency_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        mine.latency_ms.push_back(
+            std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
       }
     });
   }
@@ -225,34 +262,47 @@ int Load(const ClientOptions& base, int clients, int steps, double seconds, cons
     errors += s.errors;
     min_steps = std::min(min_steps, s.latency_ms.size());
     max_steps = std::max(max_steps, s.latency_ms.size());
-    per_client.push_back({{"client", i}, {"steps", s.latency_ms.size()},
+    per_client.push_back({{"client", i},
+                          {"steps", s.latency_ms.size()},
                           {"steps_per_s", s.latency_ms.size() / elapsed},
-                          {"p50_ms", Quantile(s.latency_ms, 0.5)}, {"p90_ms", Quantile(s.latency_ms, 0.9)},
-                          {"p99_ms", Quantile(s.latency_ms, 0.99)}, {"errors", s.errors},
+                          {"p50_ms", Quantile(s.latency_ms, 0.5)},
+                          {"p90_ms", Quantile(s.latency_ms, 0.9)},
+                          {"p99_ms", Quantile(s.latency_ms, 0.99)},
+                          {"errors", s.errors},
                           {"first_error", s.first_error}});
   }
-  const double fairness = min_steps > 0 ? static_cast<double>(max_steps) / static_cast<double>(min_steps) : 0.0;
-  json overall = {{"clients", clients}, {"seconds", elapsed}, {"steps", all.size()},
-                  {"steps_per_s", all.size() / elapsed}, {"p50_ms", Quantile(all, 0.5)},
-                  {"p90_ms", Quantile(all, 0.9)}, {"p99_ms", Quantile(all, 0.99)},
-                  {"max_ms", Quantile(all, 1.0)}, {"errors", errors},
+  const double fairness =
+      min_steps > 0 ? static_cast<double>(max_steps) / static_cast<double>(min_steps) : 0.0;
+  json overall = {{"clients", clients},
+                  {"seconds", elapsed},
+                  {"steps", all.size()},
+                  {"steps_per_s", all.size() / elapsed},
+                  {"p50_ms", Quantile(all, 0.5)},
+                  {"p90_ms", Quantile(all, 0.9)},
+                  {"p99_ms", Quantile(all, 0.99)},
+                  {"max_ms", Quantile(all, 1.0)},
+                  {"errors", errors},
                   {"fairness_max_over_min_steps", fairness}};
   if (as_json) {
     std::cout << json{{"overall", overall}, {"per_client", per_client}}.dump(2) << "\n";
   } else {
-    std::printf("%-8s %8s %10s %9s %9s %9s %7s\n", "client", "steps", "steps/s", "p50 ms", "p90 ms", "p99 ms", "errors");
+    std::printf("%-8s %8s %10s %9s %9s %9s %7s\n", "client", "steps", "steps/s", "p50 ms", "p90 ms",
+                "p99 ms", "errors");
     for (const auto& c : per_client) {
-      std::printf("%-8d %8zu %10.1f %9.3f %9.3f %9.3f %7d\n", c["client"].get<int>(), c["steps"].get<size_t>(),
-                  c["steps_per_s"].get<double>(), c["p50_ms"].get<double>(), c["p90_ms"].get<double>(),
-                  c["p99_ms"].get<double>(), c["errors"].get<int>());
+      std::printf("%-8d %8zu %10.1f %9.3f %9.3f %9.3f %7d\n", c["client"].get<int>(),
+                  c["steps"].get<size_t>(), c["steps_per_s"].get<double>(),
+                  c["p50_ms"].get<double>(), c["p90_ms"].get<double>(), c["p99_ms"].get<double>(),
+                  c["errors"].get<int>());
       if (!c["first_error"].get<std::string>().empty()) {
         std::printf("         first error: %s\n", c["first_error"].get<std::string>().c_str());
       }
     }
-    std::printf("overall: %zu steps in %.2f s = %.1f steps/s; latency p50 %.3f p90 %.3f p99 %.3f max %.3f ms; "
-                "errors %d; fairness (max/min steps per client) %.2f\n",
-                all.size(), elapsed, all.size() / elapsed, Quantile(all, 0.5), Quantile(all, 0.9),
-                Quantile(all, 0.99), Quantile(all, 1.0), errors, fairness);
+    std::printf(
+        "overall: %zu steps in %.2f s = %.1f steps/s; latency p50 %.3f p90 %.3f p99 %.3f max %.3f "
+        "ms; "
+        "errors %d; fairness (max/min steps per client) %.2f\n",
+        all.size(), elapsed, all.size() / elapsed, Quantile(all, 0.5), Quantile(all, 0.9),
+        Quantile(all, 0.99), Quantile(all, 1.0), errors, fairness);
   }
   return errors == 0 ? 0 : 1;
 }
@@ -265,27 +315,37 @@ int main(int argc, char** argv) {
   ClientOptions options;
   int timeout_ms = 5000;
   app.add_option("--lcm-url", options.lcm_url, "LCM URL of the daemon")->capture_default_str();
-  app.add_option("--timeout-ms", timeout_ms, "wait this long for the daemon's replies")->capture_default_str();
+  app.add_option("--timeout-ms", timeout_ms, "wait this long for the daemon's replies")
+      ->capture_default_str();
   bool as_json = false;
 
-  auto* ping = app.add_subcommand("ping", "Check that a daemon answers; prints the round-trip time");
-  auto* status = app.add_subcommand("status", "Print the daemon's status: GL renderer, sessions, steps, "
-                                              "latency percentiles, errors by kind");
+  auto* ping =
+      app.add_subcommand("ping", "Check that a daemon answers; prints the round-trip time");
+  auto* status = app.add_subcommand("status",
+                                    "Print the daemon's status: GL renderer, sessions, steps, "
+                                    "latency percentiles, errors by kind");
   status->add_flag("--json", as_json, "print JSON");
 
   std::string scene_path;
   StepFlags collide_flags;
-  auto* collide = app.add_subcommand("collide", "Upload a scene through the ring, run one step, print JSON:\n"
-                                                "  {contacts: [[objA, triA, objB, triB], ...], distance_pairs: "
-                                                "[[objA, triA, objB, triB, d], ...],\n   pcs_objects, pcs_primitives: "
-                                                "{objId: [tri, ...]}, object_pairs, stats}");
-  collide->add_option("scene", scene_path, "far-scene/1 JSON file (docs/scene-format.md)")->required()->check(CLI::ExistingFile);
+  auto* collide =
+      app.add_subcommand("collide",
+                         "Upload a scene through the ring, run one step, print JSON:\n"
+                         "  {contacts: [[objA, triA, objB, triB], ...], distance_pairs: "
+                         "[[objA, triA, objB, triB, d], ...],\n   pcs_objects, pcs_primitives: "
+                         "{objId: [tri, ...]}, object_pairs, stats}");
+  collide->add_option("scene", scene_path, "far-scene/1 JSON file (docs/scene-format.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
   collide_flags.Add(collide);
 
   int play_steps = 0;
   StepFlags play_flags;
-  auto* play = app.add_subcommand("play", "Run an animated scene (its frames) step by step; one stats line per step");
-  play->add_option("scene", scene_path, "far-scene/1 JSON file with frames")->required()->check(CLI::ExistingFile);
+  auto* play = app.add_subcommand(
+      "play", "Run an animated scene (its frames) step by step; one stats line per step");
+  play->add_option("scene", scene_path, "far-scene/1 JSON file with frames")
+      ->required()
+      ->check(CLI::ExistingFile);
   play->add_option("--steps", play_steps, "steps to run (default: 1 + number of frames)");
   play->add_flag("--json", as_json, "print one JSON object per step");
   play_flags.Add(play);
@@ -294,23 +354,30 @@ int main(int argc, char** argv) {
   double load_seconds = 0;
   StepFlags load_flags;
   std::string load_scene;
-  auto* load = app.add_subcommand("load", "Run N concurrent clients, each with its own session and scene; "
-                                          "prints throughput and latency percentiles per client and overall");
+  auto* load =
+      app.add_subcommand("load",
+                         "Run N concurrent clients, each with its own session and scene; "
+                         "prints throughput and latency percentiles per client and overall");
   load->add_option("--clients", clients, "concurrent clients (threads)")->capture_default_str();
-  load->add_option("--steps", load_steps, "steps per client (0: until --seconds)")->capture_default_str();
+  load->add_option("--steps", load_steps, "steps per client (0: until --seconds)")
+      ->capture_default_str();
   load->add_option("--seconds", load_seconds, "stop after this many seconds");
-  load->add_option("--scene", load_scene, "scene each client uploads (default: a random soup per client)");
+  load->add_option("--scene", load_scene,
+                   "scene each client uploads (default: a random soup per client)");
   load->add_flag("--json", as_json, "print JSON");
   load_flags.Add(load);
 
   std::string out_path;
   int leaves = 40, frames = 30, cells = 2;
-  auto* make_scene = app.add_subcommand("make-scene", "Write the demo scene: a static tree, falling deformable "
-                                                      "leaves and a vase that breaks (far-scene/1 with frames)");
-  make_scene->add_option("out", out_path, "scene JSON path to write (meshes go next to it)")->required();
+  auto* make_scene = app.add_subcommand("make-scene",
+                                        "Write the demo scene: a static tree, falling deformable "
+                                        "leaves and a vase that breaks (far-scene/1 with frames)");
+  make_scene->add_option("out", out_path, "scene JSON path to write (meshes go next to it)")
+      ->required();
   make_scene->add_option("--leaves", leaves, "number of leaves")->capture_default_str();
   make_scene->add_option("--frames", frames, "animation frames")->capture_default_str();
-  make_scene->add_option("--cells", cells, "leaf grid cells per side (2 cells^2 triangles)")->capture_default_str();
+  make_scene->add_option("--cells", cells, "leaf grid cells per side (2 cells^2 triangles)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   options.timeout = std::chrono::milliseconds(timeout_ms);
 
@@ -319,7 +386,8 @@ int main(int argc, char** argv) {
     auto answered = Client::Status(options.lcm_url, options.timeout);
     if (!answered) return Fail(answered.error());
     std::printf("far-daemon answered on %s in %.3f ms (GL_RENDERER: %s)\n", options.lcm_url.c_str(),
-                std::chrono::duration<double, std::milli>(Clock::now() - t0).count(), answered->gl_renderer.c_str());
+                std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
+                answered->gl_renderer.c_str());
     return 0;
   }
   if (*status) return Status(options.lcm_url, timeout_ms, as_json);
@@ -327,7 +395,8 @@ int main(int argc, char** argv) {
     const far::Scene scene = far::scenes::AnimatedLeavesScene(7, leaves, cells, frames);
     std::filesystem::create_directories(std::filesystem::absolute(out_path).parent_path());
     if (auto ok = far::WriteScene(scene, out_path); !ok) return Fail(ok.error());
-    std::printf("wrote %s: %zu objects, %zu frames\n", out_path.c_str(), scene.objects.size(), scene.frames.size());
+    std::printf("wrote %s: %zu objects, %zu frames\n", out_path.c_str(), scene.objects.size(),
+                scene.frames.size());
     return 0;
   }
   if (*load) {
@@ -356,25 +425,30 @@ int main(int argc, char** argv) {
   for (int step = 0; step < total; ++step) {
     // Step 0 is the scene as loaded; frame k is applied before step k + 1.
     if (step > 0 && static_cast<size_t>(step - 1) < scene->frames.size()) {
-      if (auto ok = (*client)->ApplyFrame(scene->frames[static_cast<size_t>(step - 1)]); !ok) return Fail(ok.error());
+      if (auto ok = (*client)->ApplyFrame(scene->frames[static_cast<size_t>(step - 1)]); !ok)
+        return Fail(ok.error());
     }
     const auto t0 = Clock::now();
     auto result = (*client)->Step(*request);
     if (!result) return Fail(result.error());
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     if (as_json) {
-      json line = {{"step", step}, {"round_trip_ms", ms}, {"pcs_objects", result->pcs_objects.size()},
-                   {"contacts", result->contacts.size()}, {"distance_pairs", result->distance_pairs.size()},
+      json line = {{"step", step},
+                   {"round_trip_ms", ms},
+                   {"pcs_objects", result->pcs_objects.size()},
+                   {"contacts", result->contacts.size()},
+                   {"distance_pairs", result->distance_pairs.size()},
                    {"stats", StatsJson(result->stats)}};
       std::cout << line.dump() << "\n";
     } else {
       size_t pcs_triangles = 0;
       for (const auto& [id, tris] : result->pcs_primitives) pcs_triangles += tris.size();
-      std::printf("step %3d  round trip %8.2f ms  pipeline %8.2f ms  pcs objects %4zu  pcs triangles %6zu  "
-                  "object pairs %4lld  contacts %5zu  distance pairs %5zu\n",
-                  step, ms, result->stats.total_ms, result->pcs_objects.size(), pcs_triangles,
-                  static_cast<long long>(result->stats.object_pairs), result->contacts.size(),
-                  result->distance_pairs.size());
+      std::printf(
+          "step %3d  round trip %8.2f ms  pipeline %8.2f ms  pcs objects %4zu  pcs triangles %6zu  "
+          "object pairs %4lld  contacts %5zu  distance pairs %5zu\n",
+          step, ms, result->stats.total_ms, result->pcs_objects.size(), pcs_triangles,
+          static_cast<long long>(result->stats.object_pairs), result->contacts.size(),
+          result->distance_pairs.size());
     }
   }
   return 0;

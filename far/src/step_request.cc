@@ -16,7 +16,8 @@ constexpr NameTable<Method, 6> kMethodNames{{{Method::kAabb, "aabb"},
                                              {Method::kFcl, "fcl"},
                                              {Method::kExact, "exact"}}};
 constexpr NameTable<QueryMechanism, 2> kMechanismNames{
-    {{QueryMechanism::kOcclusionQuery, "occlusion-query"}, {QueryMechanism::kIdBuffer, "id-buffer"}}};
+    {{QueryMechanism::kOcclusionQuery, "occlusion-query"},
+     {QueryMechanism::kIdBuffer, "id-buffer"}}};
 constexpr NameTable<Output, 5> kOutputNames{{{Output::kObjectPcs, "object-pcs"},
                                              {Output::kObjectPairs, "pairs"},
                                              {Output::kPrimitivePcs, "pcs"},

@@ -10,8 +10,9 @@ struct LcmBus::Subscription {
 
   static void Dispatch(const lcm_recv_buf_t* buffer, const char* channel, void* self) {
     const auto* subscription = static_cast<const Subscription*>(self);
-    subscription->handler(channel, std::span<const uint8_t>(static_cast<const uint8_t*>(buffer->data),
-                                                            buffer->data_size));
+    subscription->handler(
+        channel,
+        std::span<const uint8_t>(static_cast<const uint8_t*>(buffer->data), buffer->data_size));
   }
 };
 
@@ -40,6 +41,9 @@ void LcmBus::Subscribe(const std::string& channel, Handler handler) {
   subscription->handler = std::move(handler);
   subscription->lcm_subscription = lcm_subscribe(static_cast<lcm_t*>(lcm_), channel.c_str(),
                                                  &Subscription::Dispatch, subscription.get());
+  if (subscription->lcm_subscription != nullptr) {
+    lcm_subscription_set_queue_capacity(subscription->lcm_subscription, kQueueCapacity);
+  }
   subscriptions_.push_back(std::move(subscription));
 }
 
@@ -47,8 +51,9 @@ Result<void> LcmBus::Publish(const std::string& channel, std::span<const uint8_t
   std::lock_guard lock(publish_mutex_);
   if (lcm_publish(static_cast<lcm_t*>(lcm_), channel.c_str(), bytes.data(),
                   static_cast<unsigned int>(bytes.size())) != 0) {
-    return MakeError(ErrorCode::kUnavailable, "LCM could not publish " + std::to_string(bytes.size()) +
-                                                  " bytes on " + channel);
+    return MakeError(
+        ErrorCode::kUnavailable,
+        "LCM could not publish " + std::to_string(bytes.size()) + " bytes on " + channel);
   }
   return {};
 }

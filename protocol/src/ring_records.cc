@@ -147,7 +147,8 @@ Result<std::vector<Eigen::Vector3d>> LoadPositions(const RecordErrors& errors,
   const double* values = positions.empty() ? nullptr : positions.data()->data();
   const size_t num_values = size_t{count} * 3;
   bool all_fine = true;
-  for (size_t i = 0; i < num_values; ++i) all_fine &= std::abs(values[i]) <= limits.max_abs_coordinate;
+  for (size_t i = 0; i < num_values; ++i)
+    all_fine &= std::abs(values[i]) <= limits.max_abs_coordinate;
   if (all_fine) return positions;
   static const char* const kAxis[3] = {"x", "y", "z"};
   for (uint32_t i = 0; i < count; ++i) {

@@ -1,5 +1,7 @@
 #include "daemon.h"
 
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -11,9 +13,18 @@
 #include <thread>
 #include <variant>
 
-#include <spdlog/spdlog.h>
-
 #include "fair_scheduler.h"
+#include "far_lcm/close_session_t.hpp"
+#include "far_lcm/error_t.hpp"
+#include "far_lcm/heartbeat_t.hpp"
+#include "far_lcm/open_session_reply_t.hpp"
+#include "far_lcm/open_session_t.hpp"
+#include "far_lcm/status_reply_t.hpp"
+#include "far_lcm/status_request_t.hpp"
+#include "far_lcm/step_reply_t.hpp"
+#include "far_lcm/step_request_t.hpp"
+#include "latency_stats.h"
+
 #include "far/gl_context.h"
 #include "far/pipeline.h"
 #include "far/protocol/channels.h"
@@ -26,16 +37,6 @@
 #include "far/protocol/shm_reply.h"
 #include "far/protocol/shm_segment.h"
 #include "far/protocol/version.h"
-#include "far_lcm/close_session_t.hpp"
-#include "far_lcm/error_t.hpp"
-#include "far_lcm/heartbeat_t.hpp"
-#include "far_lcm/open_session_reply_t.hpp"
-#include "far_lcm/open_session_t.hpp"
-#include "far_lcm/status_reply_t.hpp"
-#include "far_lcm/status_request_t.hpp"
-#include "far_lcm/step_reply_t.hpp"
-#include "far_lcm/step_request_t.hpp"
-#include "latency_stats.h"
 
 namespace far::server {
 namespace {
@@ -45,7 +46,8 @@ using protocol::MessageType;
 namespace wire = far_lcm;
 
 int64_t NowMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now().time_since_epoch()).count();
+  return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now().time_since_epoch())
+      .count();
 }
 
 // What the daemon knows of one object of a session, to check updates before applying them.
@@ -110,9 +112,9 @@ struct Daemon::Impl {
 
   explicit Impl(const DaemonConfig& c)
       : config(c),
-        scheduler(SchedulerLimits{static_cast<size_t>(c.max_queued_per_session),
-                                  static_cast<size_t>(c.max_queued_total), c.max_requests_per_second,
-                                  std::max(8.0, c.max_requests_per_second / 20)}) {}
+        scheduler(SchedulerLimits{
+            static_cast<size_t>(c.max_queued_per_session), static_cast<size_t>(c.max_queued_total),
+            c.max_requests_per_second, std::max(8.0, c.max_requests_per_second / 20)}) {}
 
   void CountError(const std::string& kind) {
     std::lock_guard lock(stats_mutex);
@@ -149,7 +151,8 @@ struct Daemon::Impl {
   }
 
   // A failed step's reply (the client waits for a step_reply_t with its step id).
-  void PublishStepError(Session& session, const protocol::StepCommand& command, const Error& error) {
+  void PublishStepError(Session& session, const protocol::StepCommand& command,
+                        const Error& error) {
     CountError(far::ToString(error.code));
     protocol::StepReplyIds ids{session.id, session.next_reply_id++, command.step_id,
                                session.applied_sequence.load()};
@@ -166,8 +169,8 @@ struct Daemon::Impl {
                                                                  protocol::kMaxControlMessageBytes);
     if (!message && message.error().code == ErrorCode::kVersionMismatch) {
       // A client of another protocol version: tell it so on its reply channel, if it named one.
-      auto any = protocol::DecodeMessageAnyVersion<wire::open_session_t>(bytes.data(), bytes.size(),
-                                                                          protocol::kMaxControlMessageBytes);
+      auto any = protocol::DecodeMessageAnyVersion<wire::open_session_t>(
+          bytes.data(), bytes.size(), protocol::kMaxControlMessageBytes);
       if (any && protocol::IsValidOpenReplyChannel(any->reply_channel)) {
         wire::open_session_reply_t reply{};
         reply.protocol_version = protocol::kProtocolVersion;
@@ -190,11 +193,13 @@ struct Daemon::Impl {
       reply.status = protocol::ToWireStatus(error.code);
       reply.status_name = far::ToString(error.code);
       reply.message = error.message;
-      spdlog::warn("event=open_refused client=\"{}\" reason=\"{}\"", message->client_name, ToString(error));
+      spdlog::warn("event=open_refused client=\"{}\" reason=\"{}\"", message->client_name,
+                   ToString(error));
     };
     if (!params) {
       // Answer only on a well-formed reply channel: never publish where a client did not ask.
-      if (!protocol::IsValidOpenReplyChannel(message->reply_channel)) return Reject(channel, params.error());
+      if (!protocol::IsValidOpenReplyChannel(message->reply_channel))
+        return Reject(channel, params.error());
       fail(params.error());
       if (auto out = protocol::EncodeMessage(reply)) Publish(message->reply_channel, *out);
       return;
@@ -205,8 +210,9 @@ struct Daemon::Impl {
       if (stop) {
         fail(MakeError(ErrorCode::kUnavailable, "the daemon is shutting down"));
       } else if (static_cast<int>(sessions.size()) >= config.max_sessions) {
-        fail(MakeError(ErrorCode::kLimitExceeded, "max_sessions: " + std::to_string(config.max_sessions) +
-                                                      " sessions are open"));
+        fail(MakeError(
+            ErrorCode::kLimitExceeded,
+            "max_sessions: " + std::to_string(config.max_sessions) + " sessions are open"));
       } else {
         session = std::make_shared<Session>();
         session->id = next_session_id++;
@@ -214,8 +220,10 @@ struct Daemon::Impl {
     }
     if (session) {
       protocol::SegmentOptions options;
-      options.update_ring_bytes = params->update_ring_bytes ? params->update_ring_bytes : config.ring_bytes;
-      options.reply_ring_bytes = params->reply_ring_bytes ? params->reply_ring_bytes : config.reply_bytes;
+      options.update_ring_bytes =
+          params->update_ring_bytes ? params->update_ring_bytes : config.ring_bytes;
+      options.reply_ring_bytes =
+          params->reply_ring_bytes ? params->reply_ring_bytes : config.reply_bytes;
       auto segment = protocol::ShmSegment::Create(static_cast<uint64_t>(session->id), options);
       if (!segment) {
         fail(segment.error());
@@ -227,9 +235,12 @@ struct Daemon::Impl {
         session->request_channel = protocol::SessionRequestChannel(session->id);
         session->reply_channel = protocol::SessionReplyChannel(session->id);
         protocol::RingLimits limits;
-        limits.max_vertices = static_cast<uint32_t>(std::min<int64_t>(config.max_triangles_per_session * 3, 1 << 30));
-        limits.max_triangles = static_cast<uint32_t>(std::min<int64_t>(config.max_triangles_per_session, 1 << 30));
-        session->updates = std::make_unique<protocol::UpdateReader>(session->segment->update_ring(), limits);
+        limits.max_vertices =
+            static_cast<uint32_t>(std::min<int64_t>(config.max_triangles_per_session * 3, 1 << 30));
+        limits.max_triangles =
+            static_cast<uint32_t>(std::min<int64_t>(config.max_triangles_per_session, 1 << 30));
+        session->updates =
+            std::make_unique<protocol::UpdateReader>(session->segment->update_ring(), limits);
         session->replies = std::make_unique<protocol::RingWriter>(session->segment->reply_ring());
         session->last_heard_ms = NowMs();
         const auto& layout = session->segment->layout();
@@ -244,7 +255,8 @@ struct Daemon::Impl {
         reply.request_channel = session->request_channel;
         reply.session_reply_channel = session->reply_channel;
         reply.heartbeat_timeout_ms = config.heartbeat_timeout_ms;
-        reply.max_objects = static_cast<int32_t>(std::min<int64_t>(config.max_objects_per_session, INT32_MAX));
+        reply.max_objects =
+            static_cast<int32_t>(std::min<int64_t>(config.max_objects_per_session, INT32_MAX));
         reply.max_vertices_per_object = static_cast<int32_t>(limits.max_vertices);
         reply.max_triangles_per_object = static_cast<int32_t>(limits.max_triangles);
         std::lock_guard lock(mutex);
@@ -253,8 +265,8 @@ struct Daemon::Impl {
     }
     if (auto out = protocol::EncodeMessage(reply)) Publish(params->reply_channel, *out);
     if (session) {
-      spdlog::info("event=session_open session={} client=\"{}\" shm={}", session->id, session->client_name,
-                   session->segment->name());
+      spdlog::info("event=session_open session={} client=\"{}\" shm={}", session->id,
+                   session->client_name, session->segment->name());
     }
   }
 
@@ -280,10 +292,12 @@ struct Daemon::Impl {
     }
     work.notify_one();
     for (const StepJob& job : pending) {
-      PublishStepError(*session, job.command, MakeError(ErrorCode::kUnavailable, "session closed: " + reason));
+      PublishStepError(*session, job.command,
+                       MakeError(ErrorCode::kUnavailable, "session closed: " + reason));
     }
     if (tell_client) {
-      PublishError(id, &session->key, -1, MakeError(ErrorCode::kTimeout, "session closed: " + reason), true);
+      PublishError(id, &session->key, -1,
+                   MakeError(ErrorCode::kTimeout, "session closed: " + reason), true);
     }
     spdlog::info("event=session_close session={} reason=\"{}\"", id, reason);
   }
@@ -293,7 +307,8 @@ struct Daemon::Impl {
   template <typename T>
   std::optional<std::pair<T, std::shared_ptr<Session>>> OpenSessionMessage(
       std::string_view channel, int64_t channel_session, std::span<const uint8_t> bytes) {
-    auto message = protocol::DecodeMessage<T>(bytes.data(), bytes.size(), protocol::kMaxControlMessageBytes);
+    auto message =
+        protocol::DecodeMessage<T>(bytes.data(), bytes.size(), protocol::kMaxControlMessageBytes);
     if (!message) {
       Reject(channel, message.error());
       PublishError(channel_session, nullptr, -1, message.error(), false);
@@ -301,15 +316,16 @@ struct Daemon::Impl {
     }
     if (message->session_id != channel_session) {
       Error error = MakeError(ErrorCode::kInvalidArgument,
-                              "session_id: " + std::to_string(message->session_id) + " does not match channel " +
-                                  std::string(channel));
+                              "session_id: " + std::to_string(message->session_id) +
+                                  " does not match channel " + std::string(channel));
       Reject(channel, error);
       PublishError(channel_session, nullptr, message->request_id, error, false);
       return std::nullopt;
     }
     auto session = FindSession(channel_session);
     if (!session) {
-      Error error = MakeError(ErrorCode::kNotFound, "session_id: no open session " + std::to_string(channel_session));
+      Error error = MakeError(ErrorCode::kNotFound,
+                              "session_id: no open session " + std::to_string(channel_session));
       Reject(channel, error);
       PublishError(channel_session, nullptr, message->request_id, error, true);
       return std::nullopt;
@@ -320,9 +336,10 @@ struct Daemon::Impl {
       return std::nullopt;
     }
     if (message->request_id <= session->last_request_id) {
-      Error error = MakeError(ErrorCode::kInvalidArgument,
-                              "request_id: " + std::to_string(message->request_id) + " is not above the last one (" +
-                                  std::to_string(session->last_request_id) + "): replayed or reordered");
+      Error error = MakeError(
+          ErrorCode::kInvalidArgument,
+          "request_id: " + std::to_string(message->request_id) + " is not above the last one (" +
+              std::to_string(session->last_request_id) + "): replayed or reordered");
       Reject(channel, error);
       PublishError(channel_session, &session->key, message->request_id, error, false);
       return std::nullopt;
@@ -334,7 +351,8 @@ struct Daemon::Impl {
 
   void OnSessionRequest(std::string_view channel, std::span<const uint8_t> bytes) {
     auto channel_session = protocol::ParseSessionRequestChannel(channel);
-    if (!channel_session) return Reject(channel, MakeError(ErrorCode::kInvalidArgument, "unknown channel"));
+    if (!channel_session)
+      return Reject(channel, MakeError(ErrorCode::kInvalidArgument, "unknown channel"));
     auto type = protocol::IdentifyMessage(bytes.data(), bytes.size());
     if (!type) {
       Reject(channel, type.error());
@@ -370,7 +388,8 @@ struct Daemon::Impl {
         reply.request_id = session->next_reply_id++;
         reply.last_applied_sequence = static_cast<int64_t>(session->applied_sequence.load());
         reply.last_step_id = session->last_step_id.load();
-        if (auto out = protocol::EncodeSigned(reply, session->key)) Publish(session->reply_channel, *out);
+        if (auto out = protocol::EncodeSigned(reply, session->key))
+          Publish(session->reply_channel, *out);
         return;
       }
       case MessageType::kCloseSession: {
@@ -379,8 +398,9 @@ struct Daemon::Impl {
         return;
       }
       default: {
-        Error error = MakeError(ErrorCode::kInvalidArgument,
-                                std::string(protocol::ToString(*type)) + " is not a client-to-daemon session message");
+        Error error = MakeError(
+            ErrorCode::kInvalidArgument,
+            std::string(protocol::ToString(*type)) + " is not a client-to-daemon session message");
         Reject(channel, error);
         PublishError(*channel_session, nullptr, -1, error, false);
       }
@@ -388,8 +408,8 @@ struct Daemon::Impl {
   }
 
   void OnStatus(std::string_view channel, std::span<const uint8_t> bytes) {
-    auto message = protocol::DecodeMessage<wire::status_request_t>(bytes.data(), bytes.size(),
-                                                                   protocol::kMaxControlMessageBytes);
+    auto message = protocol::DecodeMessage<wire::status_request_t>(
+        bytes.data(), bytes.size(), protocol::kMaxControlMessageBytes);
     if (!message) return Reject(channel, message.error());
     wire::status_reply_t reply{};
     reply.protocol_version = protocol::kProtocolVersion;
@@ -409,7 +429,8 @@ struct Daemon::Impl {
       }
       reply.num_error_kinds = static_cast<int32_t>(reply.error_kind.size());
     }
-    reply.uptime_ms = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - started).count();
+    reply.uptime_ms =
+        std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - started).count();
     reply.max_sessions = config.max_sessions;
     reply.steps_total = steps_total;
     reply.errors_total = errors_total;
@@ -429,7 +450,8 @@ struct Daemon::Impl {
       reply.session_latency_p99_ms.push_back(session->latency.Quantile(0.99));
     }
     reply.num_sessions = static_cast<int32_t>(open.size());
-    if (auto out = protocol::EncodeMessage(reply)) Publish(std::string(protocol::kStatusReplyChannel), *out);
+    if (auto out = protocol::EncodeMessage(reply))
+      Publish(std::string(protocol::kStatusReplyChannel), *out);
   }
 
   // Closes sessions whose client stopped sending anything for heartbeat_timeout_ms.
@@ -443,7 +465,8 @@ struct Daemon::Impl {
       }
     }
     for (int64_t id : silent) {
-      CloseSession(id, "no heartbeat for " + std::to_string(config.heartbeat_timeout_ms) + " ms", true);
+      CloseSession(id, "no heartbeat for " + std::to_string(config.heartbeat_timeout_ms) + " ms",
+                   true);
     }
   }
 
@@ -468,18 +491,21 @@ struct Daemon::Impl {
             const std::string object = where + " object " + std::to_string(u.id);
             auto info = find(u.id);
             if constexpr (std::is_same_v<T, protocol::AddObject>) {
-              if (info) return MakeError(ErrorCode::kInvalidArgument, object + ": add_object: id is already in use");
+              if (info)
+                return MakeError(ErrorCode::kInvalidArgument,
+                                 object + ": add_object: id is already in use");
               triangles += u.mesh.num_triangles();
               objects += 1;
               if (triangles > config.max_triangles_per_session) {
                 return MakeError(ErrorCode::kLimitExceeded,
-                                 object + ": add_object: the session would have " + std::to_string(triangles) +
-                                     " triangles (limit " + std::to_string(config.max_triangles_per_session) + ")");
+                                 object + ": add_object: the session would have " +
+                                     std::to_string(triangles) + " triangles (limit " +
+                                     std::to_string(config.max_triangles_per_session) + ")");
               }
               if (objects > config.max_objects_per_session) {
-                return MakeError(ErrorCode::kLimitExceeded, object + ": add_object: more than " +
-                                                                std::to_string(config.max_objects_per_session) +
-                                                                " objects");
+                return MakeError(ErrorCode::kLimitExceeded,
+                                 object + ": add_object: more than " +
+                                     std::to_string(config.max_objects_per_session) + " objects");
               }
               changed[u.id] = ObjectInfo{u.motion, static_cast<uint32_t>(u.mesh.num_vertices()),
                                          static_cast<uint32_t>(u.mesh.num_triangles())};
@@ -491,11 +517,13 @@ struct Daemon::Impl {
               changed[u.id] = std::nullopt;
             } else if constexpr (std::is_same_v<T, protocol::SetPose>) {
               if (info->motion == Motion::kStatic) {
-                return MakeError(ErrorCode::kInvalidArgument, object + ": set_pose: the object is static");
+                return MakeError(ErrorCode::kInvalidArgument,
+                                 object + ": set_pose: the object is static");
               }
             } else {
               if (info->motion != Motion::kDeformable) {
-                return MakeError(ErrorCode::kInvalidArgument, object + ": set_vertices: the object is not deformable");
+                return MakeError(ErrorCode::kInvalidArgument,
+                                 object + ": set_vertices: the object is not deformable");
               }
               if (u.p_MV.size() != info->vertices) {
                 return MakeError(ErrorCode::kInvalidArgument,
@@ -524,7 +552,9 @@ struct Daemon::Impl {
             }
           },
           update);
-      if (!applied) return MakeError(ErrorCode::kInternal, "ring record " + std::to_string(sequence) + ": " + applied.error().message);
+      if (!applied)
+        return MakeError(ErrorCode::kInternal, "ring record " + std::to_string(sequence) + ": " +
+                                                   applied.error().message);
     }
     for (const auto& [id, info] : changed) {
       if (info) {
@@ -566,7 +596,8 @@ struct Daemon::Impl {
     if (!bytes) return PublishStepError(session, command, bytes.error());
     Publish(session.reply_channel, *bytes);
     // Latency: request received -> reply published.
-    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - job.received).count();
+    const double ms =
+        std::chrono::duration<double, std::milli>(Clock::now() - job.received).count();
     {
       std::lock_guard lock(stats_mutex);
       latency.Add(ms);
@@ -578,8 +609,8 @@ struct Daemon::Impl {
     session.steps++;
     session.last_step_id = command.step_id;
     steps_total++;
-    spdlog::debug("event=step session={} step={} method={} ms={:.3f} contacts={}", session.id, command.step_id,
-                  ToString(command.request.method), ms, result->contacts.size());
+    spdlog::debug("event=step session={} step={} method={} ms={:.3f} contacts={}", session.id,
+                  command.step_id, ToString(command.request.method), ms, result->contacts.size());
   }
 
   void GlThread(std::promise<Result<std::string>> ready) {
@@ -618,6 +649,10 @@ struct Daemon::Impl {
     // Free what is left while the context is still current.
     std::lock_guard lock(mutex);
     for (auto& [id, session] : sessions) {
+      // Tell the client, so that it does not wait out its timeout for replies that never come.
+      PublishError(id, &session->key, -1,
+                   MakeError(ErrorCode::kUnavailable, "session closed: far-daemon is shutting down"),
+                   true);
       session->pipeline.reset();
       session->segment.reset();
     }
@@ -637,12 +672,15 @@ Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config) {
   const int stale = protocol::RemoveStaleSegments();
   if (stale > 0) spdlog::info("event=stale_segments_removed count={}", stale);
   Impl* raw = impl.get();
-  impl->bus->Subscribe(std::string(protocol::kOpenChannel),
-                       [raw](std::string_view c, std::span<const uint8_t> b) { raw->OnOpen(c, b); });
-  impl->bus->Subscribe(std::string(protocol::kSessionRequestChannelPattern),
-                       [raw](std::string_view c, std::span<const uint8_t> b) { raw->OnSessionRequest(c, b); });
-  impl->bus->Subscribe(std::string(protocol::kStatusChannel),
-                       [raw](std::string_view c, std::span<const uint8_t> b) { raw->OnStatus(c, b); });
+  impl->bus->Subscribe(
+      std::string(protocol::kOpenChannel),
+      [raw](std::string_view c, std::span<const uint8_t> b) { raw->OnOpen(c, b); });
+  impl->bus->Subscribe(
+      std::string(protocol::kSessionRequestChannelPattern),
+      [raw](std::string_view c, std::span<const uint8_t> b) { raw->OnSessionRequest(c, b); });
+  impl->bus->Subscribe(
+      std::string(protocol::kStatusChannel),
+      [raw](std::string_view c, std::span<const uint8_t> b) { raw->OnStatus(c, b); });
   return std::unique_ptr<Daemon>(new Daemon(std::move(impl)));
 }
 
@@ -660,8 +698,8 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
     std::lock_guard lock(d.stats_mutex);
     d.renderer = *made;
   }
-  spdlog::info("event=daemon_ready gl_renderer=\"{}\" lcm_url={} max_sessions={}", *made, d.config.lcm_url,
-               d.config.max_sessions);
+  spdlog::info("event=daemon_ready gl_renderer=\"{}\" lcm_url={} max_sessions={}", *made,
+               d.config.lcm_url, d.config.max_sessions);
   auto last_reap = Clock::now();
   while (!d.stop && !(stop_flag != nullptr && stop_flag->load())) {
     if (!d.bus->Handle(std::chrono::milliseconds(100))) {

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "daemon_config.h"
+
 #include "far/result.h"
 
 namespace far::server {

@@ -5,8 +5,8 @@
 #include <string>
 
 #include "far/bounding_offset.h"
-#include "far/result.h"
 #include "far/gl_context.h"
+#include "far/result.h"
 
 namespace far::server {
 
@@ -14,20 +14,20 @@ namespace far::server {
 /// Read from a JSON file (keys as below) and overridden by command-line flags.
 struct DaemonConfig {
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
-  int default_resolution = 1024;      ///< viewport used when a request names none
+  int default_resolution = 1024;  ///< viewport used when a request names none
   DepthFormat depth_format = DepthFormat::kDepth24;
   GlPlatform gl_platform = GlPlatform::kAuto;
   int max_sessions = 64;
   int64_t max_triangles_per_session = 2'000'000;
   int64_t max_objects_per_session = 100'000;
-  uint64_t ring_bytes = 64ull << 20;  ///< update ring per session (power of two)
-  uint64_t reply_bytes = 16ull << 20; ///< shared-memory reply region per session
+  uint64_t ring_bytes = 64ull << 20;      ///< update ring per session (power of two)
+  uint64_t reply_bytes = 16ull << 20;     ///< shared-memory reply region per session
   double max_requests_per_second = 2000;  ///< per session, sustained
   int max_queued_per_session = 4;
   int max_queued_total = 256;
-  int heartbeat_timeout_ms = 5000;    ///< a session silent this long is closed
-  int exact_threads = 0;              ///< CPU pool for exact tests (0: all cores)
-  std::string log_level = "info";     ///< trace, debug, info, warn, error
+  int heartbeat_timeout_ms = 5000;  ///< a session silent this long is closed
+  int exact_threads = 0;            ///< CPU pool for exact tests (0: all cores)
+  std::string log_level = "info";   ///< trace, debug, info, warn, error
 };
 
 /// Reads a JSON config file; unknown keys are errors (a typo must not be silently ignored).

@@ -13,10 +13,10 @@ namespace far::server {
 
 /// Limits that keep one client from starving the others or growing memory without bound.
 struct SchedulerLimits {
-  size_t max_queued_per_session = 4;  ///< more pending requests of one session: busy
-  size_t max_queued_total = 256;      ///< more pending requests overall: busy
-  double max_rate_per_session = 1000; ///< requests per second a session may submit (sustained)
-  double burst_per_session = 50;      ///< requests a session may submit at once
+  size_t max_queued_per_session = 4;   ///< more pending requests of one session: busy
+  size_t max_queued_total = 256;       ///< more pending requests overall: busy
+  double max_rate_per_session = 1000;  ///< requests per second a session may submit (sustained)
+  double burst_per_session = 50;       ///< requests a session may submit at once
 };
 
 /// Round-robin scheduling of jobs across sessions, with bounded queues and a per-session token
@@ -36,7 +36,8 @@ class FairScheduler {
       queue.tokens = limits_.burst_per_session;
     } else {
       const double seconds = std::chrono::duration<double>(now - queue.last_refill).count();
-      queue.tokens = std::min(limits_.burst_per_session, queue.tokens + seconds * limits_.max_rate_per_session);
+      queue.tokens = std::min(limits_.burst_per_session,
+                              queue.tokens + seconds * limits_.max_rate_per_session);
     }
     queue.last_refill = now;
     if (queue.tokens < 1.0) {
@@ -49,7 +50,8 @@ class FairScheduler {
                                              std::to_string(limits_.max_queued_per_session) + ")");
     }
     if (total_ >= limits_.max_queued_total) {
-      return MakeError(ErrorCode::kBusy, "daemon has " + std::to_string(total_) + " requests pending");
+      return MakeError(ErrorCode::kBusy,
+                       "daemon has " + std::to_string(total_) + " requests pending");
     }
     queue.tokens -= 1.0;
     queue.jobs.push_back(std::move(job));

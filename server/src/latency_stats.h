@@ -25,8 +25,10 @@ class LatencyWindow {
   double Quantile(double q) const {
     if (samples_.empty()) return 0;
     std::vector<double> sorted = samples_;
-    const size_t rank = std::min(sorted.size() - 1, static_cast<size_t>(q * static_cast<double>(sorted.size())));
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(rank), sorted.end());
+    const size_t rank =
+        std::min(sorted.size() - 1, static_cast<size_t>(q * static_cast<double>(sorted.size())));
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(rank),
+                     sorted.end());
     return sorted[rank];
   }
 

@@ -1,11 +1,12 @@
 // far-daemon: the FAR collision-culling service. See README.md and docs/daemon.md.
+#include <spdlog/spdlog.h>
+
 #include <csignal>
 #include <cstdio>
 
-#include <CLI/CLI.hpp>
-#include <spdlog/spdlog.h>
-
 #include "daemon.h"
+#include <CLI/CLI.hpp>
+
 #include "far/step_request.h"
 
 namespace {
@@ -23,17 +24,35 @@ int main(int argc, char** argv) {
   DaemonConfig flags;
   app.add_option("--config", config_path, "JSON config file (docs/daemon.md); flags override it");
   auto* url = app.add_option("--lcm-url", flags.lcm_url, "LCM URL")->capture_default_str();
-  auto* resolution = app.add_option("--resolution", flags.default_resolution, "default viewport size")->capture_default_str();
-  auto* depth = app.add_option("--depth-format", depth_format, "depth16, depth24 (default) or depth32f");
-  auto* platform = app.add_option("--gl-platform", gl_platform, "auto (default), device or surfaceless");
-  auto* sessions = app.add_option("--max-sessions", flags.max_sessions, "session limit")->capture_default_str();
-  auto* triangles = app.add_option("--max-triangles", flags.max_triangles_per_session, "triangles per session")->capture_default_str();
-  auto* objects = app.add_option("--max-objects", flags.max_objects_per_session, "objects per session")->capture_default_str();
-  auto* ring = app.add_option("--ring-bytes", flags.ring_bytes, "update ring bytes per session (power of two)")->capture_default_str();
-  auto* rate = app.add_option("--max-rate", flags.max_requests_per_second, "step requests per second per session")->capture_default_str();
-  auto* heartbeat = app.add_option("--heartbeat-timeout-ms", flags.heartbeat_timeout_ms, "close sessions silent this long")->capture_default_str();
-  auto* threads = app.add_option("--threads", flags.exact_threads, "CPU threads for exact tests (0: all)")->capture_default_str();
-  auto* level = app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")->capture_default_str();
+  auto* resolution =
+      app.add_option("--resolution", flags.default_resolution, "default viewport size")
+          ->capture_default_str();
+  auto* depth =
+      app.add_option("--depth-format", depth_format, "depth16, depth24 (default) or depth32f");
+  auto* platform =
+      app.add_option("--gl-platform", gl_platform, "auto (default), device or surfaceless");
+  auto* sessions =
+      app.add_option("--max-sessions", flags.max_sessions, "session limit")->capture_default_str();
+  auto* triangles =
+      app.add_option("--max-triangles", flags.max_triangles_per_session, "triangles per session")
+          ->capture_default_str();
+  auto* objects =
+      app.add_option("--max-objects", flags.max_objects_per_session, "objects per session")
+          ->capture_default_str();
+  auto* ring = app.add_option("--ring-bytes", flags.ring_bytes,
+                              "update ring bytes per session (power of two)")
+                   ->capture_default_str();
+  auto* rate = app.add_option("--max-rate", flags.max_requests_per_second,
+                              "step requests per second per session")
+                   ->capture_default_str();
+  auto* heartbeat = app.add_option("--heartbeat-timeout-ms", flags.heartbeat_timeout_ms,
+                                   "close sessions silent this long")
+                        ->capture_default_str();
+  auto* threads =
+      app.add_option("--threads", flags.exact_threads, "CPU threads for exact tests (0: all)")
+          ->capture_default_str();
+  auto* level = app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
+                    ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   // The file first, then every flag given on the command line on top of it.
@@ -57,9 +76,12 @@ int main(int argc, char** argv) {
     config.depth_format = *format;
   }
   if (*platform) {
-    if (gl_platform == "auto") config.gl_platform = far::GlPlatform::kAuto;
-    else if (gl_platform == "device") config.gl_platform = far::GlPlatform::kDevice;
-    else if (gl_platform == "surfaceless") config.gl_platform = far::GlPlatform::kSurfaceless;
+    if (gl_platform == "auto")
+      config.gl_platform = far::GlPlatform::kAuto;
+    else if (gl_platform == "device")
+      config.gl_platform = far::GlPlatform::kDevice;
+    else if (gl_platform == "surfaceless")
+      config.gl_platform = far::GlPlatform::kSurfaceless;
     else {
       std::fprintf(stderr, "far-daemon: --gl-platform: unknown '%s'\n", gl_platform.c_str());
       return 2;

@@ -1,9 +1,9 @@
 #include "daemon_config.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 namespace far::server {
 namespace {
@@ -17,7 +17,8 @@ std::filesystem::path WriteTemp(const std::string& name, const std::string& text
 TEST(DaemonConfigTest, DefaultsAreValid) { EXPECT_TRUE(ValidateDaemonConfig(DaemonConfig{}).ok()); }
 
 TEST(DaemonConfigTest, ReadsKnownKeys) {
-  auto config = LoadDaemonConfig(WriteTemp("ok", R"({"default_resolution": 512, "depth_format": "depth32f",
+  auto config =
+      LoadDaemonConfig(WriteTemp("ok", R"({"default_resolution": 512, "depth_format": "depth32f",
       "max_sessions": 3, "log_level": "debug", "lcm_url": "memq://"})"));
   ASSERT_TRUE(config.ok()) << ToString(config.error());
   EXPECT_EQ(config->default_resolution, 512);

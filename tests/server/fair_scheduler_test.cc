@@ -1,8 +1,8 @@
 #include "fair_scheduler.h"
 
-#include <map>
-
 #include <gtest/gtest.h>
+
+#include <map>
 
 #include "latency_stats.h"
 
@@ -42,8 +42,10 @@ TEST(FairSchedulerTest, FloodingSessionGetsBusyAndOthersStillServed) {
 }
 
 TEST(FairSchedulerTest, RateLimitRefillsOverTime) {
-  FairScheduler<int> scheduler(
-      {.max_queued_per_session = 1000, .max_queued_total = 1000, .max_rate_per_session = 10, .burst_per_session = 5});
+  FairScheduler<int> scheduler({.max_queued_per_session = 1000,
+                                .max_queued_total = 1000,
+                                .max_rate_per_session = 10,
+                                .burst_per_session = 5});
   auto now = Clock::now();
   int accepted = 0;
   for (int i = 0; i < 20; ++i) accepted += scheduler.Push(1, i, now).ok();

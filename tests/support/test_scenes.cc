@@ -18,8 +18,8 @@ WorldScene PlaceInWorld(const std::vector<SceneObject>& objects) {
   return world;
 }
 
-ExactResult ReferenceAnswer(const std::vector<SceneObject>& objects,
-                            std::optional<double> distance, ThreadPool& pool) {
+ExactResult ReferenceAnswer(const std::vector<SceneObject>& objects, std::optional<double> distance,
+                            ThreadPool& pool) {
   const WorldScene world = PlaceInWorld(objects);
   return BruteForceReference(world.views, distance, pool);
 }

@@ -7,8 +7,8 @@
 #include <Eigen/Geometry>
 
 #include "far/exact_stage.h"
-#include "far/scenes.h"
 #include "far/scene.h"
+#include "far/scenes.h"
 #include "far/thread_pool.h"
 
 // Scene generators shared by the GPU tests and the studies in bench/. Every generator is
@@ -28,8 +28,8 @@ struct WorldScene {
 WorldScene PlaceInWorld(const std::vector<SceneObject>& objects);
 
 /// The brute-force reference answer for `objects`.
-ExactResult ReferenceAnswer(const std::vector<SceneObject>& objects,
-                            std::optional<double> distance, ThreadPool& pool);
+ExactResult ReferenceAnswer(const std::vector<SceneObject>& objects, std::optional<double> distance,
+                            ThreadPool& pool);
 
 /// Returns `objects` moved by the rigid transform X (applied to every pose).
 std::vector<SceneObject> Transformed(std::vector<SceneObject> objects, const Eigen::Isometry3d& X);

@@ -19,8 +19,8 @@ struct ExactQuery {
   /// Optional per-object triangle subsets, indexed like `objects` (the primitive PCS). Empty
   /// span: every triangle of every object.
   std::span<const std::vector<uint32_t>> triangle_subsets;
-  bool want_contacts = true;            ///< compute intersecting pairs
-  std::optional<double> max_distance;   ///< also compute pairs with distance <= this
+  bool want_contacts = true;           ///< compute intersecting pairs
+  std::optional<double> max_distance;  ///< also compute pairs with distance <= this
 };
 
 /// Exact answers, sorted ascending (object_a < object_b).

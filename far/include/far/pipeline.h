@@ -41,12 +41,12 @@ struct StepStats {
   int64_t primitives_rendered = 0;  ///< object and sub-object primitives drawn, all views
   int64_t draws = 0;
   int64_t queries = 0;
-  int64_t bytes_uploaded = 0;        ///< to the GPU this step
-  int64_t object_pairs = 0;          ///< candidate object pairs after sweep-and-prune
-  int64_t pairs_considered = 0;      ///< candidate triangle pairs (PCS x PCS over object pairs)
-  int64_t pairs_tested = 0;          ///< triangle pairs that reached an exact test
-  double object_radius = 0;          ///< offset radius r of the last object-level view
-  double primitive_radius = 0;       ///< offset radius r of the last sub-object view
+  int64_t bytes_uploaded = 0;    ///< to the GPU this step
+  int64_t object_pairs = 0;      ///< candidate object pairs after sweep-and-prune
+  int64_t pairs_considered = 0;  ///< candidate triangle pairs (PCS x PCS over object pairs)
+  int64_t pairs_tested = 0;      ///< triangle pairs that reached an exact test
+  double object_radius = 0;      ///< offset radius r of the last object-level view
+  double primitive_radius = 0;   ///< offset radius r of the last sub-object view
 };
 
 /// The answer of one step. Ids and triangle indices are as in the scene (docs/scene-format.md).

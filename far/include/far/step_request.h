@@ -36,10 +36,10 @@ enum class Output {
 struct StepRequest {
   Method method = Method::kFar;
   QueryMechanism mechanism = QueryMechanism::kIdBuffer;
-  int resolution = 1024;                ///< viewport is resolution x resolution
+  int resolution = 1024;  ///< viewport is resolution x resolution
   DepthFormat depth_format = DepthFormat::kDepth24;
-  int subobject_size = 1;               ///< triangles per sub-object (k)
-  std::optional<double> distance;       ///< D for localized distance culling (world units)
+  int subobject_size = 1;          ///< triangles per sub-object (k)
+  std::optional<double> distance;  ///< D for localized distance culling (world units)
   Output output = Output::kContacts;
 };
 

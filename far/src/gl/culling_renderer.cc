@@ -1,11 +1,11 @@
 #include "culling_renderer.h"
 
+#include <epoxy/egl.h>
+#include <epoxy/gl.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
-
-#include <epoxy/egl.h>
-#include <epoxy/gl.h>
 
 #include "gl_program.h"
 
@@ -14,10 +14,10 @@ namespace {
 
 // What the fragment shader does in each draw of a view.
 enum class FragmentRole {
-  kWriteId,      // ID pass 1: nearest front face per pixel, writes its group id
-  kOtherDepth,   // ID pass 2: nearest front face of any group other than pass 1's
-  kFlag,         // ID pass 3: back faces behind another group's nearest front face flag
-  kDepthOnly,    // occlusion queries: depth only
+  kWriteId,     // ID pass 1: nearest front face per pixel, writes its group id
+  kOtherDepth,  // ID pass 2: nearest front face of any group other than pass 1's
+  kFlag,        // ID pass 3: back faces behind another group's nearest front face flag
+  kDepthOnly,   // occlusion queries: depth only
 };
 constexpr int kNumRoles = 4;
 
@@ -26,9 +26,12 @@ enum class Shape { kBox, kPrism, kTriangle };
 Shape ShapeOf(PieceSet set) {
   switch (set) {
     case PieceSet::kUobb:
-    case PieceSet::kEdgeBoxes: return Shape::kBox;
-    case PieceSet::kPrisms: return Shape::kPrism;
-    case PieceSet::kTriangles: return Shape::kTriangle;
+    case PieceSet::kEdgeBoxes:
+      return Shape::kBox;
+    case PieceSet::kPrisms:
+      return Shape::kPrism;
+    case PieceSet::kTriangles:
+      return Shape::kTriangle;
   }
   return Shape::kTriangle;
 }
@@ -150,9 +153,12 @@ static_assert(sizeof(ObjectData) == 80);
 
 GLenum DepthInternalFormat(DepthFormat format) {
   switch (format) {
-    case DepthFormat::kDepth16: return GL_DEPTH_COMPONENT16;
-    case DepthFormat::kDepth24: return GL_DEPTH_COMPONENT24;
-    case DepthFormat::kDepth32F: return GL_DEPTH_COMPONENT32F;
+    case DepthFormat::kDepth16:
+      return GL_DEPTH_COMPONENT16;
+    case DepthFormat::kDepth24:
+      return GL_DEPTH_COMPONENT24;
+    case DepthFormat::kDepth32F:
+      return GL_DEPTH_COMPONENT32F;
   }
   return GL_DEPTH_COMPONENT24;
 }
@@ -197,7 +203,8 @@ std::array<float, 3> ToFloat(const Eigen::Vector3d& v) {
 }  // namespace
 
 std::string CurrentGlRenderer() {
-  if (epoxy_egl_version(eglGetCurrentDisplay()) == 0 || eglGetCurrentContext() == EGL_NO_CONTEXT) return "";
+  if (epoxy_egl_version(eglGetCurrentDisplay()) == 0 || eglGetCurrentContext() == EGL_NO_CONTEXT)
+    return "";
   const auto* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   return name != nullptr ? name : "";
 }
@@ -216,7 +223,9 @@ void AppendPieces(PieceSet set, uint32_t slot, uint32_t triangle, const Eigen::V
     out->push_back(piece);
   };
   switch (set) {
-    case PieceSet::kUobb: box(TriangleRectangle(a, b, c)); break;
+    case PieceSet::kUobb:
+      box(TriangleRectangle(a, b, c));
+      break;
     case PieceSet::kEdgeBoxes:
       for (const Obb& edge : ComputeBoundedExactOffset(a, b, c, 0.0).edge_boxes) box(edge);
       break;
@@ -250,7 +259,7 @@ struct CullingRenderer::Impl {
   GLuint fbo_id = 0, fbo_other = 0, fbo_nearest_only = 0;
   GLuint object_buffer = 0, alive_buffer = 0, flag_buffer = 0;
   std::vector<GLuint> queries;
-  GLuint index_buffers[3] = {};                // per shape: CornerIndices
+  GLuint index_buffers[3] = {};                 // per shape: CornerIndices
   GLuint indirect_buffers[kNumPieceSets] = {};  // per set: this view's draw commands
   size_t view_commands[kNumPieceSets] = {};
   uint64_t view_instances[kNumPieceSets] = {};
@@ -293,8 +302,9 @@ struct CullingRenderer::Impl {
       for (size_t s = 0; s < store.slots.size(); ++s) {
         if (!store.dirty[s] || store.slots[s].empty()) continue;
         const auto bytes = static_cast<GLsizeiptr>(store.slots[s].size() * sizeof(PieceInstance));
-        glNamedBufferSubData(store.buffer, static_cast<GLintptr>(store.first[s] * sizeof(PieceInstance)),
-                             bytes, store.slots[s].data());
+        glNamedBufferSubData(store.buffer,
+                             static_cast<GLintptr>(store.first[s] * sizeof(PieceInstance)), bytes,
+                             store.slots[s].data());
         counters->bytes_uploaded += bytes;
       }
     }
@@ -313,9 +323,9 @@ struct CullingRenderer::Impl {
     if (count == 0) return;
     const PieceStore& store = stores[static_cast<int>(set)];
     glBindVertexArray(store.vao);
-    glDrawElementsInstancedBaseInstance(GL_TRIANGLES, static_cast<GLsizei>(CornerIndices(ShapeOf(set)).size()),
-                                        GL_UNSIGNED_BYTE, nullptr, static_cast<GLsizei>(count),
-                                        static_cast<GLuint>(first));
+    glDrawElementsInstancedBaseInstance(
+        GL_TRIANGLES, static_cast<GLsizei>(CornerIndices(ShapeOf(set)).size()), GL_UNSIGNED_BYTE,
+        nullptr, static_cast<GLsizei>(count), static_cast<GLuint>(first));
     counters->draws++;
     counters->instances += static_cast<int64_t>(count);
   }
@@ -334,9 +344,10 @@ struct CullingRenderer::Impl {
     view_commands[static_cast<int>(set)] = commands.size();
     view_instances[static_cast<int>(set)] = 0;
     for (const auto& c : commands) view_instances[static_cast<int>(set)] += c.instance_count;
-    glNamedBufferData(indirect_buffers[static_cast<int>(set)],
-                      static_cast<GLsizeiptr>(std::max<size_t>(commands.size(), 1) * sizeof(DrawCommand)),
-                      commands.data(), GL_STREAM_DRAW);
+    glNamedBufferData(
+        indirect_buffers[static_cast<int>(set)],
+        static_cast<GLsizeiptr>(std::max<size_t>(commands.size(), 1) * sizeof(DrawCommand)),
+        commands.data(), GL_STREAM_DRAW);
     *bytes += static_cast<int64_t>(commands.size() * sizeof(DrawCommand));
   }
 
@@ -346,7 +357,8 @@ struct CullingRenderer::Impl {
     if (view_commands[s] == 0) return;
     glBindVertexArray(stores[s].vao);
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buffers[s]);
-    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_BYTE, nullptr, static_cast<GLsizei>(view_commands[s]), 0);
+    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_BYTE, nullptr,
+                                static_cast<GLsizei>(view_commands[s]), 0);
     counters->draws++;
     counters->instances += static_cast<int64_t>(view_instances[s]);
   }
@@ -358,9 +370,9 @@ CullingRenderer::~CullingRenderer() = default;
 
 Result<std::unique_ptr<CullingRenderer>> CullingRenderer::Create(const RasterFormat& raster) {
   if (raster.width < 8 || raster.height < 8 || raster.width > 16384 || raster.height > 16384) {
-    return MakeError(ErrorCode::kInvalidArgument,
-                     "raster size " + std::to_string(raster.width) + "x" +
-                         std::to_string(raster.height) + " is outside [8, 16384]");
+    return MakeError(ErrorCode::kInvalidArgument, "raster size " + std::to_string(raster.width) +
+                                                      "x" + std::to_string(raster.height) +
+                                                      " is outside [8, 16384]");
   }
   auto impl = std::make_unique<Impl>();
   // Shaders: one program per piece shape and fragment role.
@@ -385,7 +397,8 @@ Result<std::unique_ptr<CullingRenderer>> CullingRenderer::Create(const RasterFor
     PieceStore& store = impl->stores[static_cast<size_t>(set)];
     glCreateBuffers(1, &store.buffer);
     glCreateVertexArrays(1, &store.vao);
-    glVertexArrayElementBuffer(store.vao, impl->index_buffers[static_cast<int>(ShapeOf(static_cast<PieceSet>(set)))]);
+    glVertexArrayElementBuffer(
+        store.vao, impl->index_buffers[static_cast<int>(ShapeOf(static_cast<PieceSet>(set)))]);
     glVertexArrayVertexBuffer(store.vao, 0, store.buffer, 0, sizeof(PieceInstance));
     glVertexArrayBindingDivisor(store.vao, 0, 1);
     for (GLuint i = 0; i < 4; ++i) {
@@ -489,8 +502,8 @@ Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
                     objects.data(), GL_STREAM_DRAW);
   glNamedBufferData(gl.alive_buffer, static_cast<GLsizeiptr>(alive.size() * sizeof(uint32_t)),
                     alive.data(), GL_STREAM_DRAW);
-  counters->bytes_uploaded += static_cast<int64_t>(objects.size() * sizeof(ObjectData) +
-                                                   alive.size() * sizeof(uint32_t));
+  counters->bytes_uploaded +=
+      static_cast<int64_t>(objects.size() * sizeof(ObjectData) + alive.size() * sizeof(uint32_t));
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl.object_buffer);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, gl.alive_buffer);
 
@@ -540,7 +553,8 @@ Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
   auto primitives_of = [&](const ViewObject& object) {
     if (view.triangles_per_primitive <= 0) return 1;
     const int k = view.triangles_per_primitive;
-    return static_cast<int>((object.num_triangles + static_cast<uint32_t>(k) - 1) / static_cast<uint32_t>(k));
+    return static_cast<int>((object.num_triangles + static_cast<uint32_t>(k) - 1) /
+                            static_cast<uint32_t>(k));
   };
 
   std::vector<uint8_t> stays(static_cast<size_t>(view.num_primitives), 0);
@@ -576,9 +590,9 @@ Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
       glBindFramebuffer(GL_FRAMEBUFFER, against_nearest ? gl.fbo_nearest_only : gl.fbo_other);
       for (PieceSet set : view.sets) {
         gl.UseProgram(ShapeOf(set), FragmentRole::kFlag, view.triangles_per_primitive);
-        glUniform1i(glGetUniformLocation(gl.programs[static_cast<int>(ShapeOf(set))][2],
-                                         "against_nearest"),
-                    against_nearest ? 1 : 0);
+        glUniform1i(
+            glGetUniformLocation(gl.programs[static_cast<int>(ShapeOf(set))][2], "against_nearest"),
+            against_nearest ? 1 : 0);
         gl.DrawView(set, counters);
       }
     }
@@ -604,7 +618,8 @@ Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
       int since_flush = 0;
       const int n = static_cast<int>(view.objects.size());
       for (int step = 0; step < n; ++step) {
-        const ViewObject& object = view.objects[static_cast<size_t>(pass == 0 ? step : n - 1 - step)];
+        const ViewObject& object =
+            view.objects[static_cast<size_t>(pass == 0 ? step : n - 1 - step)];
         const int num_local = primitives_of(object);
         // Query each live primitive's back faces against the objects drawn so far.
         glDepthMask(GL_FALSE);

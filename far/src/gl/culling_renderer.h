@@ -48,8 +48,8 @@ void AppendPieces(PieceSet set, uint32_t slot, uint32_t triangle, const Eigen::V
 
 /// An object taking part in one axis view.
 struct ViewObject {
-  uint32_t slot = 0;             ///< where its instances are
-  uint32_t group = 0;            ///< self-exclusion unit: primitives of one group never cull each other
+  uint32_t slot = 0;   ///< where its instances are
+  uint32_t group = 0;  ///< self-exclusion unit: primitives of one group never cull each other
   uint32_t first_primitive = 0;  ///< primitive index of its first sub-object
   uint32_t num_triangles = 0;
   Eigen::Isometry3d X_WA = Eigen::Isometry3d::Identity();  ///< anchor frame A in world
@@ -63,8 +63,8 @@ struct AxisView {
   std::span<const ViewObject> objects;
   int triangles_per_primitive = 0;  ///< sub-object size k; 0 = one primitive per object
   int num_primitives = 0;
-  std::span<const uint8_t> alive;   ///< per primitive: 1 if still in the PCS
-  std::span<const PieceSet> sets;   ///< what to draw for each triangle
+  std::span<const uint8_t> alive;  ///< per primitive: 1 if still in the PCS
+  std::span<const PieceSet> sets;  ///< what to draw for each triangle
 };
 
 /// Counters of the GPU work a view did.

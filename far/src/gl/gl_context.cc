@@ -1,10 +1,10 @@
 #include "far/gl_context.h"
 
-#include <string>
-#include <vector>
-
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
+
+#include <string>
+#include <vector>
 
 namespace far {
 
@@ -19,17 +19,28 @@ struct EglState {
 
 std::string EglErrorName(EGLint error) {
   switch (error) {
-    case EGL_SUCCESS: return "EGL_SUCCESS";
-    case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
-    case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
-    case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
-    case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
-    case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
-    case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
-    case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
-    case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
-    case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
-    default: return "EGL error " + std::to_string(error);
+    case EGL_SUCCESS:
+      return "EGL_SUCCESS";
+    case EGL_NOT_INITIALIZED:
+      return "EGL_NOT_INITIALIZED";
+    case EGL_BAD_ACCESS:
+      return "EGL_BAD_ACCESS";
+    case EGL_BAD_ALLOC:
+      return "EGL_BAD_ALLOC";
+    case EGL_BAD_ATTRIBUTE:
+      return "EGL_BAD_ATTRIBUTE";
+    case EGL_BAD_CONFIG:
+      return "EGL_BAD_CONFIG";
+    case EGL_BAD_CONTEXT:
+      return "EGL_BAD_CONTEXT";
+    case EGL_BAD_DISPLAY:
+      return "EGL_BAD_DISPLAY";
+    case EGL_BAD_MATCH:
+      return "EGL_BAD_MATCH";
+    case EGL_BAD_PARAMETER:
+      return "EGL_BAD_PARAMETER";
+    default:
+      return "EGL error " + std::to_string(error);
   }
 }
 
@@ -69,9 +80,13 @@ bool MakeContext(EGLDisplay display, EglState* impl, std::string* why) {
     config = EGL_NO_CONFIG_KHR;
   }
   // Core 4.5 is the highest profile llvmpipe gives (4.6 fails on Mesa 22.3).
-  const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
+  const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                       4,
+                                       EGL_CONTEXT_MINOR_VERSION,
+                                       5,
                                        EGL_CONTEXT_OPENGL_PROFILE_MASK,
-                                       EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+                                       EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                       EGL_NONE};
   EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attributes);
   if (context == EGL_NO_CONTEXT) {
     *why = "eglCreateContext(OpenGL 4.5 core) failed (" + EglErrorName(eglGetError()) + ")";
@@ -114,12 +129,13 @@ Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform) {
       if (num_devices == 0) attempts.push_back("EGL device platform: no devices");
       for (bool want_software : {false, true}) {
         for (int i = 0; i < num_devices; ++i) {
-          const bool software = HasExtension(
-              eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS), "EGL_MESA_device_software");
+          const bool software = HasExtension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS),
+                                             "EGL_MESA_device_software");
           if (software != want_software) continue;
           const std::string name = "EGL device " + std::to_string(i) +
                                    (software ? " (EGL_MESA_device_software)" : " (hardware)");
-          EGLDisplay display = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
+          EGLDisplay display =
+              eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
           std::string why;
           if (MakeContext(display, impl.get(), &why)) {
             impl->platform = name;
@@ -136,8 +152,8 @@ Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform) {
     if (!HasExtension(client_extensions, "EGL_MESA_platform_surfaceless")) {
       attempts.push_back("surfaceless platform: not offered by this EGL");
     } else {
-      EGLDisplay display = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY,
-                                                    nullptr);
+      EGLDisplay display =
+          eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
       std::string why;
       if (MakeContext(display, impl.get(), &why)) {
         impl->platform = "surfaceless";

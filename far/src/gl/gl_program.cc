@@ -63,12 +63,12 @@ Result<void> CheckGl(const char* what) {
   if (error == GL_NO_ERROR) return {};
   while (glGetError() != GL_NO_ERROR) {
   }
-  return MakeError(ErrorCode::kInternal,
-                   std::string(what) + ": GL error 0x" + [&] {
-                     char hex[16];
-                     std::snprintf(hex, sizeof(hex), "%04x", error);
-                     return std::string(hex);
-                   }());
+  return MakeError(
+      ErrorCode::kInternal, std::string(what) + ": GL error 0x" + [&] {
+        char hex[16];
+        std::snprintf(hex, sizeof(hex), "%04x", error);
+        return std::string(hex);
+      }());
 }
 
 }  // namespace far::internal

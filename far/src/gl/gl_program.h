@@ -1,8 +1,8 @@
 #pragma once
 
-#include <string>
-
 #include <epoxy/gl.h>
+
+#include <string>
 
 #include "far/result.h"
 

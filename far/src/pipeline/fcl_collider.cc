@@ -1,10 +1,10 @@
 #include "fcl_collider.h"
 
-#include <algorithm>
-
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/narrowphase/collision.h>
+
+#include <algorithm>
 
 namespace far::internal {
 namespace {
@@ -80,7 +80,8 @@ std::vector<ContactPair> FclCollider::Collide(const std::vector<Object>& objects
     uint32_t id2 = *static_cast<uint32_t*>(o2->getUserData());
     for (size_t i = 0; i < result.numContacts(); ++i) {
       const auto& contact = result.getContact(i);
-      ContactPair pair{id1, static_cast<uint32_t>(contact.b1), id2, static_cast<uint32_t>(contact.b2)};
+      ContactPair pair{id1, static_cast<uint32_t>(contact.b1), id2,
+                       static_cast<uint32_t>(contact.b2)};
       if (id1 > id2) pair = {id2, pair.triangle_b, id1, pair.triangle_a};
       data->pairs.push_back(pair);
     }

@@ -9,12 +9,13 @@
 #include <string>
 #include <unordered_map>
 
+#include "fcl_collider.h"
+#include "gl/culling_renderer.h"
+
 #include "far/bounding_offset.h"
 #include "far/exact_stage.h"
 #include "far/sweep_and_prune.h"
 #include "far/thread_pool.h"
-#include "fcl_collider.h"
-#include "gl/culling_renderer.h"
 
 namespace far {
 namespace {
@@ -30,7 +31,8 @@ double MillisecondsSince(Clock::time_point start) {
 }
 
 bool AllFinite(const std::vector<Eigen::Vector3d>& points) {
-  return std::all_of(points.begin(), points.end(), [](const Eigen::Vector3d& p) { return p.allFinite(); });
+  return std::all_of(points.begin(), points.end(),
+                     [](const Eigen::Vector3d& p) { return p.allFinite(); });
 }
 
 // Validates a pose and returns it as an isometry with a normalized rotation.
@@ -40,8 +42,9 @@ Result<Eigen::Isometry3d> CheckedPose(const Pose& pose, const std::string& where
   }
   const double norm = pose.rotation.norm();
   if (std::abs(norm - 1.0) > 1e-6) {
-    return MakeError(ErrorCode::kInvalidArgument,
-                     where + ": rotation is not a unit quaternion (norm " + std::to_string(norm) + ")");
+    return MakeError(
+        ErrorCode::kInvalidArgument,
+        where + ": rotation is not a unit quaternion (norm " + std::to_string(norm) + ")");
   }
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.linear() = pose.rotation.normalized().toRotationMatrix();
@@ -58,10 +61,14 @@ Eigen::AlignedBox3d TransformBox(const Eigen::Isometry3d& X, const Eigen::Aligne
 
 std::vector<PieceSet> PieceSetsFor(Method method) {
   switch (method) {
-    case Method::kFar: return {PieceSet::kUobb};
-    case Method::kFarExactOffset: return {PieceSet::kEdgeBoxes, PieceSet::kPrisms};
-    case Method::kCullide: return {PieceSet::kTriangles};
-    default: return {};
+    case Method::kFar:
+      return {PieceSet::kUobb};
+    case Method::kFarExactOffset:
+      return {PieceSet::kEdgeBoxes, PieceSet::kPrisms};
+    case Method::kCullide:
+      return {PieceSet::kTriangles};
+    default:
+      return {};
   }
 }
 
@@ -74,9 +81,9 @@ struct ObjectState {
   uint32_t id = 0;
   uint32_t slot = 0;
   Motion motion = Motion::kStatic;
-  Mesh mesh;                                  // frame M
+  Mesh mesh;  // frame M
   Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
-  uint64_t geometry_stamp = 0;                // changes whenever p_MV changes
+  uint64_t geometry_stamp = 0;  // changes whenever p_MV changes
   // Derived from p_MV (recomputed only when the vertices change):
   Eigen::Vector3d anchor_M = Eigen::Vector3d::Zero();  // middle of the mesh: frame A's origin
   double local_extent = 0;                             // bound on |x| of pieces in frame A
@@ -121,7 +128,8 @@ struct Pipeline::Impl {
     for (const auto& p : object.mesh.p_MV) box_M.extend(p);
     object.anchor_M = box_M.center();
     double extent = 0;
-    for (const auto& p : object.mesh.p_MV) extent = std::max(extent, (p - object.anchor_M).cwiseAbs().maxCoeff());
+    for (const auto& p : object.mesh.p_MV)
+      extent = std::max(extent, (p - object.anchor_M).cwiseAbs().maxCoeff());
     // A rectangle corner is within one edge length (<= 2 extent) of a vertex.
     object.local_extent = 3.0 * extent;
     object.rect_boxes_M.resize(object.mesh.triangles.size());
@@ -149,8 +157,10 @@ struct Pipeline::Impl {
   }
 
   Result<RendererEntry*> RendererFor(const StepRequest& request) {
-    if (!has_gl) return MakeError(ErrorCode::kUnavailable, "method '" + std::string(ToString(request.method)) +
-                                                           "' needs the GPU, and this pipeline has no GL context");
+    if (!has_gl)
+      return MakeError(ErrorCode::kUnavailable,
+                       "method '" + std::string(ToString(request.method)) +
+                           "' needs the GPU, and this pipeline has no GL context");
     const RasterFormat raster{request.resolution, request.resolution, request.depth_format};
     auto key = std::make_tuple(raster.width, raster.height, static_cast<int>(raster.depth));
     auto it = renderers.find(key);
@@ -179,7 +189,8 @@ struct Pipeline::Impl {
                                  object.mesh.p_MV[tri[2]] - object.anchor_M, &pieces);
         }
         counters.piece_builds++;
-        counters.piece_bytes += static_cast<int64_t>(pieces.size() * sizeof(internal::PieceInstance));
+        counters.piece_bytes +=
+            static_cast<int64_t>(pieces.size() * sizeof(internal::PieceInstance));
         entry.renderer->SetPieces(set, object.slot, std::move(pieces));
         entry.built[key] = object.geometry_stamp;
       }
@@ -254,19 +265,21 @@ Result<void> Pipeline::Impl::CheckRequest(const StepRequest& request) const {
                      "resolution: " + std::to_string(request.resolution) + " is outside [8, 8192]");
   }
   if (request.subobject_size < 1 || request.subobject_size > 1 << 20) {
-    return MakeError(ErrorCode::kInvalidArgument,
-                     "subobject_size: " + std::to_string(request.subobject_size) + " is outside [1, 2^20]");
+    return MakeError(
+        ErrorCode::kInvalidArgument,
+        "subobject_size: " + std::to_string(request.subobject_size) + " is outside [1, 2^20]");
   }
   if (request.distance && (!std::isfinite(*request.distance) || *request.distance < 0)) {
-    return MakeError(ErrorCode::kInvalidArgument,
-                     "distance: " + std::to_string(*request.distance) + " is not a finite number >= 0");
+    return MakeError(ErrorCode::kInvalidArgument, "distance: " + std::to_string(*request.distance) +
+                                                      " is not a finite number >= 0");
   }
   if (request.output == Output::kDistancePairs && !request.distance) {
     return MakeError(ErrorCode::kInvalidArgument, "output: 'distance' needs a distance D");
   }
   if (request.method == Method::kFcl && request.distance) {
-    return MakeError(ErrorCode::kInvalidArgument,
-                     "method: 'fcl' answers contacts only; distance queries need far, aabb or exact");
+    return MakeError(
+        ErrorCode::kInvalidArgument,
+        "method: 'fcl' answers contacts only; distance queries need far, aabb or exact");
   }
   return {};
 }
@@ -286,7 +299,8 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
     return std::move(result);
   };
   const double distance = request.distance.value_or(0.0);
-  const bool want_exact = request.output == Output::kContacts || request.output == Output::kDistancePairs;
+  const bool want_exact =
+      request.output == Output::kContacts || request.output == Output::kDistancePairs;
 
   // Update: world-frame vertices of objects that moved or deformed.
   for (auto& [id, object] : objects) RefreshWorld(object);
@@ -350,7 +364,8 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
     std::vector<ViewObject> view_objects;
     std::vector<Eigen::AlignedBox3d> boxes;
     for (size_t i = 0; i < all.size(); ++i) {
-      view_objects.push_back(MakeViewObject(*all[i], static_cast<uint32_t>(i), static_cast<uint32_t>(i)));
+      view_objects.push_back(
+          MakeViewObject(*all[i], static_cast<uint32_t>(i), static_cast<uint32_t>(i)));
       boxes.push_back(TransformBox(all[i]->X_WM, all[i]->rect_box_M));
     }
     if (auto ok = CullLevel(*entry, request, view_objects, 0, boxes, object_alive, stats,
@@ -381,7 +396,8 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
     result.pcs_objects.assign(paired.begin(), paired.end());
   }
   end_stage("sweep_and_prune");
-  if (request.output == Output::kObjectPcs || request.output == Output::kObjectPairs) return finish();
+  if (request.output == Output::kObjectPcs || request.output == Output::kObjectPairs)
+    return finish();
 
   // Sub-object culling of the objects in candidate pairs -> primitive PCS.
   std::map<uint32_t, size_t> index_of;
@@ -398,16 +414,19 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
     std::vector<Eigen::AlignedBox3d> boxes;
     for (size_t i : paired) {
       const ObjectState& object = *all[i];
-      view_objects.push_back(MakeViewObject(object, static_cast<uint32_t>(i), static_cast<uint32_t>(boxes.size())));
+      view_objects.push_back(
+          MakeViewObject(object, static_cast<uint32_t>(i), static_cast<uint32_t>(boxes.size())));
       const size_t n = object.mesh.triangles.size();
       for (size_t first = 0; first < n; first += static_cast<size_t>(k)) {
         Eigen::AlignedBox3d box_M;
-        for (size_t t = first; t < std::min(n, first + static_cast<size_t>(k)); ++t) box_M.extend(object.rect_boxes_M[t]);
+        for (size_t t = first; t < std::min(n, first + static_cast<size_t>(k)); ++t)
+          box_M.extend(object.rect_boxes_M[t]);
         boxes.push_back(TransformBox(object.X_WM, box_M));
       }
     }
     std::vector<uint8_t> alive(boxes.size(), 1);
-    if (auto ok = CullLevel(*entry, request, view_objects, k, boxes, alive, stats, &stats.primitive_radius);
+    if (auto ok = CullLevel(*entry, request, view_objects, k, boxes, alive, stats,
+                            &stats.primitive_radius);
         !ok.ok()) {
       return ok.error();
     }
@@ -415,7 +434,8 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
       const uint32_t count = (view.num_triangles + k - 1) / k;
       for (uint32_t j = 0; j < count; ++j) {
         if (!alive[view.first_primitive + j]) continue;
-        for (uint32_t t = j * k; t < std::min(view.num_triangles, (j + 1) * k); ++t) subsets[view.group].push_back(t);
+        for (uint32_t t = j * k; t < std::min(view.num_triangles, (j + 1) * k); ++t)
+          subsets[view.group].push_back(t);
       }
     }
   } else {
@@ -474,7 +494,8 @@ Result<std::unique_ptr<Pipeline>> Pipeline::Create(const PipelineOptions& option
   } else if (options.use_gl) {
     impl->renderer_name = internal::CurrentGlRenderer();
     if (impl->renderer_name.empty()) {
-      return MakeError(ErrorCode::kUnavailable, "use_current_context: no GL context is current on this thread");
+      return MakeError(ErrorCode::kUnavailable,
+                       "use_current_context: no GL context is current on this thread");
     }
   }
   impl->has_gl = options.use_gl;
@@ -483,15 +504,19 @@ Result<std::unique_ptr<Pipeline>> Pipeline::Create(const PipelineOptions& option
 
 Result<void> Pipeline::AddObject(uint32_t id, Mesh mesh, Motion motion, const Pose& X_WO) {
   const std::string where = "object " + std::to_string(id);
-  if (impl_->objects.count(id)) return MakeError(ErrorCode::kInvalidArgument, where + ": id is already in use");
-  if (mesh.triangles.empty()) return MakeError(ErrorCode::kInvalidArgument, where + ": mesh has no triangles");
-  if (!AllFinite(mesh.p_MV)) return MakeError(ErrorCode::kInvalidArgument, where + ": a vertex is not finite");
+  if (impl_->objects.count(id))
+    return MakeError(ErrorCode::kInvalidArgument, where + ": id is already in use");
+  if (mesh.triangles.empty())
+    return MakeError(ErrorCode::kInvalidArgument, where + ": mesh has no triangles");
+  if (!AllFinite(mesh.p_MV))
+    return MakeError(ErrorCode::kInvalidArgument, where + ": a vertex is not finite");
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     for (uint32_t v : mesh.triangles[t]) {
       if (v >= mesh.p_MV.size()) {
-        return MakeError(ErrorCode::kInvalidArgument,
-                         where + ": triangle " + std::to_string(t) + " has vertex index " +
-                             std::to_string(v) + " >= vertex count " + std::to_string(mesh.p_MV.size()));
+        return MakeError(ErrorCode::kInvalidArgument, where + ": triangle " + std::to_string(t) +
+                                                          " has vertex index " + std::to_string(v) +
+                                                          " >= vertex count " +
+                                                          std::to_string(mesh.p_MV.size()));
       }
     }
   }
@@ -515,7 +540,8 @@ Result<void> Pipeline::AddObject(uint32_t id, Mesh mesh, Motion motion, const Po
 
 Result<void> Pipeline::RemoveObject(uint32_t id) {
   auto it = impl_->objects.find(id);
-  if (it == impl_->objects.end()) return MakeError(ErrorCode::kNotFound, "object " + std::to_string(id) + ": no such object");
+  if (it == impl_->objects.end())
+    return MakeError(ErrorCode::kNotFound, "object " + std::to_string(id) + ": no such object");
   const uint32_t slot = it->second.slot;
   for (auto& [key, entry] : impl_->renderers) {
     entry.renderer->RemoveSlot(slot);
@@ -530,7 +556,8 @@ Result<void> Pipeline::RemoveObject(uint32_t id) {
 Result<void> Pipeline::SetPose(uint32_t id, const Pose& X_WO) {
   const std::string where = "object " + std::to_string(id);
   auto it = impl_->objects.find(id);
-  if (it == impl_->objects.end()) return MakeError(ErrorCode::kNotFound, where + ": no such object");
+  if (it == impl_->objects.end())
+    return MakeError(ErrorCode::kNotFound, where + ": no such object");
   if (it->second.motion == Motion::kStatic) {
     return MakeError(ErrorCode::kInvalidArgument, where + ": static objects cannot move");
   }
@@ -546,17 +573,20 @@ Result<void> Pipeline::SetPose(uint32_t id, const Pose& X_WO) {
 Result<void> Pipeline::SetVertices(uint32_t id, std::vector<Eigen::Vector3d> p_MV) {
   const std::string where = "object " + std::to_string(id);
   auto it = impl_->objects.find(id);
-  if (it == impl_->objects.end()) return MakeError(ErrorCode::kNotFound, where + ": no such object");
+  if (it == impl_->objects.end())
+    return MakeError(ErrorCode::kNotFound, where + ": no such object");
   ObjectState& object = it->second;
   if (object.motion != Motion::kDeformable) {
-    return MakeError(ErrorCode::kInvalidArgument, where + ": only deformable objects take new vertices");
+    return MakeError(ErrorCode::kInvalidArgument,
+                     where + ": only deformable objects take new vertices");
   }
   if (p_MV.size() != object.mesh.p_MV.size()) {
     return MakeError(ErrorCode::kInvalidArgument, where + ": " + std::to_string(p_MV.size()) +
                                                       " vertices given, the mesh has " +
                                                       std::to_string(object.mesh.p_MV.size()));
   }
-  if (!AllFinite(p_MV)) return MakeError(ErrorCode::kInvalidArgument, where + ": a vertex is not finite");
+  if (!AllFinite(p_MV))
+    return MakeError(ErrorCode::kInvalidArgument, where + ": a vertex is not finite");
   object.mesh.p_MV = std::move(p_MV);
   impl_->RefreshGeometry(object);
   return {};
@@ -564,7 +594,8 @@ Result<void> Pipeline::SetVertices(uint32_t id, std::vector<Eigen::Vector3d> p_M
 
 Result<void> Pipeline::LoadScene(const Scene& scene) {
   for (const SceneObject& object : scene.objects) {
-    if (auto ok = AddObject(object.id, object.mesh, object.motion, object.X_WO); !ok.ok()) return ok;
+    if (auto ok = AddObject(object.id, object.mesh, object.motion, object.X_WO); !ok.ok())
+      return ok;
   }
   return {};
 }

@@ -21,7 +21,8 @@ std::vector<SceneObject> RandomSoup(uint64_t seed, int num_objects, int triangle
     const double cluster = triangle_size * std::cbrt(static_cast<double>(triangles_per_object));
     for (int t = 0; t < triangles_per_object; ++t) {
       const Eigen::Vector3d center = cluster * random_vector();
-      for (int v = 0; v < 3; ++v) object.mesh.p_MV.push_back(center + triangle_size * random_vector());
+      for (int v = 0; v < 3; ++v)
+        object.mesh.p_MV.push_back(center + triangle_size * random_vector());
       const auto base = static_cast<uint32_t>(3 * t);
       object.mesh.triangles.push_back({base, base + 1, base + 2});
     }
@@ -46,7 +47,9 @@ Mesh SphereMesh(const Eigen::Vector3d& center, double radius, int stacks, int sl
     }
   }
   mesh.p_MV.push_back(center + Eigen::Vector3d(0, 0, -radius));
-  const auto ring = [&](int i, int j) { return static_cast<uint32_t>(1 + (i - 1) * slices + (j % slices)); };
+  const auto ring = [&](int i, int j) {
+    return static_cast<uint32_t>(1 + (i - 1) * slices + (j % slices));
+  };
   const auto south = static_cast<uint32_t>(mesh.p_MV.size() - 1);
   for (int j = 0; j < slices; ++j) {
     mesh.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
@@ -62,7 +65,8 @@ Mesh SphereMesh(const Eigen::Vector3d& center, double radius, int stacks, int sl
 namespace {
 
 // A closed tube (open cylinder with capped ends) from a to b.
-void AppendTube(Mesh* mesh, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius, int sides) {
+void AppendTube(Mesh* mesh, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
+                int sides) {
   const Eigen::Vector3d axis = (b - a).normalized();
   const Eigen::Vector3d u = axis.unitOrthogonal(), v = axis.cross(u);
   const auto base = static_cast<uint32_t>(mesh->p_MV.size());
@@ -98,7 +102,8 @@ std::vector<SceneObject> LeavesScene(uint64_t seed, int num_leaves, int leaf_cel
   for (int b = 0; b < 24; ++b) {
     const double height = 2.0 + 4.0 * b / 24.0, angle = 2.4 * b;
     const Eigen::Vector3d start(0, 0, height);
-    const Eigen::Vector3d end = start + Eigen::Vector3d(2.5 * std::cos(angle), 2.5 * std::sin(angle), 0.8);
+    const Eigen::Vector3d end =
+        start + Eigen::Vector3d(2.5 * std::cos(angle), 2.5 * std::sin(angle), 0.8);
     AppendTube(&tree.mesh, start, end, 0.08, 8);
   }
   tree.mesh_path = "tree.obj";
@@ -117,16 +122,20 @@ std::vector<SceneObject> LeavesScene(uint64_t seed, int num_leaves, int leaf_cel
     const Eigen::Vector3d center(radius * std::cos(swirl), radius * std::sin(swirl), fall);
     const double bend = 0.3 * std::sin(phase + 2.0 * time);
     const Eigen::Matrix3d tilt =
-        (Eigen::AngleAxisd(phase, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.7 * std::sin(phase + time), Eigen::Vector3d::UnitX()))
+        (Eigen::AngleAxisd(phase, Eigen::Vector3d::UnitZ()) *
+         Eigen::AngleAxisd(0.7 * std::sin(phase + time), Eigen::Vector3d::UnitX()))
             .toRotationMatrix();
     for (int i = 0; i <= leaf_cells; ++i) {
       for (int j = 0; j <= leaf_cells; ++j) {
         const double x = size * (static_cast<double>(i) / leaf_cells - 0.5);
         const double y = size * (static_cast<double>(j) / leaf_cells - 0.5);
-        leaf.mesh.p_MV.push_back(center + tilt * Eigen::Vector3d(x, y, bend * (x * x + y * y) / size));
+        leaf.mesh.p_MV.push_back(center +
+                                 tilt * Eigen::Vector3d(x, y, bend * (x * x + y * y) / size));
       }
     }
-    const auto index = [&](int i, int j) { return static_cast<uint32_t>(i * (leaf_cells + 1) + j); };
+    const auto index = [&](int i, int j) {
+      return static_cast<uint32_t>(i * (leaf_cells + 1) + j);
+    };
     for (int i = 0; i < leaf_cells; ++i) {
       for (int j = 0; j < leaf_cells; ++j) {
         leaf.mesh.triangles.push_back({index(i, j), index(i + 1, j), index(i + 1, j + 1)});
@@ -156,7 +165,8 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
     FrameUpdate frame;
     // Leaves: new vertices (same triangles).
     const auto leaves = LeavesScene(seed, num_leaves, leaf_cells, kDt * f);
-    for (size_t l = 1; l < leaves.size(); ++l) frame.vertices.emplace_back(leaves[l].id, leaves[l].mesh);
+    for (size_t l = 1; l < leaves.size(); ++l)
+      frame.vertices.emplace_back(leaves[l].id, leaves[l].mesh);
     if (f < breaks_at) {
       // The vase falls towards the trunk's base.
       Pose pose;
@@ -172,7 +182,8 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
         fragment.mesh_path = "fragment.obj";
         fragment.mesh = SphereMesh(Eigen::Vector3d::Zero(), 0.22, 6, 10);
         const double angle = std::numbers::pi / 2 * k;
-        fragment.X_WO.translation = Eigen::Vector3d(0.3 + 0.3 * std::cos(angle), 0.3 * std::sin(angle), 0.6);
+        fragment.X_WO.translation =
+            Eigen::Vector3d(0.3 + 0.3 * std::cos(angle), 0.3 * std::sin(angle), 0.6);
         frame.additions.push_back(fragment);
       }
     } else {
@@ -181,7 +192,8 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
       for (int k = 0; k < num_fragments; ++k) {
         const double angle = std::numbers::pi / 2 * k;
         Pose pose;
-        pose.translation = Eigen::Vector3d(0.3 + (0.3 + 0.8 * t) * std::cos(angle), (0.3 + 0.8 * t) * std::sin(angle),
+        pose.translation = Eigen::Vector3d(0.3 + (0.3 + 0.8 * t) * std::cos(angle),
+                                           (0.3 + 0.8 * t) * std::sin(angle),
                                            std::max(0.2, 0.6 + 0.5 * t - 1.2 * t * t));
         pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(3 * t + k, Eigen::Vector3d::UnitZ()));
         frame.poses.emplace_back(vase_id + 1 + static_cast<uint32_t>(k), pose);

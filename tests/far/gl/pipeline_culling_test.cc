@@ -1,15 +1,16 @@
 // The reliability tests of the GPU culling (label gpu; llvmpipe in CI): FAR never misses a
 // contact of the brute-force reference, the two query mechanisms agree, CULLIDE can miss
 // where FAR does not, and the answer does not depend on where the scene is.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <random>
 #include <set>
 
-#include <gtest/gtest.h>
-
-#include "far/pipeline.h"
 #include "hard_cases.h"
 #include "test_scenes.h"
+
+#include "far/pipeline.h"
 
 namespace far {
 namespace {
@@ -48,17 +49,20 @@ class PipelineCullingTest : public ::testing::Test {
   }
 
   // Every reference contact is in the PCS (objects and primitives) and in the contacts.
-  static void ExpectNoMiss(const ExactResult& reference, const StepResult& result, const std::string& what) {
+  static void ExpectNoMiss(const ExactResult& reference, const StepResult& result,
+                           const std::string& what) {
     const std::set<uint32_t> pcs(result.pcs_objects.begin(), result.pcs_objects.end());
     for (const ContactPair& c : reference.contacts) {
       ASSERT_TRUE(pcs.count(c.object_a) && pcs.count(c.object_b))
-          << what << ": objects of contact " << c.object_a << "/" << c.triangle_a << " - " << c.object_b
-          << "/" << c.triangle_b << " not in the object PCS";
-      for (auto [object, triangle] : {std::pair{c.object_a, c.triangle_a}, std::pair{c.object_b, c.triangle_b}}) {
+          << what << ": objects of contact " << c.object_a << "/" << c.triangle_a << " - "
+          << c.object_b << "/" << c.triangle_b << " not in the object PCS";
+      for (auto [object, triangle] :
+           {std::pair{c.object_a, c.triangle_a}, std::pair{c.object_b, c.triangle_b}}) {
         auto it = result.pcs_primitives.find(object);
         ASSERT_TRUE(it != result.pcs_primitives.end() &&
                     std::binary_search(it->second.begin(), it->second.end(), triangle))
-            << what << ": triangle " << triangle << " of object " << object << " not in the primitive PCS";
+            << what << ": triangle " << triangle << " of object " << object
+            << " not in the primitive PCS";
       }
     }
     EXPECT_EQ(result.contacts, reference.contacts) << what;
@@ -70,7 +74,8 @@ class PipelineCullingTest : public ::testing::Test {
 };
 
 constexpr int kResolutions[] = {32, 64, 128, 256, 512, 1024, 2048};
-constexpr DepthFormat kDepths[] = {DepthFormat::kDepth24, DepthFormat::kDepth32F, DepthFormat::kDepth16};
+constexpr DepthFormat kDepths[] = {DepthFormat::kDepth24, DepthFormat::kDepth32F,
+                                   DepthFormat::kDepth16};
 
 TEST_F(PipelineCullingTest, ReliableMethodsNeverMissOnRandomScenes) {
   int scenes = 0, contacts = 0;
@@ -89,7 +94,8 @@ TEST_F(PipelineCullingTest, ReliableMethodsNeverMissOnRandomScenes) {
       request.method = method;
       ExpectNoMiss(reference, Run(request),
                    "seed " + std::to_string(seed) + " " + std::string(ToString(method)) + " res " +
-                       std::to_string(request.resolution) + " " + std::string(ToString(request.depth_format)));
+                       std::to_string(request.resolution) + " " +
+                       std::string(ToString(request.depth_format)));
       if (HasFatalFailure()) return;
     }
     ++scenes;
@@ -100,7 +106,8 @@ TEST_F(PipelineCullingTest, ReliableMethodsNeverMissOnRandomScenes) {
 
 TEST_F(PipelineCullingTest, BothMechanismsGiveTheSamePcs) {
   for (uint64_t seed = 100; seed < 160; ++seed) {
-    const auto objects = RandomSoup(seed, 4 + static_cast<int>(seed % 4), 6 + static_cast<int>(seed % 9), 2.0, 0.6);
+    const auto objects =
+        RandomSoup(seed, 4 + static_cast<int>(seed % 4), 6 + static_cast<int>(seed % 9), 2.0, 0.6);
     Load(objects);
     for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kCullide}) {
       StepRequest request;
@@ -112,8 +119,9 @@ TEST_F(PipelineCullingTest, BothMechanismsGiveTheSamePcs) {
       const StepResult ids = Run(request);
       request.mechanism = QueryMechanism::kOcclusionQuery;
       const StepResult queries = Run(request);
-      const std::string what = "seed " + std::to_string(seed) + " " + std::string(ToString(method)) +
-                               " res " + std::to_string(request.resolution);
+      const std::string what = "seed " + std::to_string(seed) + " " +
+                               std::string(ToString(method)) + " res " +
+                               std::to_string(request.resolution);
       EXPECT_EQ(ids.pcs_objects, queries.pcs_objects) << what;
       EXPECT_EQ(ids.pcs_primitives, queries.pcs_primitives) << what;
       EXPECT_GT(queries.stats.queries, 0) << what;
@@ -176,14 +184,16 @@ TEST_F(PipelineCullingTest, HardCasesFarFromOriginAndTinyFeatures) {
   // Features of 1e-3 at 1e5 and 1e6 from the origin.
   for (double origin : {1e5, 1e6}) {
     for (uint64_t seed = 0; seed < 12; ++seed) {
-      const auto objects = RandomSoup(seed, 5, 8, 4e-3, 1e-3, Eigen::Vector3d(origin, -origin, origin));
+      const auto objects =
+          RandomSoup(seed, 5, 8, 4e-3, 1e-3, Eigen::Vector3d(origin, -origin, origin));
       Load(objects);
       const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
       StepRequest request;
       request.resolution = kResolutions[seed % 7];
       for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
         request.method = method;
-        ExpectNoMiss(reference, Run(request), "origin " + std::to_string(origin) + " seed " + std::to_string(seed));
+        ExpectNoMiss(reference, Run(request),
+                     "origin " + std::to_string(origin) + " seed " + std::to_string(seed));
       }
     }
   }
@@ -211,7 +221,8 @@ TEST_F(PipelineCullingTest, ReliableMethodsGetEveryHardCaseRight) {
       request.method = method;
       const StepResult result = Run(request);
       const bool found = !result.contacts.empty();
-      ASSERT_EQ(found, hard.intersect) << hard.name << " " << ToString(method) << " res " << request.resolution;
+      ASSERT_EQ(found, hard.intersect)
+          << hard.name << " " << ToString(method) << " res " << request.resolution;
       if (hard.intersect) {
         EXPECT_EQ(result.pcs_objects, (std::vector<uint32_t>{1, 2})) << hard.name;
       }
@@ -230,9 +241,11 @@ TEST_F(PipelineCullingTest, OneHugeObjectWithManyTinyOnes) {
   std::mt19937_64 rng(11);
   std::normal_distribution<double> normal;
   for (auto& object : tiny) {
-    const Eigen::Vector3d direction = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    const Eigen::Vector3d direction =
+        Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
     // On a facet of the tessellated sphere the surface is up to ~2 units inside radius 1000.
-    object.X_WO.translation = (998.0 + 4.0 * std::uniform_real_distribution<double>(0, 1)(rng)) * direction;
+    object.X_WO.translation =
+        (998.0 + 4.0 * std::uniform_real_distribution<double>(0, 1)(rng)) * direction;
     objects.push_back(object);
   }
   Load(objects);
@@ -242,7 +255,8 @@ TEST_F(PipelineCullingTest, OneHugeObjectWithManyTinyOnes) {
       StepRequest request;
       request.method = method;
       request.resolution = resolution;
-      ExpectNoMiss(reference, Run(request), std::string(ToString(method)) + " res " + std::to_string(resolution));
+      ExpectNoMiss(reference, Run(request),
+                   std::string(ToString(method)) + " res " + std::to_string(resolution));
     }
   }
 }
@@ -260,7 +274,8 @@ TEST_F(PipelineCullingTest, DistanceCullingNeverMissesAPairCloserThanD) {
     for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
       request.method = method;
       const StepResult result = Run(request);
-      EXPECT_EQ(result.distance_pairs, reference.distance_pairs) << "seed " << seed << " " << ToString(method);
+      EXPECT_EQ(result.distance_pairs, reference.distance_pairs)
+          << "seed " << seed << " " << ToString(method);
     }
   }
 }
@@ -296,7 +311,8 @@ TEST_F(PipelineCullingTest, OnlyWhatChangedIsRecomputed) {
   EXPECT_EQ(pipeline_->counters().piece_builds, first.piece_builds + 1);
   // Static objects refuse poses; rigid ones refuse vertices.
   EXPECT_EQ(pipeline_->SetPose(objects[0].id, moved).error().code, ErrorCode::kInvalidArgument);
-  EXPECT_EQ(pipeline_->SetVertices(objects[1].id, vertices).error().code, ErrorCode::kInvalidArgument);
+  EXPECT_EQ(pipeline_->SetVertices(objects[1].id, vertices).error().code,
+            ErrorCode::kInvalidArgument);
 }
 
 TEST_F(PipelineCullingTest, StagesPastTheDeepestOutputDoNotRun) {

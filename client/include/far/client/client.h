@@ -21,7 +21,7 @@ namespace far::client {
 /// How to reach the daemon and what to ask of it.
 struct ClientOptions {
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
-  std::string client_name = "far-client";  ///< shown in the daemon's status and logs
+  std::string client_name = "far-client";   ///< shown in the daemon's status and logs
   std::chrono::milliseconds timeout{3000};  ///< for opening a session and for Step
   bool heartbeat = true;  ///< send heartbeats from a background thread (else call Heartbeat)
 };

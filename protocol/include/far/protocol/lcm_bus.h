@@ -30,7 +30,15 @@ class LcmBus {
   LcmBus(const LcmBus&) = delete;
   LcmBus& operator=(const LcmBus&) = delete;
 
-  /// Calls `handler` for every message on channels matching the regular expression `channel`.
+  /// Messages LCM keeps per subscription while they wait for Handle. LCM's default is 30 and
+  /// it silently drops what does not fit: the daemon's one subscription for every session's
+  /// request channel would lose a well-behaved session's step request after a burst of 30
+  /// messages from another session (tests/integration: BurstFromOneSession...). Memory bound:
+  /// this many received messages (each at most one ~64 KiB datagram unless fragmented).
+  static constexpr int kQueueCapacity = 1000;
+
+  /// Calls `handler` for every message on channels matching the regular expression `channel`
+  /// (queue capacity kQueueCapacity).
   void Subscribe(const std::string& channel, Handler handler);
   /// Publishes bytes on `channel`. Errors: kUnavailable when LCM fails to send.
   Result<void> Publish(const std::string& channel, std::span<const uint8_t> bytes);

@@ -141,7 +141,8 @@ template <typename T>
 Result<T> DecodeMessage(const void* data, size_t size, size_t max_size) {
   auto message = DecodeMessageAnyVersion<T>(data, size, max_size);
   if (!message) return message;
-  if (auto ok = internal::CheckProtocolVersion(internal::MessageTypeOf<T>::value, message->protocol_version);
+  if (auto ok = internal::CheckProtocolVersion(internal::MessageTypeOf<T>::value,
+                                               message->protocol_version);
       !ok) {
     return ok.error();
   }
