@@ -3,7 +3,8 @@
 // shared memory, framing checks, validation of every double, conversion to far's types).
 // Bytes per second count the vertex payload (24 bytes per vertex). Same process, one thread:
 // the daemon-side cost is what bounds ingest (the writer is a memcpy).
-//   build/release/bench/far_ring_ingest_benchmark --benchmark_repetitions=10
+//   build/release/bench/protocol/far_ring_ingest_benchmark --benchmark_repetitions=10
+// (add --glibc-default-malloc last to measure without the daemon's malloc settings)
 #include <benchmark/benchmark.h>
 
 #include <vector>
@@ -58,4 +59,17 @@ BENCHMARK(BM_RingIngest_SetVertices)
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  // As far-daemon does at start-up (server/src/main.cc): large buffers come from the heap and
+  // are reused, instead of fresh zero-filled pages from mmap for every record.
+  if (argc > 1 && std::string(argv[argc - 1]) == "--glibc-default-malloc") {
+    --argc;
+  } else {
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+  }
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -312,6 +312,7 @@ int Load(const ClientOptions& base, int clients, int steps, double seconds,
 int main(int argc, char** argv) {
   CLI::App app{"far-client: probe a far-daemon, run scene files through it, load-test it"};
   app.require_subcommand(1);
+  app.fallthrough();  // --lcm-url and --timeout-ms may also come after the command
   ClientOptions options;
   int timeout_ms = 5000;
   app.add_option("--lcm-url", options.lcm_url, "LCM URL of the daemon")->capture_default_str();

@@ -224,7 +224,16 @@ struct Daemon::Impl {
           params->update_ring_bytes ? params->update_ring_bytes : config.ring_bytes;
       options.reply_ring_bytes =
           params->reply_ring_bytes ? params->reply_ring_bytes : config.reply_bytes;
-      auto segment = protocol::ShmSegment::Create(static_cast<uint64_t>(session->id), options);
+      // A client may ask for smaller rings than the daemon's, never larger ones.
+      const bool too_large = options.update_ring_bytes > config.ring_bytes ||
+                             options.reply_ring_bytes > config.reply_bytes;
+      auto segment =
+          too_large ? Result<std::unique_ptr<protocol::ShmSegment>>(MakeError(
+                          ErrorCode::kLimitExceeded,
+                          "update_ring_bytes/reply_ring_bytes: this daemon allows at most " +
+                              std::to_string(config.ring_bytes) + "/" +
+                              std::to_string(config.reply_bytes) + " bytes"))
+                    : protocol::ShmSegment::Create(static_cast<uint64_t>(session->id), options);
       if (!segment) {
         fail(segment.error());
         session.reset();
@@ -365,6 +374,12 @@ struct Daemon::Impl {
         if (!opened) return;
         auto& [message, session] = *opened;
         auto command = protocol::ValidateStepRequest(message);
+        if (command && command->request.resolution > config.max_resolution) {
+          command = MakeError(ErrorCode::kLimitExceeded,
+                              "resolution: " + std::to_string(command->request.resolution) +
+                                  " is over this daemon's max_resolution " +
+                                  std::to_string(config.max_resolution));
+        }
         if (!command) {
           protocol::StepCommand failed;
           failed.step_id = message.step_id;
@@ -650,9 +665,9 @@ struct Daemon::Impl {
     std::lock_guard lock(mutex);
     for (auto& [id, session] : sessions) {
       // Tell the client, so that it does not wait out its timeout for replies that never come.
-      PublishError(id, &session->key, -1,
-                   MakeError(ErrorCode::kUnavailable, "session closed: far-daemon is shutting down"),
-                   true);
+      PublishError(
+          id, &session->key, -1,
+          MakeError(ErrorCode::kUnavailable, "session closed: far-daemon is shutting down"), true);
       session->pipeline.reset();
       session->segment.reset();
     }
@@ -702,7 +717,9 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
                d.config.lcm_url, d.config.max_sessions);
   auto last_reap = Clock::now();
   while (!d.stop && !(stop_flag != nullptr && stop_flag->load())) {
-    if (!d.bus->Handle(std::chrono::milliseconds(100))) {
+    const bool handled = d.bus->Handle(std::chrono::milliseconds(100));
+    // (a signal that stops the daemon also interrupts LCM's wait: not an error)
+    if (!handled && !d.stop && !(stop_flag != nullptr && stop_flag->load())) {
       spdlog::error("event=lcm_error lcm_url={}", d.config.lcm_url);
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }

@@ -33,6 +33,8 @@ Result<DaemonConfig> LoadDaemonConfig(const std::filesystem::path& path, DaemonC
         config.lcm_url = value.get<std::string>();
       else if (key == "default_resolution")
         config.default_resolution = value.get<int>();
+      else if (key == "max_resolution")
+        config.max_resolution = value.get<int>();
       else if (key == "depth_format") {
         auto format = ParseDepthFormat(value.get<std::string>());
         if (!format) return Invalid(key, "unknown depth format " + value.dump());
@@ -84,6 +86,10 @@ Result<void> ValidateDaemonConfig(const DaemonConfig& config) {
   if (config.default_resolution < 8 || config.default_resolution > 8192) {
     return Invalid("default_resolution",
                    std::to_string(config.default_resolution) + " is outside [8, 8192]");
+  }
+  if (config.max_resolution < config.default_resolution || config.max_resolution > 8192) {
+    return Invalid("max_resolution", std::to_string(config.max_resolution) +
+                                         " is outside [default_resolution, 8192]");
   }
   if (config.max_sessions < 1) return Invalid("max_sessions", "must be >= 1");
   if (config.max_triangles_per_session < 1)

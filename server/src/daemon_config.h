@@ -15,13 +15,15 @@ namespace far::server {
 struct DaemonConfig {
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
   int default_resolution = 1024;  ///< viewport used when a request names none
+  int max_resolution = 4096;      ///< larger requests are refused: one GL thread serves all
   DepthFormat depth_format = DepthFormat::kDepth24;
   GlPlatform gl_platform = GlPlatform::kAuto;
   int max_sessions = 64;
   int64_t max_triangles_per_session = 2'000'000;
   int64_t max_objects_per_session = 100'000;
-  uint64_t ring_bytes = 64ull << 20;      ///< update ring per session (power of two)
-  uint64_t reply_bytes = 16ull << 20;     ///< shared-memory reply region per session
+  uint64_t ring_bytes = 64ull << 20;      ///< update ring per session (power of two): the most a
+                                          ///< client may ask for
+  uint64_t reply_bytes = 16ull << 20;     ///< reply ring per session (power of two): the same
   double max_requests_per_second = 2000;  ///< per session, sustained
   int max_queued_per_session = 4;
   int max_queued_total = 256;

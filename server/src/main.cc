@@ -1,4 +1,5 @@
 // far-daemon: the FAR collision-culling service. See README.md and docs/daemon.md.
+#include <malloc.h>
 #include <spdlog/spdlog.h>
 
 #include <csignal>
@@ -39,6 +40,9 @@ int main(int argc, char** argv) {
   auto* objects =
       app.add_option("--max-objects", flags.max_objects_per_session, "objects per session")
           ->capture_default_str();
+  auto* max_resolution = app.add_option("--max-resolution", flags.max_resolution,
+                                        "largest viewport a request may ask for")
+                             ->capture_default_str();
   auto* ring = app.add_option("--ring-bytes", flags.ring_bytes,
                               "update ring bytes per session (power of two)")
                    ->capture_default_str();
@@ -87,6 +91,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  if (*max_resolution) config.max_resolution = flags.max_resolution;
   if (*sessions) config.max_sessions = flags.max_sessions;
   if (*triangles) config.max_triangles_per_session = flags.max_triangles_per_session;
   if (*objects) config.max_objects_per_session = flags.max_objects_per_session;
@@ -103,6 +108,12 @@ int main(int argc, char** argv) {
   // Structured logs: one line per event, key=value.
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e level=%l %v");
   spdlog::set_level(spdlog::level::from_str(config.log_level));
+
+  // Ring records and meshes are large (a 10k-vertex update is 240 KB): keep such buffers on the
+  // heap for reuse instead of glibc's default fresh mmap (zero-filled pages) for every one of
+  // them, which cost more than the copies themselves (bench/RESULTS.md, ring ingest).
+  mallopt(M_MMAP_THRESHOLD, 256 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
 
   auto daemon = far::server::Daemon::Create(config);
   if (!daemon) {

@@ -1,0 +1,134 @@
+#pragma once
+
+// Real processes for the integration tests: far-daemon started with fork/exec (its output in a
+// log file that a failing test prints), far-client runs with their output captured, and the
+// shared-memory files the daemon leaves in /dev/shm.
+//
+// Every test runs in its own network namespace (deploy/netns-run.sh, set as the test target's
+// CROSSCOMPILING_EMULATOR), so the default udpm URL reaches only the processes of that test.
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "far/client/client.h"
+#include "far/result.h"
+
+namespace far::integration {
+
+/// The LCM URL every integration test uses: the default one, private to the test's namespace.
+std::string TestLcmUrl();
+
+/// A temporary folder, removed (with its contents) on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// One far-daemon process. Start() forks and execs FAR_DAEMON_PATH with `args` (plus
+/// --lcm-url and --log-level unless given), its stdout and stderr in a log file, then waits
+/// until it answers a status request (Client::Status, retried for up to `ready_timeout`).
+/// Stop() sends SIGTERM and waits (bounded) for the exit status. The destructor SIGKILLs a
+/// process that is still running, so no test leaves one behind whatever fails.
+class DaemonProcess {
+ public:
+  explicit DaemonProcess(std::vector<std::string> args = {});
+  ~DaemonProcess();
+  DaemonProcess(const DaemonProcess&) = delete;
+  DaemonProcess& operator=(const DaemonProcess&) = delete;
+
+  /// Starts the process and waits until it answers. Errors: kUnavailable (fork/exec failed,
+  /// the process exited, or it did not answer in time; the message holds the log's tail).
+  Result<void> Start(std::chrono::milliseconds ready_timeout = std::chrono::seconds(10));
+  /// SIGTERM, then waits up to `timeout` (then SIGKILL). Returns the exit code (128 + signal
+  /// when killed by one), or an error when it was not running.
+  Result<int> Stop(std::chrono::milliseconds timeout = std::chrono::seconds(10));
+  /// SIGKILL and reap (the daemon gets no chance to clean up).
+  void Kill();
+  /// True while the process has not exited (reaps it when it has).
+  bool Running();
+
+  pid_t pid() const { return pid_; }
+  /// The whole log so far (stdout and stderr of the daemon).
+  std::string Log() const;
+  /// The log file's path.
+  const std::filesystem::path& log_path() const { return log_path_; }
+
+ private:
+  std::vector<std::string> args_;
+  TempDir dir_;
+  std::filesystem::path log_path_;
+  pid_t pid_ = -1;
+  int exit_status_ = -1;  // raw waitpid status once reaped
+};
+
+/// What a child process did.
+struct ProcessResult {
+  int exit_code = -1;  ///< exit status, or 128 + signal, or -1 when it could not run
+  std::string out, err;
+  bool timed_out = false;
+};
+
+/// Runs `argv` (argv[0] a path), waits up to `timeout` (then SIGKILL), and returns its exit
+/// code and output.
+ProcessResult RunProcess(const std::vector<std::string>& argv,
+                         std::chrono::milliseconds timeout = std::chrono::seconds(60));
+
+/// A child process whose stdout the test reads line by line (stderr goes to the test's).
+/// The destructor SIGKILLs and reaps it if it is still running.
+class ChildProcess {
+ public:
+  /// Forks and execs `argv` (argv[0] a path). Errors: kUnavailable.
+  static Result<std::unique_ptr<ChildProcess>> Spawn(const std::vector<std::string>& argv);
+  ~ChildProcess();
+  /// The next line of its stdout (without the newline); nullopt at EOF or after `timeout`.
+  std::optional<std::string> ReadLine(std::chrono::milliseconds timeout);
+  /// Waits up to `timeout` for it to exit; returns its exit code (128 + signal), or nullopt.
+  std::optional<int> Wait(std::chrono::milliseconds timeout);
+  /// SIGKILL and reap; returns the exit code.
+  int Kill();
+  pid_t pid() const { return pid_; }
+
+ private:
+  ChildProcess() = default;
+  pid_t pid_ = -1;
+  int out_ = -1;
+  std::string buffer_;
+  std::optional<int> exit_code_;
+};
+
+/// The path of this test binary (/proc/self/exe).
+std::string SelfPath();
+
+/// Runs FAR_CLIENT_PATH with `args`.
+ProcessResult RunFarClient(const std::vector<std::string>& args,
+                           std::chrono::milliseconds timeout = std::chrono::seconds(60));
+
+/// True when /dev/shm holds the segment `shm_name` ("/far-...").
+bool ShmExists(const std::string& shm_name);
+/// The mode bits (st_mode & 07777) of the segment, or -1 when it does not exist.
+int ShmMode(const std::string& shm_name);
+/// Names ("/far-<pid>-...") of the segments in /dev/shm made by the daemon with this pid.
+std::vector<std::string> ShmSegmentsOf(pid_t daemon_pid);
+
+/// Waits until `condition` holds, checking every 20 ms, up to `timeout`. Returns whether it held.
+bool WaitUntil(const std::function<bool()>& condition, std::chrono::milliseconds timeout);
+
+/// Client options for the tests: the test URL, a name, a timeout.
+client::ClientOptions TestClientOptions(
+    const std::string& name, std::chrono::milliseconds timeout = std::chrono::seconds(5));
+
+}  // namespace far::integration

@@ -1,0 +1,253 @@
+// End to end through real processes: far-client collide/play against far-daemon give the
+// brute-force reference's answers; concurrent sessions with the same ids and interpenetrating
+// geometry never see each other; far-client status reports what happened.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <future>
+
+#include "daemon_fixture.h"
+#include "integration_scenes.h"
+#include "raw_session.h"
+#include <nlohmann/json.hpp>
+
+#include "far/client/client.h"
+#include "far/protocol/convert.h"
+#include "far/scene_io.h"
+
+namespace far::integration {
+namespace {
+
+using nlohmann::json;
+
+// The [objA, triA, objB, triB(, d)] arrays of far-client's JSON as sorted id quadruples.
+std::vector<ContactPair> PairsFromJson(const json& array) {
+  std::vector<ContactPair> pairs;
+  for (const json& p : array) {
+    pairs.push_back({p.at(0).get<uint32_t>(), p.at(1).get<uint32_t>(), p.at(2).get<uint32_t>(),
+                     p.at(3).get<uint32_t>()});
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+// Writes `objects` as a scene file in `dir` and returns what a reader of that file gets (the
+// objects far-client uploads), so the reference is computed on exactly those.
+std::vector<SceneObject> WriteAndReadBack(const std::vector<SceneObject>& objects,
+                                          const std::filesystem::path& path) {
+  Scene scene;
+  scene.objects = objects;
+  auto written = WriteScene(scene, path);
+  EXPECT_TRUE(written.ok()) << (written.ok() ? "" : far::ToString(written.error()));
+  auto read = ReadScene(path);
+  EXPECT_TRUE(read.ok()) << (read.ok() ? "" : far::ToString(read.error()));
+  return read.ok() ? read->objects : std::vector<SceneObject>{};
+}
+
+using EndToEndTest = DaemonTest;
+
+TEST_F(EndToEndTest, CollideGivesTheBruteForceContactsForEveryMethod) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  TempDir dir;
+  const auto path = dir.path() / "soup.json";
+  const std::vector<SceneObject> objects = WriteAndReadBack(ContactSoup(3), path);
+  ASSERT_FALSE(objects.empty());
+  const std::vector<ContactPair> expected = ReferenceContacts(objects);
+  ASSERT_GE(expected.size(), 3u) << "the scene must have several contacts";
+
+  for (const char* method : {"far", "far-exact-offset", "aabb", "exact"}) {
+    SCOPED_TRACE(method);
+    const ProcessResult run =
+        RunFarClient({"collide", path.string(), "--method", method, "--resolution", "256"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const json out = json::parse(run.out, nullptr, /*allow_exceptions=*/false);
+    ASSERT_FALSE(out.is_discarded()) << "stdout is not JSON: " << run.out;
+    const auto contacts = PairsFromJson(out.at("contacts"));
+    EXPECT_EQ(contacts, expected) << "got " << ToString(contacts) << "\nexpected "
+                                  << ToString(expected);
+  }
+}
+
+TEST_F(EndToEndTest, CollideWithDistanceGivesTheBruteForceDistancePairs) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  TempDir dir;
+  const auto path = dir.path() / "soup.json";
+  const std::vector<SceneObject> objects = WriteAndReadBack(ContactSoup(3), path);
+  ASSERT_FALSE(objects.empty());
+  constexpr double kDistance = 0.05;
+  const std::vector<ContactPair> expected = ReferenceDistancePairs(objects, kDistance);
+  const std::vector<ContactPair> contacts = ReferenceContacts(objects);
+  // Pairs within D include the touching ones and some that only come close.
+  ASSERT_GT(expected.size(), contacts.size());
+
+  for (const char* method : {"far", "exact"}) {
+    SCOPED_TRACE(method);
+    const ProcessResult run =
+        RunFarClient({"collide", path.string(), "--method", method, "--resolution", "256",
+                      "--distance", "0.05", "--output", "distance"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const json out = json::parse(run.out, nullptr, false);
+    ASSERT_FALSE(out.is_discarded()) << run.out;
+    const auto pairs = PairsFromJson(out.at("distance_pairs"));
+    EXPECT_EQ(pairs, expected) << "got " << ToString(pairs) << "\nexpected " << ToString(expected);
+    for (const json& p : out.at("distance_pairs")) {
+      EXPECT_LE(p.at(4).get<double>(), kDistance);
+      EXPECT_GE(p.at(4).get<double>(), 0.0);
+    }
+  }
+}
+
+TEST_F(EndToEndTest, PlayRunsEveryFrameOfAMadeScene) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  TempDir dir;
+  const auto path = dir.path() / "demo" / "scene.json";
+  const ProcessResult made =
+      RunFarClient({"make-scene", path.string(), "--leaves", "4", "--frames", "4", "--cells", "2"});
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  auto scene = ReadScene(path);
+  ASSERT_TRUE(scene.ok()) << far::ToString(scene.error());
+
+  const ProcessResult played = RunFarClient({"play", path.string(), "--resolution", "128"});
+  ASSERT_EQ(played.exit_code, 0) << played.err;
+  size_t steps = 0;
+  std::istringstream lines(played.out);
+  for (std::string line; std::getline(lines, line);) steps += line.rfind("step", 0) == 0;
+  EXPECT_EQ(steps, scene->frames.size() + 1) << played.out;
+}
+
+TEST_F(EndToEndTest, ConcurrentSessionsWithTheSameIdsNeverSeeEachOther) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  // Same ids (1, 4, 7, ...) and the same region of space: the two scenes interpenetrate.
+  const std::vector<SceneObject> a = ContactSoup(21);
+  const std::vector<SceneObject> b = ContactSoup(22);
+  std::vector<SceneObject> both = a;
+  for (SceneObject object : b) {
+    object.id += 1000;
+    both.push_back(object);
+  }
+  const auto merged = ReferenceContacts(both);
+  const bool cross = std::any_of(merged.begin(), merged.end(), [](const ContactPair& p) {
+    return p.object_a < 1000 && p.object_b >= 1000;
+  });
+  ASSERT_TRUE(cross) << "the two scenes must intersect each other, or a leak could not show";
+  std::vector<ContactPair> expected_a = ReferenceContacts(a);
+  const std::vector<ContactPair> expected_b = ReferenceContacts(b);
+  ASSERT_FALSE(expected_a.empty());
+  ASSERT_FALSE(expected_b.empty());
+
+  auto client_a = client::Client::Connect(TestClientOptions("isolation-a"));
+  auto client_b = client::Client::Connect(TestClientOptions("isolation-b"));
+  ASSERT_TRUE(client_a.ok()) << far::ToString(client_a.error());
+  ASSERT_TRUE(client_b.ok()) << far::ToString(client_b.error());
+  client::Client& ca = **client_a;
+  client::Client& cb = **client_b;
+
+  // Each session's segment: its own, owner-only.
+  EXPECT_NE(ca.session_id(), cb.session_id());
+  EXPECT_NE(ca.shm_name(), cb.shm_name());
+  EXPECT_EQ(ShmMode(ca.shm_name()), 0600);
+  EXPECT_EQ(ShmMode(cb.shm_name()), 0600);
+
+  Scene scene_a, scene_b;
+  scene_a.objects = a;
+  scene_b.objects = b;
+  ASSERT_TRUE(ca.LoadScene(scene_a).ok());
+  ASSERT_TRUE(cb.LoadScene(scene_b).ok());
+
+  // Round 1: both step at once.
+  for (int round = 0; round < 2; ++round) {
+    SCOPED_TRACE("round " + std::to_string(round));
+    auto future_a = ca.StepAsync(SmallRequest());
+    auto future_b = cb.StepAsync(SmallRequest());
+    ASSERT_EQ(future_a.wait_for(std::chrono::seconds(10)), std::future_status::ready);
+    ASSERT_EQ(future_b.wait_for(std::chrono::seconds(10)), std::future_status::ready);
+    auto result_a = future_a.get();
+    auto result_b = future_b.get();
+    ASSERT_TRUE(result_a.ok()) << far::ToString(result_a.error());
+    ASSERT_TRUE(result_b.ok()) << far::ToString(result_b.error());
+    EXPECT_EQ(result_a->contacts, expected_a) << "A got " << ToString(result_a->contacts);
+    EXPECT_EQ(result_b->contacts, expected_b) << "B got " << ToString(result_b->contacts);
+    // Round 2: A removes the object with the most contacts; B must not notice.
+    if (round == 0) {
+      std::map<uint32_t, int> counts;
+      for (const auto& p : expected_a) counts[p.object_a]++, counts[p.object_b]++;
+      const uint32_t busiest = std::max_element(counts.begin(), counts.end(), [](auto& x, auto& y) {
+                                 return x.second < y.second;
+                               })->first;
+      ASSERT_TRUE(ca.RemoveObject(busiest).ok());
+      std::vector<SceneObject> rest;
+      for (const auto& o : a) {
+        if (o.id != busiest) rest.push_back(o);
+      }
+      expected_a = ReferenceContacts(rest);
+    }
+  }
+}
+
+TEST_F(EndToEndTest, StatusReportsRendererSessionsLatencyAndErrorKinds) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  auto session = RawSession::Open(TestLcmUrl(), "status-probe");
+  ASSERT_TRUE(session.ok()) << far::ToString(session.error());
+  RawSession& raw = **session;
+
+  // Some steps that work ...
+  ASSERT_TRUE(HealthyClientSteps("status-healthy"));
+  ASSERT_TRUE(raw.writer().AddObject(1, TriangleRow(1), Motion::kRigid, Pose{}).ok());
+  ASSERT_TRUE(raw.SendStep(0, SmallRequest()).ok());
+  auto ok_reply = raw.WaitStepReply(0);
+  ASSERT_TRUE(ok_reply.has_value());
+  ASSERT_EQ(ok_reply->status, 0) << ok_reply->message;
+
+  // ... and errors of three kinds: garbage (parse_error, rejected_message), a forged tag
+  // (permission_denied) and a NaN pose (invalid_argument).
+  const std::vector<uint8_t> garbage(40, 0xAB);
+  ASSERT_TRUE(raw.PublishRequest(garbage).ok());
+  ASSERT_TRUE(raw.WaitError(-1).has_value());
+  protocol::SessionKey wrong{};
+  auto forged = raw.SendStep(1, SmallRequest(), std::nullopt, &wrong);
+  ASSERT_TRUE(forged.ok());
+  ASSERT_TRUE(raw.WaitError(*forged).has_value());
+  Pose bad;
+  bad.translation.x() = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_TRUE(raw.writer().SetPose(1, bad).ok());
+  ASSERT_TRUE(raw.SendStep(2, SmallRequest()).ok());
+  auto nan_reply = raw.WaitStepReply(2);
+  ASSERT_TRUE(nan_reply.has_value());
+  EXPECT_EQ(nan_reply->status, protocol::ToWireStatus(ErrorCode::kInvalidArgument));
+
+  const ProcessResult run = RunFarClient({"status", "--json"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const json status = json::parse(run.out, nullptr, false);
+  ASSERT_FALSE(status.is_discarded()) << run.out;
+  const std::string renderer = status.at("gl_renderer").get<std::string>();
+  EXPECT_FALSE(renderer.empty());
+  EXPECT_NE(renderer, "none");
+  EXPECT_GE(status.at("steps_total").get<int64_t>(), 2);
+  EXPECT_GE(status.at("latency_ms").at("samples").get<int64_t>(), 2);
+  EXPECT_GT(status.at("latency_ms").at("p50").get<double>(), 0.0);
+  EXPECT_LE(status.at("latency_ms").at("p50").get<double>(),
+            status.at("latency_ms").at("p99").get<double>());
+  EXPECT_LE(status.at("latency_ms").at("p99").get<double>(),
+            status.at("latency_ms").at("max").get<double>());
+  // The raw session is open (the healthy client closed its own); it made one good step.
+  bool found = false;
+  for (const json& s : status.at("sessions")) {
+    if (s.at("id").get<int64_t>() != raw.id()) continue;
+    found = true;
+    EXPECT_EQ(s.at("client").get<std::string>(), "status-probe");
+    EXPECT_EQ(s.at("steps").get<int64_t>(), 1);
+    EXPECT_EQ(s.at("objects").get<int>(), 1);
+  }
+  EXPECT_TRUE(found) << run.out;
+  const json& errors = status.at("errors_by_kind");
+  for (const char* kind :
+       {"parse_error", "permission_denied", "invalid_argument", "rejected_message"}) {
+    EXPECT_TRUE(errors.contains(kind) && errors.at(kind).get<int64_t>() >= 1)
+        << kind << " in " << errors.dump();
+  }
+  EXPECT_GE(status.at("errors_total").get<int64_t>(), 4);
+  EXPECT_GE(status.at("rejected_messages_total").get<int64_t>(), 2);
+}
+
+}  // namespace
+}  // namespace far::integration

@@ -1,0 +1,36 @@
+# Integration tests: real far-daemon processes, the far-client binary and the client library,
+# over LCM udpm. Label integration.
+#
+# Every test process (and gtest_discover_tests' --gtest_list_tests run) goes through
+# deploy/netns-run.sh: a private network namespace whose loopback carries multicast, so the
+# daemons and clients of one test never hear another test's traffic and nothing leaves the
+# host. The property must be set before gtest_discover_tests, which reads it at the call.
+if(NOT TARGET far_test_scenes)
+  message(STATUS "tests/integration: skipped (needs far_test_scenes from tests/far/tests_gl.cmake)")
+  return()
+endif()
+
+add_executable(far_integration_test
+  integration/integration_main.cc
+  integration/daemon_process.cc
+  integration/raw_session.cc
+  integration/integration_scenes.cc
+  integration/end_to_end_test.cc
+  integration/bad_input_test.cc
+  integration/session_lifetime_test.cc)
+target_link_libraries(far_integration_test PRIVATE far::client far::protocol far::scenes far::io
+                      far_test_scenes nlohmann_json::nlohmann_json GTest::gtest far_warnings
+                      Threads::Threads)
+target_compile_definitions(far_integration_test PRIVATE
+  FAR_DAEMON_PATH="$<TARGET_FILE:far-daemon>"
+  FAR_CLIENT_PATH="$<TARGET_FILE:far-client>"
+  FAR_NETNS_RUN_PATH="${PROJECT_SOURCE_DIR}/deploy/netns-run.sh")
+add_dependencies(far_integration_test far-daemon far-client)
+set_target_properties(far_integration_test PROPERTIES
+  CROSSCOMPILING_EMULATOR "${PROJECT_SOURCE_DIR}/deploy/netns-run.sh")
+# Discovery (POST_BUILD, like every other suite) runs `netns-run.sh far_integration_test
+# --gtest_list_tests` too: on a machine where unshare is not permitted, linking this target
+# fails with unshare's message instead of the tests silently not running.
+gtest_discover_tests(far_integration_test
+  PROPERTIES LABELS integration TIMEOUT 120
+  DISCOVERY_TIMEOUT 60)
