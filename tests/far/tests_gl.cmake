@@ -6,3 +6,10 @@ target_link_libraries(far_test_scenes PUBLIC far::pairs far::scenes PRIVATE far_
 # GPU tests: headless GL (llvmpipe in CI). Label gpu.
 far_add_test(far_gl_test gpu far/gl/gl_context_test.cc far/gl/pipeline_culling_test.cc)
 target_link_libraries(far_gl_test PRIVATE far::gl far_test_scenes far_hard_cases)
+
+
+# With no EGL driver at all (GLVND pointed at no vendor), far-daemon exits with one clear line
+# that lists what it tried, instead of crashing.
+add_test(NAME GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gl/no_driver_test.sh $<TARGET_FILE:far-daemon>)
+set_tests_properties(GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried PROPERTIES LABELS gpu)
