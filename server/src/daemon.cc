@@ -596,7 +596,14 @@ struct Daemon::Impl {
     }
     // Ingest: the ring up to the commit sequence, checked, then applied all-or-nothing.
     auto updates = session.updates->Drain(command.ring_commit_sequence);
-    if (!updates) return PublishStepError(session, command, updates.error());
+    if (!updates) {
+      PublishStepError(session, command, updates.error());
+      // A segment its client truncated can never be read again: end the session now.
+      if (session.segment->faulted()) {
+        CloseSession(session.id, "the client truncated its shared-memory segment", true);
+      }
+      return;
+    }
     if (auto applied = ApplyUpdates(session, *updates); !applied) {
       return PublishStepError(session, command, applied.error());
     }
