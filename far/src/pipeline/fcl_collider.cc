@@ -5,6 +5,7 @@
 #include <fcl/narrowphase/collision.h>
 
 #include <algorithm>
+#include <unordered_set>
 
 namespace far::internal {
 namespace {
@@ -25,12 +26,18 @@ struct FclCollider::Impl {
     uint32_t id = 0;
   };
   std::unordered_map<uint32_t, Entry> entries;
+  fcl::DynamicAABBTreeCollisionManagerd manager;
 };
 
 FclCollider::FclCollider() : impl_(std::make_unique<Impl>()) {}
 FclCollider::~FclCollider() = default;
 
-void FclCollider::Remove(uint32_t id) { impl_->entries.erase(id); }
+void FclCollider::Remove(uint32_t id) {
+  auto it = impl_->entries.find(id);
+  if (it == impl_->entries.end()) return;
+  impl_->manager.unregisterObject(it->second.object.get());
+  impl_->entries.erase(it);
+}
 
 std::vector<ContactPair> FclCollider::Collide(const std::vector<Object>& objects,
                                               size_t* narrow_pairs) {
@@ -60,9 +67,20 @@ std::vector<ContactPair> FclCollider::Collide(const std::vector<Object>& objects
     entry.object->computeAABB();
     registered.push_back(entry.object.get());
   }
-  fcl::DynamicAABBTreeCollisionManagerd manager;
-  manager.registerObjects(registered);
-  manager.setup();
+  // The broadphase tree is kept across steps, as a simulation using FCL would: objects that
+  // came or went are (un)registered, then update() refits it to the moved boxes.
+  std::unordered_set<fcl::CollisionObjectd*> now(registered.begin(), registered.end());
+  std::vector<fcl::CollisionObjectd*> known;
+  impl_->manager.getObjects(known);
+  for (fcl::CollisionObjectd* object : known) {
+    if (!now.count(object)) impl_->manager.unregisterObject(object);
+  }
+  const std::unordered_set<fcl::CollisionObjectd*> had(known.begin(), known.end());
+  for (fcl::CollisionObjectd* object : registered) {
+    if (!had.count(object)) impl_->manager.registerObject(object);
+  }
+  impl_->manager.update();
+  auto& manager = impl_->manager;
 
   // Every broadphase pair goes through FCL's mesh-mesh collide; all contacts are kept.
   struct Data {

@@ -27,7 +27,11 @@ std::vector<SceneObject> RandomSoup(uint64_t seed, int num_objects, int triangle
       object.mesh.triangles.push_back({base, base + 1, base + 2});
     }
     object.X_WO.translation = origin + world_size * random_vector();
-    object.X_WO.rotation = Eigen::Quaterniond::UnitRandom();
+    // A uniformly random rotation from this generator (Eigen's UnitRandom uses std::rand, which
+    // would make the scene depend on what else ran before).
+    std::normal_distribution<double> normal;
+    object.X_WO.rotation =
+        Eigen::Quaterniond(normal(rng), normal(rng), normal(rng), normal(rng)).normalized();
     objects.push_back(std::move(object));
   }
   return objects;
