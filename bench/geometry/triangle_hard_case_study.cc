@@ -5,14 +5,13 @@
 // bench/RESULTS.md; with a path argument also writes the per-case counts as CSV.
 //   far_triangle_hard_case_study [cases.csv]
 
-#include <fcl/narrowphase/detail/traversal/collision/intersect.h>
-
 #include <cstdio>
 #include <fstream>
 #include <map>
 #include <string>
 
 #include "hard_cases.h"
+#include <fcl/narrowphase/detail/traversal/collision/intersect.h>
 
 #include "far/triangle_tests.h"
 

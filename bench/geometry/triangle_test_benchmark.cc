@@ -14,11 +14,11 @@
 // ("meet"); for FCL, the fraction of pairs where it disagrees with far's exact answer
 // ("disagree").
 
-#include <benchmark/benchmark.h>
-#include <fcl/narrowphase/detail/traversal/collision/intersect.h>
-
 #include <random>
 #include <vector>
+
+#include <benchmark/benchmark.h>
+#include <fcl/narrowphase/detail/traversal/collision/intersect.h>
 
 #include "far/triangle_tests.h"
 

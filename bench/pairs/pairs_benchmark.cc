@@ -10,12 +10,12 @@
 //   build/<dir>/bench/pairs/far_pairs_benchmark --benchmark_repetitions=5
 //       --benchmark_report_aggregates_only=true
 
-#include <benchmark/benchmark.h>
-
 #include <cmath>
 #include <cstdint>
 #include <random>
 #include <vector>
+
+#include <benchmark/benchmark.h>
 
 #include "far/exact_stage.h"
 #include "far/sweep_and_prune.h"

@@ -5,9 +5,12 @@
 // the daemon-side cost is what bounds ingest (the writer is a memcpy).
 //   build/release/bench/protocol/far_ring_ingest_benchmark --benchmark_repetitions=10
 // (add --glibc-default-malloc last to measure without the daemon's malloc settings)
-#include <benchmark/benchmark.h>
+#include <malloc.h>
 
+#include <string>
 #include <vector>
+
+#include <benchmark/benchmark.h>
 
 #include "far/protocol/ring_records.h"
 #include "far/protocol/shm_segment.h"

@@ -12,13 +12,12 @@
 // with other work it is the steadier measure of the work done; "Time" is wall clock.
 //   far_culling_benchmark --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
 
-#include <benchmark/benchmark.h>
-
 #include <cstdio>
 #include <memory>
 #include <vector>
 
 #include "test_scenes.h"
+#include <benchmark/benchmark.h>
 
 #include "far/pipeline.h"
 #include "far/step_request.h"

@@ -1,7 +1,5 @@
 #include "daemon.h"
 
-#include <spdlog/spdlog.h>
-
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -24,6 +22,7 @@
 #include "far_lcm/step_reply_t.hpp"
 #include "far_lcm/step_request_t.hpp"
 #include "latency_stats.h"
+#include <spdlog/spdlog.h>
 
 #include "far/gl_context.h"
 #include "far/pipeline.h"

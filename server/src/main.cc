@@ -1,12 +1,12 @@
 // far-daemon: the FAR collision-culling service. See README.md and docs/daemon.md.
 #include <malloc.h>
-#include <spdlog/spdlog.h>
 
 #include <csignal>
 #include <cstdio>
 
 #include "daemon.h"
 #include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
 
 #include "far/step_request.h"
 

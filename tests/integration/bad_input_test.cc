@@ -3,7 +3,6 @@
 // is still served. Messages are built by hand with far::protocol (RawSession), so each test
 // sends exactly the bytes it means to.
 #include <fcntl.h>
-#include <gtest/gtest.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -19,6 +18,7 @@
 #include "daemon_fixture.h"
 #include "integration_scenes.h"
 #include "raw_session.h"
+#include <gtest/gtest.h>
 
 #include "far/client/client.h"
 #include "far/protocol/channels.h"

@@ -3,8 +3,6 @@
 // The fixture of every integration test: starts far-daemon processes and stops them in
 // TearDown (SIGTERM; the exit code must be 0), printing their logs when the test failed.
 
-#include <gtest/gtest.h>
-
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -12,6 +10,7 @@
 #include <vector>
 
 #include "daemon_process.h"
+#include <gtest/gtest.h>
 
 namespace far::integration {
 

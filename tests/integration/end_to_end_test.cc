@@ -1,14 +1,13 @@
 // End to end through real processes: far-client collide/play against far-daemon give the
 // brute-force reference's answers; concurrent sessions with the same ids and interpenetrating
 // geometry never see each other; far-client status reports what happened.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <future>
 
 #include "daemon_fixture.h"
 #include "integration_scenes.h"
 #include "raw_session.h"
+#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "far/client/client.h"

@@ -3,7 +3,6 @@
 // "<session id> <shm name> <key hex>" on stdout, then writes part of an update and dies
 // (tests/integration/session_lifetime_test.cc starts it with fork/exec: a forked copy of a
 // multi-threaded test process must not go on to use LCM or malloc-heavy code).
-#include <gtest/gtest.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -17,6 +16,7 @@
 #include "daemon_process.h"
 #include "integration_scenes.h"
 #include "raw_session.h"
+#include <gtest/gtest.h>
 
 #include "far/protocol/convert.h"
 

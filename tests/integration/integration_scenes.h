@@ -3,12 +3,12 @@
 // Scenes with known contacts for the integration tests, their brute-force reference answers,
 // and the "healthy client" check every bad-input test ends with.
 
-#include <gtest/gtest.h>
-
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "far/contact_pair.h"
 #include "far/scene.h"

@@ -1,6 +1,5 @@
 // Sessions that end badly: clients that stop sending heartbeats, clients killed in the middle
 // of writing an update, a daemon killed with SIGKILL and started again, no daemon at all.
-#include <gtest/gtest.h>
 #include <signal.h>
 
 #include <algorithm>
@@ -10,6 +9,7 @@
 #include "daemon_fixture.h"
 #include "integration_scenes.h"
 #include "raw_session.h"
+#include <gtest/gtest.h>
 
 #include "far/client/client.h"
 #include "far/protocol/channels.h"

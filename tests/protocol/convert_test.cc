@@ -2,9 +2,8 @@
 
 #include "far/protocol/convert.h"
 
-#include <gtest/gtest.h>
-
 #include "test_messages.h"
+#include <gtest/gtest.h>
 
 #include "far/protocol/message_validate.h"
 

@@ -3,13 +3,12 @@
 
 #include "far/protocol/message.h"
 
-#include <gtest/gtest.h>
-
 #include <cstring>
 #include <random>
 #include <vector>
 
 #include "test_messages.h"
+#include <gtest/gtest.h>
 
 namespace far::protocol {
 namespace {

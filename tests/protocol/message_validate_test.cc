@@ -3,12 +3,11 @@
 
 #include "far/protocol/message_validate.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <limits>
 
 #include "test_messages.h"
+#include <gtest/gtest.h>
 
 #include "far/protocol/channels.h"
 

@@ -3,10 +3,10 @@
 
 #include "far/protocol/ring_layout.h"
 
-#include <gtest/gtest.h>
-
 #include <cstddef>
 #include <cstring>
+
+#include <gtest/gtest.h>
 
 namespace far::protocol {
 namespace {

@@ -2,14 +2,14 @@
 
 #include "far/protocol/ring_records.h"
 
-#include <gtest/gtest.h>
-
 #include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 namespace far::protocol {
 namespace {

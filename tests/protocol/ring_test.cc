@@ -2,12 +2,12 @@
 
 #include "far/protocol/ring.h"
 
-#include <gtest/gtest.h>
-
 #include <atomic>
 #include <cstring>
 #include <thread>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 namespace far::protocol {
 namespace {

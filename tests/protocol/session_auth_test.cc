@@ -3,12 +3,11 @@
 
 #include "far/protocol/session_auth.h"
 
-#include <gtest/gtest.h>
-
 #include <cstring>
 #include <set>
 
 #include "test_messages.h"
+#include <gtest/gtest.h>
 
 namespace far::protocol {
 namespace {

@@ -3,11 +3,10 @@
 
 #include "far/protocol/shm_reply.h"
 
-#include <gtest/gtest.h>
-
 #include <cstring>
 #include <optional>
 
+#include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include "far/protocol/channels.h"

@@ -4,7 +4,6 @@
 #include "far/protocol/shm_segment.h"
 
 #include <fcntl.h>
-#include <gtest/gtest.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -13,6 +12,8 @@
 #include <cstring>
 #include <regex>
 #include <set>
+
+#include <gtest/gtest.h>
 
 #include "far/protocol/ring_records.h"
 

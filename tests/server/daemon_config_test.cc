@@ -1,9 +1,9 @@
 #include "daemon_config.h"
 
-#include <gtest/gtest.h>
-
 #include <filesystem>
 #include <fstream>
+
+#include <gtest/gtest.h>
 
 namespace far::server {
 namespace {

@@ -1,10 +1,9 @@
 #include "fair_scheduler.h"
 
-#include <gtest/gtest.h>
-
 #include <map>
 
 #include "latency_stats.h"
+#include <gtest/gtest.h>
 
 namespace far::server {
 namespace {

@@ -1,13 +1,12 @@
 #include "culling_renderer.h"
 
-#include <epoxy/egl.h>
-#include <epoxy/gl.h>
-
 #include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "gl_program.h"
+#include <epoxy/egl.h>
+#include <epoxy/gl.h>
 
 namespace far::internal {
 namespace {

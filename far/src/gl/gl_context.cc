@@ -1,10 +1,10 @@
 #include "far/gl_context.h"
 
-#include <epoxy/egl.h>
-#include <epoxy/gl.h>
-
 #include <string>
 #include <vector>
+
+#include <epoxy/egl.h>
+#include <epoxy/gl.h>
 
 namespace far {
 

@@ -1,8 +1,8 @@
 #pragma once
 
-#include <epoxy/gl.h>
-
 #include <string>
+
+#include <epoxy/gl.h>
 
 #include "far/result.h"
 

@@ -1,11 +1,11 @@
 #include "fcl_collider.h"
 
+#include <algorithm>
+#include <unordered_set>
+
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/narrowphase/collision.h>
-
-#include <algorithm>
-#include <unordered_set>
 
 namespace far::internal {
 namespace {

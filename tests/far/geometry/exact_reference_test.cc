@@ -3,13 +3,12 @@
 
 #include "exact_reference.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <map>
 #include <string>
 
 #include "hard_cases.h"
+#include <gtest/gtest.h>
 
 namespace far::reference {
 namespace {

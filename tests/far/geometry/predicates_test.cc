@@ -1,7 +1,6 @@
 #include "far/internal/predicates.h"
 
 #include <gmpxx.h>
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
@@ -9,6 +8,7 @@
 
 #include "exact_reference.h"
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
 
 namespace far::internal {
 namespace {

@@ -1,5 +1,4 @@
 #include <gmpxx.h>
-#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +9,7 @@
 #include "exact_reference.h"
 #include "hard_cases.h"
 #include "triangle_test_scenes.h"
+#include <gtest/gtest.h>
 
 #include "far/triangle_tests.h"
 

@@ -1,5 +1,3 @@
-#include <gtest/gtest.h>
-
 #include <random>
 #include <string>
 #include <vector>
@@ -7,6 +5,7 @@
 #include "exact_reference.h"
 #include "hard_cases.h"
 #include "triangle_test_scenes.h"
+#include <gtest/gtest.h>
 
 #include "far/triangle_tests.h"
 

@@ -1,14 +1,13 @@
 // The reliability tests of the GPU culling (label gpu; llvmpipe in CI): FAR never misses a
 // contact of the brute-force reference, the two query mechanisms agree, CULLIDE can miss
 // where FAR does not, and the answer does not depend on where the scene is.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <random>
 #include <set>
 
 #include "hard_cases.h"
 #include "test_scenes.h"
+#include <gtest/gtest.h>
 
 #include "far/pipeline.h"
 

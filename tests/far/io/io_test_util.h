@@ -3,8 +3,6 @@
 // Helpers for the far_io tests: a temporary folder, file writing, binary byte builders and an
 // error matcher.
 
-#include <gtest/gtest.h>
-
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -12,6 +10,8 @@
 #include <random>
 #include <string>
 #include <string_view>
+
+#include <gtest/gtest.h>
 
 #include "far/mesh.h"
 #include "far/result.h"

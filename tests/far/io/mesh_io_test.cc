@@ -1,13 +1,12 @@
 #include "far/mesh_io.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <limits>
 #include <random>
 #include <string>
 
 #include "io_test_util.h"
+#include <gtest/gtest.h>
 
 namespace far {
 namespace {

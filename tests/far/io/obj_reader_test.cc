@@ -1,8 +1,7 @@
-#include <gtest/gtest.h>
-
 #include <string>
 
 #include "io_test_util.h"
+#include <gtest/gtest.h>
 
 #include "far/mesh_io.h"
 

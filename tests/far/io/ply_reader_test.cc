@@ -1,9 +1,8 @@
-#include <gtest/gtest.h>
-
 #include <chrono>
 #include <string>
 
 #include "io_test_util.h"
+#include <gtest/gtest.h>
 
 #include "far/mesh_io.h"
 

@@ -1,11 +1,10 @@
 #include "far/scene_io.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <string>
 
 #include "io_test_util.h"
+#include <gtest/gtest.h>
 
 #include "far/mesh_io.h"
 

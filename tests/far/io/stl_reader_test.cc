@@ -1,10 +1,9 @@
-#include <gtest/gtest.h>
-
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "io_test_util.h"
+#include <gtest/gtest.h>
 
 #include "far/mesh_io.h"
 

@@ -1,9 +1,9 @@
 // Oriented boxes: corner numbering, the box triangles' orientation and closedness, growth,
 // rigid motion and world AABBs.
 
-#include <gtest/gtest.h>
-
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "far/bounding_offset.h"
 #include "far/offsets/offset_test_support.h"

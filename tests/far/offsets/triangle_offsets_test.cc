@@ -2,12 +2,12 @@
 // and the randomized guarantee that every point of the triangle grown by a ball of radius r
 // lies inside its UOBB and inside the union of its bounded exact offset's pieces.
 
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "far/bounding_offset.h"
 #include "far/offsets/offset_test_support.h"

@@ -1,13 +1,13 @@
 #include "far/exact_stage.h"
 
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <optional>
 #include <random>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "far/triangle_tests.h"
 
