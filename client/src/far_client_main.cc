@@ -198,6 +198,7 @@ int Load(const ClientOptions& base, int clients, int steps, double seconds,
   }
   std::vector<LoadStats> stats(static_cast<size_t>(clients));
   std::atomic<int> ready{0};
+  std::atomic<bool> go{false};
   const auto deadline_of = [&](Clock::time_point start) {
     return seconds > 0 ? start + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double>(seconds))
@@ -227,7 +228,8 @@ int Load(const ClientOptions& base, int clients, int steps, double seconds,
         if (auto ok = (*client)->AddObject(o.id, o.mesh, o.motion, o.X_WO); !ok) fail(ok.error());
       }
       ready++;
-      while (ready < clients) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      // Everyone starts together, once the main thread has set `start` and said go.
+      while (!go) std::this_thread::sleep_for(std::chrono::milliseconds(1));
       const auto deadline = deadline_of(start);
       for (int s = 0; (steps <= 0 || s < steps) && Clock::now() < deadline; ++s) {
         // Rigid objects drift a little every step, as a simulation would move them.
@@ -249,6 +251,7 @@ int Load(const ClientOptions& base, int clients, int steps, double seconds,
   }
   while (ready < clients) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   start = Clock::now();
+  go = true;  // (release: the workers read `start` after seeing it)
   for (auto& t : threads) t.join();
   const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
 
