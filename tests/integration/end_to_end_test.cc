@@ -114,6 +114,29 @@ TEST_F(EndToEndTest, PlayRunsEveryFrameOfAMadeScene) {
   EXPECT_EQ(steps, scene->frames.size() + 1) << played.out;
 }
 
+TEST_F(EndToEndTest, LoadRunsEveryClientForItsStepsAndTime) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  // By step count: every client, each with its own session, does all of its steps.
+  ProcessResult load =
+      RunFarClient({"load", "--clients", "3", "--steps", "4", "--resolution", "64", "--json"});
+  ASSERT_EQ(load.exit_code, 0) << load.out << load.err;
+  auto report = nlohmann::json::parse(load.out);
+  ASSERT_EQ(report["per_client"].size(), 3u);
+  for (const auto& client : report["per_client"]) {
+    EXPECT_EQ(client["steps"].get<int>(), 4) << client.dump();
+    EXPECT_EQ(client["errors"].get<int>(), 0) << client.dump();
+  }
+  EXPECT_EQ(report["overall"]["steps"].get<int>(), 12);
+  EXPECT_DOUBLE_EQ(report["overall"]["fairness_max_over_min_steps"].get<double>(), 1.0);
+  // By time: every client gets steps (all start together).
+  load = RunFarClient({"load", "--clients", "3", "--steps", "0", "--seconds", "1.5", "--resolution",
+                       "64", "--json"});
+  ASSERT_EQ(load.exit_code, 0) << load.out << load.err;
+  report = nlohmann::json::parse(load.out);
+  for (const auto& client : report["per_client"])
+    EXPECT_GT(client["steps"].get<int>(), 0) << client.dump();
+}
+
 TEST_F(EndToEndTest, ConcurrentSessionsWithTheSameIdsNeverSeeEachOther) {
   ASSERT_NE(StartDaemon(), nullptr);
   // Same ids (1, 4, 7, ...) and the same region of space: the two scenes interpenetrate.
