@@ -29,6 +29,10 @@
 namespace far::client {
 namespace {
 
+// The public header cannot include protocol headers (they are not installed): its default URL
+// must stay the protocol's.
+static_assert(kDefaultLcmUrl == protocol::kDefaultLcmUrl);
+
 using protocol::MessageType;
 namespace wire = far_lcm;
 

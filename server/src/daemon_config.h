@@ -6,6 +6,7 @@
 
 #include "far/bounding_offset.h"
 #include "far/gl_context.h"
+#include "far/protocol/channels.h"
 #include "far/result.h"
 
 namespace far::server {
@@ -13,7 +14,7 @@ namespace far::server {
 /// Everything far-daemon can be told, with defaults that work on the embedded llvmpipe.
 /// Read from a JSON file (keys as below) and overridden by command-line flags.
 struct DaemonConfig {
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
+  std::string lcm_url = std::string(protocol::kDefaultLcmUrl);  ///< docs/protocol.md
   int default_resolution = 1024;  ///< viewport used when a request names none
   int max_resolution = 4096;      ///< larger requests are refused: one GL thread serves all
   DepthFormat depth_format = DepthFormat::kDepth24;

@@ -6,6 +6,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -18,9 +19,14 @@
 
 namespace far::client {
 
+/// The daemon's default LCM URL: host-local multicast with a 2 MiB receive buffer (the same as
+/// far::protocol::kDefaultLcmUrl, docs/protocol.md; checked at compile time in client.cc).
+inline constexpr std::string_view kDefaultLcmUrl =
+    "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152";
+
 /// How to reach the daemon and what to ask of it.
 struct ClientOptions {
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
+  std::string lcm_url = std::string(kDefaultLcmUrl);
   std::string client_name = "far-client";   ///< shown in the daemon's status and logs
   std::chrono::milliseconds timeout{3000};  ///< for opening a session and for Step
   bool heartbeat = true;  ///< send heartbeats from a background thread (else call Heartbeat)
