@@ -82,7 +82,9 @@ class BusThread {
 struct Client::Impl {
   ClientOptions options;
   std::unique_ptr<protocol::LcmBus> bus;
-  int64_t session_id = 0;
+  // Set once, last, when the session is open (release); the receive thread reads it (acquire)
+  // before it touches the session's channel name, key and reply ring.
+  std::atomic<int64_t> session_id{0};
   std::string request_channel, reply_channel;
   std::unique_ptr<protocol::ShmSegment> segment;
   std::unique_ptr<protocol::UpdateWriter> updates;
@@ -177,7 +179,7 @@ struct Client::Impl {
   Result<void> Send(auto&& message) {
     std::lock_guard lock(send_mutex);
     message.protocol_version = protocol::kProtocolVersion;
-    message.session_id = session_id;
+    message.session_id = session_id.load();
     message.request_id = next_request_id++;
     auto bytes = protocol::EncodeSigned(message, key);
     if (!bytes) return bytes.error();
@@ -208,11 +210,11 @@ Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
   Impl* raw = impl.get();
   c.bus->Subscribe(c.open_channel,
                    [raw](std::string_view, std::span<const uint8_t> b) { raw->OnOpenReply(b); });
-  c.bus->Subscribe("FAR_S[0-9]+_REPLY",
-                   [raw](std::string_view channel, std::span<const uint8_t> b) {
-                     if (raw->session_id != 0 && channel == raw->reply_channel)
-                       raw->OnSessionReply(b);
-                   });
+  c.bus->Subscribe(
+      "FAR_S[0-9]+_REPLY", [raw](std::string_view channel, std::span<const uint8_t> b) {
+        if (raw->session_id.load(std::memory_order_acquire) != 0 && channel == raw->reply_channel)
+          raw->OnSessionReply(b);
+      });
   c.receiver = std::make_unique<BusThread>(c.bus.get());
 
   // Ask for a session and wait for the answer.
@@ -249,7 +251,7 @@ Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
                                                      c.segment->layout().reply_ring_capacity);
   c.request_channel = reply.request_channel;
   c.reply_channel = reply.session_reply_channel;
-  c.session_id = reply.session_id;
+  c.session_id.store(reply.session_id, std::memory_order_release);  // last: see its comment
   if (options.heartbeat) {
     const auto period =
         std::chrono::milliseconds(std::max<int64_t>(50, reply.heartbeat_timeout_ms / 4));
@@ -335,7 +337,7 @@ std::future<Result<StepResult>> Client::StepAsync(const StepRequest& request) {
     std::lock_guard lock(c.mutex);
     c.pending[step_id] = Impl::Pending{request_id, std::move(promise)};
   }
-  auto message = protocol::MakeStepRequest(c.session_id, request_id, step_id,
+  auto message = protocol::MakeStepRequest(c.session_id.load(), request_id, step_id,
                                            c.updates->last_sequence(), request);
   auto bytes = protocol::EncodeSigned(message, c.key);
   Result<void> sent =
@@ -376,7 +378,7 @@ Result<void> Client::Close() {
   return sent;
 }
 
-int64_t Client::session_id() const { return impl_->session_id; }
+int64_t Client::session_id() const { return impl_->session_id.load(); }
 const std::string& Client::shm_name() const { return impl_->segment->name(); }
 
 Result<DaemonStatus> Client::Status(const std::string& lcm_url, std::chrono::milliseconds timeout) {
