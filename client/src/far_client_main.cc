@@ -48,7 +48,10 @@ struct StepFlags {
         ->capture_default_str();
     command->add_option("--mechanism", mechanism, "id-buffer or occlusion-query")
         ->capture_default_str();
-    command->add_option("--resolution", resolution, "viewport size (8..8192)")
+    command
+        ->add_option("--resolution", resolution,
+                     "viewport size (8..8192; the daemon refuses more than its max_resolution, "
+                     "default 4096)")
         ->capture_default_str();
     command->add_option("--depth-format", depth, "depth16, depth24 or depth32f")
         ->capture_default_str();
@@ -58,7 +61,8 @@ struct StepFlags {
                         "distance D: report every triangle pair closer than D");
     command->add_option(
         "--output", output,
-        "deepest output: pcs (object and primitive PCS), pairs (object pairs), contacts, "
+        "deepest output: object-pcs (objects only), pairs (object pairs), pcs (object and "
+        "primitive PCS), contacts, "
         "distance (default: contacts, or distance when --distance is given)");
   }
 
