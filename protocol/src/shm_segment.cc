@@ -282,26 +282,26 @@ void ShmSegment::Unlink() {
 
 bool ShmSegment::faulted() const { return mapping_ != nullptr && mapping_->faulted != 0; }
 
-RingRegion ShmSegment::update_ring() const {
+RingRegion ShmSegment::Ring(uint64_t offset, uint64_t capacity, std::atomic<uint64_t>* write_index,
+                            std::atomic<uint64_t>* read_index, const char* name) const {
   RingRegion region;
-  region.data = mapping_->base + layout_.update_ring_offset;
-  region.capacity = layout_.update_ring_capacity;
-  region.write_index = &header_->update_write_index;
-  region.read_index = &header_->update_read_index;
+  region.data = mapping_->base + offset;
+  region.capacity = capacity;
+  region.write_index = write_index;
+  region.read_index = read_index;
   region.mapping = mapping_.get();
-  region.name = "update ring";
+  region.name = name;
   return region;
 }
 
+RingRegion ShmSegment::update_ring() const {
+  return Ring(layout_.update_ring_offset, layout_.update_ring_capacity,
+              &header_->update_write_index, &header_->update_read_index, "update ring");
+}
+
 RingRegion ShmSegment::reply_ring() const {
-  RingRegion region;
-  region.data = mapping_->base + layout_.reply_ring_offset;
-  region.capacity = layout_.reply_ring_capacity;
-  region.write_index = &header_->reply_write_index;
-  region.read_index = &header_->reply_read_index;
-  region.mapping = mapping_.get();
-  region.name = "reply ring";
-  return region;
+  return Ring(layout_.reply_ring_offset, layout_.reply_ring_capacity, &header_->reply_write_index,
+              &header_->reply_read_index, "reply ring");
 }
 
 int RemoveStaleSegments() {

@@ -9,32 +9,13 @@
 #include <random>
 #include <vector>
 
+#include "test_ring.h"
 #include <gtest/gtest.h>
 
 namespace far::protocol {
 namespace {
 
-struct TestRing {
-  explicit TestRing(uint64_t capacity) : data(capacity, 0) {}
-  RingRegion region() {
-    RingRegion r;
-    r.data = data.data();
-    r.capacity = data.size();
-    r.write_index = &write_index;
-    r.read_index = &read_index;
-    r.name = "update ring";
-    return r;
-  }
-  // Appends forged record bytes at the write index and commits them, as a hostile client.
-  void Append(const std::vector<uint8_t>& record) {
-    const uint64_t at = write_index.load();
-    for (size_t i = 0; i < record.size(); ++i) data[(at + i) & (data.size() - 1)] = record[i];
-    write_index = at + record.size();
-  }
-  std::vector<uint8_t> data;
-  std::atomic<uint64_t> write_index{0};
-  std::atomic<uint64_t> read_index{0};
-};
+using testing::TestRing;
 
 Mesh Tetrahedron(double scale) {
   Mesh mesh;
@@ -129,7 +110,7 @@ void ExpectParseError(const std::vector<uint8_t>& record, ErrorCode code,
 // ---- round trips ------------------------------------------------------------------------------
 
 TEST(UpdateRingTest, RoundTripsEveryRecordType) {
-  TestRing ring(1 << 16);
+  TestRing ring(1 << 16, "update ring");
   UpdateWriter writer(ring.region());
   UpdateReader reader(ring.region(), RingLimits{});
   const Mesh mesh = Tetrahedron(0.1 + 1.0 / 3.0);
@@ -169,7 +150,7 @@ TEST(UpdateRingTest, RoundTripsEveryRecordType) {
 }
 
 TEST(UpdateRingTest, RoundTripsAcrossTheRingEndManyTimes) {
-  TestRing ring(4096);
+  TestRing ring(4096, "update ring");
   UpdateWriter writer(ring.region());
   UpdateReader reader(ring.region(), RingLimits{});
   for (int step = 0; step < 300; ++step) {
@@ -186,7 +167,7 @@ TEST(UpdateRingTest, RoundTripsAcrossTheRingEndManyTimes) {
 }
 
 TEST(UpdateRingTest, DrainUpToLastSequenceReturnsNothing) {
-  TestRing ring(4096);
+  TestRing ring(4096, "update ring");
   UpdateReader reader(ring.region(), RingLimits{});
   auto updates = reader.Drain(0);
   ASSERT_TRUE(updates);
@@ -196,7 +177,7 @@ TEST(UpdateRingTest, DrainUpToLastSequenceReturnsNothing) {
 // ---- all-or-nothing per step -------------------------------------------------------------------
 
 TEST(UpdateRingTest, BadRecordDiscardsTheWholeStepAndTheSessionGoesOn) {
-  TestRing ring(4096);
+  TestRing ring(4096, "update ring");
   UpdateWriter writer(ring.region());
   UpdateReader reader(ring.region(), RingLimits{});
   // Step 1: fine.
@@ -228,7 +209,7 @@ TEST(UpdateRingTest, BadRecordDiscardsTheWholeStepAndTheSessionGoesOn) {
 }
 
 TEST(UpdateRingTest, ValidatesItsCopyNotWhatTheClientWritesLater) {
-  TestRing ring(4096);
+  TestRing ring(4096, "update ring");
   UpdateWriter writer(ring.region());
   UpdateReader reader(ring.region(), RingLimits{});
   ASSERT_TRUE(writer.SetPose(3, MakePose(2, 0.5)));
@@ -242,7 +223,7 @@ TEST(UpdateRingTest, ValidatesItsCopyNotWhatTheClientWritesLater) {
 }
 
 TEST(UpdateRingTest, OverwriteDuringTheCopyIsCaughtByValidatingTheCopy) {
-  TestRing ring(4096);
+  TestRing ring(4096, "update ring");
   UpdateWriter writer(ring.region());
   UpdateReader reader(ring.region(), RingLimits{});
   ASSERT_TRUE(writer.SetPose(3, MakePose(2, 0.5)));
@@ -259,7 +240,7 @@ TEST(UpdateRingTest, OverwriteDuringTheCopyIsCaughtByValidatingTheCopy) {
 
 TEST(UpdateRingTest, RecordCommittedBeforeItsBodyWasWrittenIsRejectedWithoutCrashing) {
   // A client bug: it advanced write_index past a record whose body it never wrote.
-  TestRing ring(4096);
+  TestRing ring(4096, "update ring");
   UpdateReader reader(ring.region(), RingLimits{});
   std::vector<uint8_t> header_only(176, 0);
   const RecordHeader header{static_cast<uint32_t>(RecordType::kAddObject), 176, 1};
@@ -273,7 +254,7 @@ TEST(UpdateRingTest, RecordCommittedBeforeItsBodyWasWrittenIsRejectedWithoutCras
 }
 
 TEST(UpdateRingTest, ForgedRecordsInTheRingAreValidated) {
-  TestRing ring(4096);
+  TestRing ring(4096, "update ring");
   UpdateReader reader(ring.region(), RingLimits{});
   ring.Append(ForgeAddObject(1, 5, 1, 3, 1, kIdentity, kTriangle, {0, 1, 2}));
   ring.Append(ForgeAddObject(2, 6, 1, 3, 1, kIdentity, kTriangle, {0, 1, 3}));
@@ -289,7 +270,7 @@ TEST(UpdateRingTest, SurvivesRandomCorruptionOfRingBytesAndIndices) {
   // Valid records, then random bytes and write indices: every Drain returns (an error or
   // updates that passed validation), nothing crashes or reads out of bounds (ASan build).
   std::mt19937 random(777);
-  TestRing pristine(4096);
+  TestRing pristine(4096, "update ring");
   {
     UpdateWriter writer(pristine.region());
     ASSERT_TRUE(writer.AddObject(1, Tetrahedron(1), Motion::kDeformable, MakePose(1, 0.2)));
@@ -301,7 +282,7 @@ TEST(UpdateRingTest, SurvivesRandomCorruptionOfRingBytesAndIndices) {
   const uint64_t committed = pristine.write_index.load();
   int accepted = 0;
   for (int i = 0; i < 3000; ++i) {
-    TestRing ring(4096);
+    TestRing ring(4096, "update ring");
     ring.data = pristine.data;
     const int flips = 1 + static_cast<int>(random() % 6);
     for (int k = 0; k < flips; ++k) {

@@ -7,36 +7,13 @@
 #include <thread>
 #include <vector>
 
+#include "test_ring.h"
 #include <gtest/gtest.h>
 
 namespace far::protocol {
 namespace {
 
-// A ring in private memory: the test plays the other process by writing the bytes directly.
-struct TestRing {
-  explicit TestRing(uint64_t capacity) : data(capacity, 0) {}
-  RingRegion region() {
-    RingRegion r;
-    r.data = data.data();
-    r.capacity = data.size();
-    r.write_index = &write_index;
-    r.read_index = &read_index;
-    r.name = "test ring";
-    return r;
-  }
-  // Writes raw bytes into the byte stream at `index` (wrapping), as a hostile producer would.
-  void Poke(uint64_t index, const void* bytes, size_t size) {
-    const auto* in = static_cast<const uint8_t*>(bytes);
-    for (size_t i = 0; i < size; ++i) data[(index + i) & (data.size() - 1)] = in[i];
-  }
-  void PokeHeader(uint64_t index, uint32_t type, uint32_t size, uint64_t sequence) {
-    const RecordHeader header{type, size, sequence};
-    Poke(index, &header, sizeof(header));
-  }
-  std::vector<uint8_t> data;
-  std::atomic<uint64_t> write_index{0};
-  std::atomic<uint64_t> read_index{0};
-};
+using testing::TestRing;
 
 std::vector<uint8_t> Pattern(size_t size, uint8_t seed) {
   std::vector<uint8_t> bytes(size);

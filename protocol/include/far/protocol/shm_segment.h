@@ -81,6 +81,9 @@ class ShmSegment {
 
  private:
   ShmSegment() = default;
+  // The ring at `offset` of this mapping with its two published indices.
+  RingRegion Ring(uint64_t offset, uint64_t capacity, std::atomic<uint64_t>* write_index,
+                  std::atomic<uint64_t>* read_index, const char* name) const;
 
   std::string name_;
   uint64_t session_id_ = 0;
