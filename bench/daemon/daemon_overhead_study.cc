@@ -16,8 +16,8 @@
 #include "daemon.h"
 
 #include "far/client/client.h"
-#include "far/pipeline.h"
-#include "far/scenes.h"
+#include "far/pipeline/pipeline.h"
+#include "far/scenes/scenes.h"
 
 namespace {
 

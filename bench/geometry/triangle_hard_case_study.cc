@@ -13,7 +13,7 @@
 #include "hard_cases.h"
 #include <fcl/narrowphase/detail/traversal/collision/intersect.h>
 
-#include "far/triangle_tests.h"
+#include "far/geometry/triangle_tests.h"
 
 namespace {
 

@@ -20,7 +20,7 @@
 #include <benchmark/benchmark.h>
 #include <fcl/narrowphase/detail/traversal/collision/intersect.h>
 
-#include "far/triangle_tests.h"
+#include "far/geometry/triangle_tests.h"
 
 namespace {
 

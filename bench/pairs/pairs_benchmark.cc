@@ -17,8 +17,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "far/exact_stage.h"
-#include "far/sweep_and_prune.h"
+#include "far/pairs/exact_stage.h"
+#include "far/pairs/sweep_and_prune.h"
 
 namespace far {
 namespace {

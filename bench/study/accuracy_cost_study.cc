@@ -47,10 +47,10 @@
 #include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
 
-#include "far/gl_context.h"
-#include "far/mesh_io.h"
-#include "far/pipeline.h"
-#include "far/step_request.h"
+#include "far/gpu/gl_context.h"
+#include "far/io/mesh_io.h"
+#include "far/model/step_request.h"
+#include "far/pipeline/pipeline.h"
 
 #ifndef FAR_STUDY_DATA_DIR
 #define FAR_STUDY_DATA_DIR "bench/data"

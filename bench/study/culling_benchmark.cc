@@ -19,8 +19,8 @@
 #include "test_scenes.h"
 #include <benchmark/benchmark.h>
 
-#include "far/pipeline.h"
-#include "far/step_request.h"
+#include "far/model/step_request.h"
+#include "far/pipeline/pipeline.h"
 
 namespace {
 

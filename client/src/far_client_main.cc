@@ -13,8 +13,8 @@
 #include <nlohmann/json.hpp>
 
 #include "far/client/client.h"
-#include "far/scene_io.h"
-#include "far/scenes.h"
+#include "far/io/scene_io.h"
+#include "far/scenes/scenes.h"
 
 namespace {
 

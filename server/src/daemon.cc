@@ -24,8 +24,8 @@
 #include "latency_stats.h"
 #include <spdlog/spdlog.h>
 
-#include "far/gl_context.h"
-#include "far/pipeline.h"
+#include "far/gpu/gl_context.h"
+#include "far/pipeline/pipeline.h"
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/lcm_bus.h"

@@ -5,7 +5,7 @@
 
 #include "daemon_config.h"
 
-#include "far/result.h"
+#include "far/model/result.h"
 
 namespace far::server {
 

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "far/step_request.h"
+#include "far/model/step_request.h"
 
 namespace far::server {
 namespace {

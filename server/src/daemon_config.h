@@ -4,10 +4,10 @@
 #include <filesystem>
 #include <string>
 
-#include "far/bounding_offset.h"
-#include "far/gl_context.h"
+#include "far/gpu/gl_context.h"
+#include "far/model/result.h"
+#include "far/offsets/bounding_offset.h"
 #include "far/protocol/channels.h"
-#include "far/result.h"
 
 namespace far::server {
 

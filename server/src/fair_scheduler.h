@@ -7,7 +7,7 @@
 #include <optional>
 #include <utility>
 
-#include "far/result.h"
+#include "far/model/result.h"
 
 namespace far::server {
 

@@ -8,7 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
-#include "far/step_request.h"
+#include "far/model/step_request.h"
 
 namespace {
 

@@ -9,7 +9,7 @@ find_library(FAR_GMP_LIBRARY gmp REQUIRED)
 add_library(far_hard_cases STATIC far/geometry/exact_reference.cc far/geometry/hard_cases.cc)
 target_include_directories(far_hard_cases PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/far/geometry
                                                  ${FAR_GMPXX_INCLUDE_DIR})
-target_link_libraries(far_hard_cases PUBLIC far_base ${FAR_GMPXX_LIBRARY} ${FAR_GMP_LIBRARY}
+target_link_libraries(far_hard_cases PUBLIC far_geometry ${FAR_GMPXX_LIBRARY} ${FAR_GMP_LIBRARY}
                                      PRIVATE far_warnings)
 
 far_add_test(far_geometry_test unit

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "far/client/client.h"
-#include "far/result.h"
+#include "far/model/result.h"
 
 namespace far::integration {
 

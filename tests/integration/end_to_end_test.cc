@@ -11,8 +11,8 @@
 #include <nlohmann/json.hpp>
 
 #include "far/client/client.h"
+#include "far/io/scene_io.h"
 #include "far/protocol/convert.h"
-#include "far/scene_io.h"
 
 namespace far::integration {
 namespace {

@@ -8,7 +8,7 @@
 #include "test_scenes.h"
 
 #include "far/client/client.h"
-#include "far/thread_pool.h"
+#include "far/pairs/thread_pool.h"
 
 namespace far::integration {
 

@@ -10,8 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "far/contact_pair.h"
-#include "far/scene.h"
+#include "far/model/contact_pair.h"
+#include "far/model/scene.h"
 
 namespace far::integration {
 

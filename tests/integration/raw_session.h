@@ -21,14 +21,14 @@
 #include <thread>
 #include <vector>
 
+#include "far/model/result.h"
+#include "far/model/step_request.h"
 #include "far/protocol/lcm_bus.h"
 #include "far/protocol/message.h"
 #include "far/protocol/ring.h"
 #include "far/protocol/ring_records.h"
 #include "far/protocol/session_auth.h"
 #include "far/protocol/shm_segment.h"
-#include "far/result.h"
-#include "far/step_request.h"
 
 namespace far::integration {
 

@@ -6,10 +6,10 @@
 
 #include <Eigen/Geometry>
 
-#include "far/exact_stage.h"
-#include "far/scene.h"
-#include "far/scenes.h"
-#include "far/thread_pool.h"
+#include "far/model/scene.h"
+#include "far/pairs/exact_stage.h"
+#include "far/pairs/thread_pool.h"
+#include "far/scenes/scenes.h"
 
 // Scene generators shared by the GPU tests and the studies in bench/. Every generator is
 // deterministic for a seed.

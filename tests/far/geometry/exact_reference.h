@@ -8,7 +8,7 @@
 
 #include <gmpxx.h>
 
-#include "far/triangle_tests.h"
+#include "far/geometry/triangle_tests.h"
 
 namespace far::reference {
 

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "far/triangle_tests.h"
+#include "far/geometry/triangle_tests.h"
 
 namespace far::reference {
 

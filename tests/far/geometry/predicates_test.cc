@@ -1,4 +1,4 @@
-#include "far/internal/predicates.h"
+#include "far/geometry/internal/predicates.h"
 
 #include <gmpxx.h>
 

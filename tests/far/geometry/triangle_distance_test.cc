@@ -11,7 +11,7 @@
 #include "triangle_test_scenes.h"
 #include <gtest/gtest.h>
 
-#include "far/triangle_tests.h"
+#include "far/geometry/triangle_tests.h"
 
 namespace far {
 namespace {

@@ -1,4 +1,4 @@
-#include "far/mesh_io.h"
+#include "far/io/mesh_io.h"
 
 #include <cmath>
 #include <limits>

@@ -4,7 +4,7 @@
 #include "io_test_util.h"
 #include <gtest/gtest.h>
 
-#include "far/mesh_io.h"
+#include "far/io/mesh_io.h"
 
 namespace far {
 namespace {

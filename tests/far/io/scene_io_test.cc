@@ -1,4 +1,4 @@
-#include "far/scene_io.h"
+#include "far/io/scene_io.h"
 
 #include <cmath>
 #include <string>
@@ -6,7 +6,7 @@
 #include "io_test_util.h"
 #include <gtest/gtest.h>
 
-#include "far/mesh_io.h"
+#include "far/io/mesh_io.h"
 
 namespace far {
 namespace {

@@ -2,7 +2,7 @@
 // culling and the float32 error) for the bounds it returns, and the bounds strictly contain
 // every fattened primitive, as computed in double and as rounded to float32.
 
-#include "far/bounding_offset.h"
+#include "far/offsets/bounding_offset.h"
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "far/bounding_offset.h"
+#include "far/offsets/bounding_offset.h"
 #include "far/offsets/offset_test_support.h"
 
 namespace far {

@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "far/bounding_offset.h"
+#include "far/offsets/bounding_offset.h"
 
 namespace far::test {
 

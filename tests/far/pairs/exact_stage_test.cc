@@ -1,4 +1,4 @@
-#include "far/exact_stage.h"
+#include "far/pairs/exact_stage.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "far/triangle_tests.h"
+#include "far/geometry/triangle_tests.h"
 
 namespace far {
 namespace {

@@ -1,4 +1,4 @@
-#include "far/sweep_and_prune.h"
+#include "far/pairs/sweep_and_prune.h"
 
 #include <algorithm>
 #include <cmath>

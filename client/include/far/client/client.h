@@ -11,11 +11,11 @@
 
 #include <Eigen/Core>
 
-#include "far/mesh.h"
-#include "far/pipeline.h"
-#include "far/result.h"
-#include "far/scene.h"
-#include "far/step_request.h"
+#include "far/model/mesh.h"
+#include "far/model/result.h"
+#include "far/model/scene.h"
+#include "far/model/step_request.h"
+#include "far/model/step_result.h"
 
 namespace far::client {
 

@@ -7,10 +7,10 @@
 #include <optional>
 #include <string>
 
-#include "far/pipeline.h"
+#include "far/model/result.h"
+#include "far/model/step_request.h"
+#include "far/model/step_result.h"
 #include "far/protocol/message.h"
-#include "far/result.h"
-#include "far/step_request.h"
 
 namespace far::protocol {
 

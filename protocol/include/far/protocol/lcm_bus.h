@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "far/result.h"
+#include "far/model/result.h"
 
 namespace far::protocol {
 

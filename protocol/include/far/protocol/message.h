@@ -37,8 +37,8 @@
 #include "far_lcm/step_reply_t.hpp"
 #include "far_lcm/step_request_t.hpp"
 
+#include "far/model/result.h"
 #include "far/protocol/version.h"
-#include "far/result.h"
 
 namespace far::protocol {
 

@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <string>
 
+#include "far/model/result.h"
+#include "far/model/step_request.h"
 #include "far/protocol/message.h"
-#include "far/result.h"
-#include "far/step_request.h"
 
 namespace far::protocol {
 

@@ -26,8 +26,8 @@
 #include <string>
 #include <vector>
 
+#include "far/model/result.h"
 #include "far/protocol/ring_layout.h"
-#include "far/result.h"
 
 namespace far::protocol {
 

@@ -25,11 +25,11 @@
 
 #include <Eigen/Core>
 
-#include "far/mesh.h"
+#include "far/model/mesh.h"
+#include "far/model/result.h"
+#include "far/model/scene.h"
 #include "far/protocol/ring.h"
 #include "far/protocol/ring_layout.h"
-#include "far/result.h"
-#include "far/scene.h"
 
 namespace far::protocol {
 

@@ -17,8 +17,8 @@
 #include <span>
 #include <vector>
 
+#include "far/model/result.h"
 #include "far/protocol/message.h"
-#include "far/result.h"
 
 namespace far::protocol {
 

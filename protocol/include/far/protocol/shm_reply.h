@@ -16,10 +16,10 @@
 #include <span>
 #include <vector>
 
+#include "far/model/result.h"
 #include "far/protocol/message.h"
 #include "far/protocol/ring.h"
 #include "far/protocol/session_auth.h"
-#include "far/result.h"
 
 namespace far::protocol {
 

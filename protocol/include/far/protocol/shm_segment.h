@@ -17,10 +17,10 @@
 #include <string>
 #include <string_view>
 
+#include "far/model/result.h"
 #include "far/protocol/ring.h"
 #include "far/protocol/ring_layout.h"
 #include "far/protocol/session_auth.h"
-#include "far/result.h"
 
 namespace far::protocol {
 

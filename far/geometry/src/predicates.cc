@@ -1,0 +1,322 @@
+// Exact orientation predicates: floating-point filter plus exact fallback.
+//
+// Why hand-written: Debian offers no small library with robust predicates that we can link
+// cheaply. CGAL's are header templates that pull in GMP, MPFR and Boost, and Shewchuk's
+// predicates.c is not packaged. The few routines needed here follow Shewchuk's algorithms
+// ("Adaptive precision floating-point arithmetic and fast robust geometric predicates",
+// Discrete & Computational Geometry 18, 1997): a semi-static stage-A filter whose error bound
+// scales with the magnitudes of the actual products, then an exact evaluation with expansion
+// arithmetic (TwoSum, TwoProduct via std::fma) when the filter cannot certify the sign.
+//
+// Requirements for exactness (stated in predicates.h): IEEE-754 double with round-to-nearest,
+// no overflow or underflow, and no contraction of a*b+c into fma by the compiler in the filter
+// (the area's CMake file compiles this file with -ffp-contract=off; never add -ffast-math).
+
+#include "far/geometry/internal/predicates.h"
+
+#include <cmath>
+
+namespace far::internal {
+namespace {
+
+constexpr double kEps = 0x1p-53;  // unit roundoff of double
+// Shewchuk's ccwerrboundA: |fl(det) - det| <= kOrient2dBoundA * (|detleft| + |detright|).
+constexpr double kOrient2dBoundA = (3.0 + 16.0 * kEps) * kEps;
+
+// --- Error-free transformations ------------------------------------------------------------
+
+// x + y == a + b exactly, with x = fl(a + b).
+inline void TwoSum(double a, double b, double& x, double& y) {
+  x = a + b;
+  const double b_virtual = x - a;
+  const double a_virtual = x - b_virtual;
+  const double b_round = b - b_virtual;
+  const double a_round = a - a_virtual;
+  y = a_round + b_round;
+}
+
+// As TwoSum, valid when |a| >= |b| (or a == 0).
+inline void FastTwoSum(double a, double b, double& x, double& y) {
+  x = a + b;
+  const double b_virtual = x - a;
+  y = b - b_virtual;
+}
+
+// x + y == a - b exactly, with x = fl(a - b).
+inline void TwoDiff(double a, double b, double& x, double& y) {
+  x = a - b;
+  const double b_virtual = a - x;
+  const double a_virtual = x + b_virtual;
+  const double b_round = b_virtual - b;
+  const double a_round = a - a_virtual;
+  y = a_round + b_round;
+}
+
+// x + y == a * b exactly, with x = fl(a * b) (no underflow).
+inline void TwoProduct(double a, double b, double& x, double& y) {
+  x = a * b;
+  y = std::fma(a, b, -x);
+}
+
+// --- Expansions ----------------------------------------------------------------------------
+// An expansion is an array of nonoverlapping doubles in increasing magnitude whose exact sum is
+// the value; zero components are eliminated, except that zero itself is the one-component [0].
+// The sign of an expansion is the sign of its last (largest) component.
+
+// h = a - b as an expansion of one or two components; returns the length.
+inline int DiffExpansion(double a, double b, double* h) {
+  double x, y;
+  TwoDiff(a, b, x, y);
+  if (y == 0.0) {
+    h[0] = x;
+    return 1;
+  }
+  h[0] = y;
+  h[1] = x;
+  return 2;
+}
+
+// h = e * b (Shewchuk's scale_expansion_zeroelim). h holds 2 * elen; returns the length.
+int ScaleExpansion(const double* e, int elen, double b, double* h) {
+  double q, hh;
+  TwoProduct(e[0], b, q, hh);
+  int hindex = 0;
+  if (hh != 0.0) h[hindex++] = hh;
+  for (int i = 1; i < elen; ++i) {
+    double product1, product0, sum;
+    TwoProduct(e[i], b, product1, product0);
+    TwoSum(q, product0, sum, hh);
+    if (hh != 0.0) h[hindex++] = hh;
+    FastTwoSum(product1, sum, q, hh);
+    if (hh != 0.0) h[hindex++] = hh;
+  }
+  if (q != 0.0 || hindex == 0) h[hindex++] = q;
+  return hindex;
+}
+
+// h = e + f (Shewchuk's fast_expansion_sum_zeroelim, without reads past the ends).
+// h holds elen + flen; returns the length.
+int SumExpansions(const double* e, int elen, const double* f, int flen, double* h) {
+  int ei = 0;
+  int fi = 0;
+  double enow = e[0];
+  double fnow = f[0];
+  double q;
+  // Start with the smaller of the two smallest components.
+  if ((fnow > enow) == (fnow > -enow)) {
+    q = enow;
+    ++ei;
+    if (ei < elen) enow = e[ei];
+  } else {
+    q = fnow;
+    ++fi;
+    if (fi < flen) fnow = f[fi];
+  }
+  int hindex = 0;
+  double qnew, hh;
+  if (ei < elen && fi < flen) {
+    if ((fnow > enow) == (fnow > -enow)) {
+      FastTwoSum(enow, q, qnew, hh);
+      ++ei;
+      if (ei < elen) enow = e[ei];
+    } else {
+      FastTwoSum(fnow, q, qnew, hh);
+      ++fi;
+      if (fi < flen) fnow = f[fi];
+    }
+    q = qnew;
+    if (hh != 0.0) h[hindex++] = hh;
+    while (ei < elen && fi < flen) {
+      if ((fnow > enow) == (fnow > -enow)) {
+        TwoSum(q, enow, qnew, hh);
+        ++ei;
+        if (ei < elen) enow = e[ei];
+      } else {
+        TwoSum(q, fnow, qnew, hh);
+        ++fi;
+        if (fi < flen) fnow = f[fi];
+      }
+      q = qnew;
+      if (hh != 0.0) h[hindex++] = hh;
+    }
+  }
+  while (ei < elen) {
+    TwoSum(q, enow, qnew, hh);
+    ++ei;
+    if (ei < elen) enow = e[ei];
+    q = qnew;
+    if (hh != 0.0) h[hindex++] = hh;
+  }
+  while (fi < flen) {
+    TwoSum(q, fnow, qnew, hh);
+    ++fi;
+    if (fi < flen) fnow = f[fi];
+    q = qnew;
+    if (hh != 0.0) h[hindex++] = hh;
+  }
+  if (q != 0.0 || hindex == 0) h[hindex++] = q;
+  return hindex;
+}
+
+// h = e * f where f has at most two components. h holds 4 * elen; returns the length.
+// @pre elen <= 16.
+int MultiplyBySmall(const double* e, int elen, const double* f, int flen, double* h) {
+  if (flen == 1) return ScaleExpansion(e, elen, f[0], h);
+  double low[32];
+  double high[32];
+  const int low_len = ScaleExpansion(e, elen, f[0], low);
+  const int high_len = ScaleExpansion(e, elen, f[1], high);
+  return SumExpansions(low, low_len, high, high_len, h);
+}
+
+// Negates an expansion in place.
+inline void Negate(double* e, int len) {
+  for (int i = 0; i < len; ++i) e[i] = -e[i];
+}
+
+inline int SignOf(const double* e, int len) {
+  const double top = e[len - 1];
+  return (top > 0.0) - (top < 0.0);
+}
+
+// A coordinate difference as an expansion.
+struct Diff {
+  double v[2];
+  int n;
+};
+
+inline Diff MakeDiff(double a, double b) {
+  Diff d;
+  d.n = DiffExpansion(a, b, d.v);
+  return d;
+}
+
+// h = x1 * y1 - x2 * y2 for differences x1, y1, x2, y2 (h holds 16); returns the length.
+int MinorExpansion(const Diff& x1, const Diff& y1, const Diff& x2, const Diff& y2, double* h) {
+  double p[8];
+  double q[8];
+  const int p_len = MultiplyBySmall(x1.v, x1.n, y1.v, y1.n, p);
+  const int q_len = MultiplyBySmall(x2.v, x2.n, y2.v, y2.n, q);
+  Negate(q, q_len);
+  return SumExpansions(p, p_len, q, q_len, h);
+}
+
+// Rounds an expansion to a double: the components summed from the smallest up.
+inline double Estimate(const double* e, int len) {
+  double sum = e[0];
+  for (int i = 1; i < len; ++i) sum += e[i];
+  return sum;
+}
+
+inline int Sign(double x) { return (x > 0.0) - (x < 0.0); }
+
+}  // namespace
+
+// --- Orient3d ------------------------------------------------------------------------------
+
+PlaneSide::PlaneSide(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c)
+    : a_(a), b_(b), c_(c) {
+  // The same expression tree as Shewchuk's orient3d stage A: three terms x * (y1 z1 - y2 z2) of
+  // rounded differences, so his bound (7 + 56 eps) eps * permanent applies unchanged.
+  const double ux = b.x() - a.x();
+  const double uy = b.y() - a.y();
+  const double uz = b.z() - a.z();
+  const double vx = c.x() - a.x();
+  const double vy = c.y() - a.y();
+  const double vz = c.z() - a.z();
+  const double uyvz = uy * vz;
+  const double uzvy = uz * vy;
+  const double uzvx = uz * vx;
+  const double uxvz = ux * vz;
+  const double uxvy = ux * vy;
+  const double uyvx = uy * vx;
+  normal_ = Eigen::Vector3d(uyvz - uzvy, uzvx - uxvz, uxvy - uyvx);
+  permanent_ = Eigen::Vector3d(std::abs(uyvz) + std::abs(uzvy), std::abs(uzvx) + std::abs(uxvz),
+                               std::abs(uxvy) + std::abs(uyvx));
+}
+
+int PlaneSide::SideExact(const Eigen::Vector3d& d) const { return Orient3dExact(a_, b_, c_, d); }
+
+int Orient3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+             const Eigen::Vector3d& d) {
+  return PlaneSide(a, b, c).Side(d);
+}
+
+int Orient3dExact(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                  const Eigen::Vector3d& d) {
+  // det[u, v, w] with u = b - a, v = c - a, w = d - a, each difference an exact expansion,
+  // expanded along u: ux (vy wz - vz wy) + uy (vz wx - vx wz) + uz (vx wy - vy wx).
+  const Diff ux = MakeDiff(b.x(), a.x()), uy = MakeDiff(b.y(), a.y()), uz = MakeDiff(b.z(), a.z());
+  const Diff vx = MakeDiff(c.x(), a.x()), vy = MakeDiff(c.y(), a.y()), vz = MakeDiff(c.z(), a.z());
+  const Diff wx = MakeDiff(d.x(), a.x()), wy = MakeDiff(d.y(), a.y()), wz = MakeDiff(d.z(), a.z());
+  double minor[16];
+  double term_x[64], term_y[64], term_z[64];
+  int len = MinorExpansion(vy, wz, vz, wy, minor);
+  const int x_len = MultiplyBySmall(minor, len, ux.v, ux.n, term_x);
+  len = MinorExpansion(vz, wx, vx, wz, minor);
+  const int y_len = MultiplyBySmall(minor, len, uy.v, uy.n, term_y);
+  len = MinorExpansion(vx, wy, vy, wx, minor);
+  const int z_len = MultiplyBySmall(minor, len, uz.v, uz.n, term_z);
+  double xy[128];
+  const int xy_len = SumExpansions(term_x, x_len, term_y, y_len, xy);
+  double det[192];
+  const int det_len = SumExpansions(xy, xy_len, term_z, z_len, det);
+  return SignOf(det, det_len);
+}
+
+// --- Orient2d ------------------------------------------------------------------------------
+
+int Orient2d(double ax, double ay, double bx, double by, double cx, double cy) {
+  // Shewchuk's orient2d stage A. When the two products have opposite signs (or one is zero),
+  // the sign of their difference is already certain.
+  const double detleft = (ax - cx) * (by - cy);
+  const double detright = (ay - cy) * (bx - cx);
+  const double det = detleft - detright;
+  double detsum;
+  if (detleft > 0.0) {
+    if (detright <= 0.0) return Sign(det);
+    detsum = detleft + detright;
+  } else if (detleft < 0.0) {
+    if (detright >= 0.0) return Sign(det);
+    detsum = -detleft - detright;
+  } else {
+    return Sign(det);
+  }
+  const double bound = kOrient2dBoundA * detsum;
+  if (det >= bound || -det >= bound) return Sign(det);
+  return Orient2dExact(ax, ay, bx, by, cx, cy);
+}
+
+int Orient2dExact(double ax, double ay, double bx, double by, double cx, double cy) {
+  // (b - a) x (c - a) with exact differences.
+  const Diff ux = MakeDiff(bx, ax), uy = MakeDiff(by, ay);
+  const Diff vx = MakeDiff(cx, ax), vy = MakeDiff(cy, ay);
+  double det[16];
+  const int len = MinorExpansion(ux, vy, uy, vx, det);
+  return SignOf(det, len);
+}
+
+bool Collinear3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  // Collinear iff (b - a) x (c - a) == 0, i.e. all three projected orientations vanish.
+  return Orient2dProjected(a, b, c, 0, 1) == 0 && Orient2dProjected(a, b, c, 1, 2) == 0 &&
+         Orient2dProjected(a, b, c, 2, 0) == 0;
+}
+
+// --- Accurate cross product ----------------------------------------------------------------
+
+Eigen::Vector3d RoundedCross(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                             const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
+  const Diff ux = MakeDiff(b.x(), a.x()), uy = MakeDiff(b.y(), a.y()), uz = MakeDiff(b.z(), a.z());
+  const Diff vx = MakeDiff(d.x(), c.x()), vy = MakeDiff(d.y(), c.y()), vz = MakeDiff(d.z(), c.z());
+  double component[16];
+  Eigen::Vector3d n;
+  int len = MinorExpansion(uy, vz, uz, vy, component);
+  n.x() = Estimate(component, len);
+  len = MinorExpansion(uz, vx, ux, vz, component);
+  n.y() = Estimate(component, len);
+  len = MinorExpansion(ux, vy, uy, vx, component);
+  n.z() = Estimate(component, len);
+  return n;
+}
+
+}  // namespace far::internal

@@ -1,0 +1,110 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "far/model/result.h"
+#include "far/model/step_request.h"
+#include "far/offsets/bounding_offset.h"
+
+namespace far::internal {
+
+/// The four ways a triangle can be drawn. Each has its own persistent GPU buffer of instances.
+enum class PieceSet {
+  kUobb,       ///< 1 box per triangle: its rectangle, grown by r in the vertex shader (FAR)
+  kEdgeBoxes,  ///< 3 boxes per triangle, one per edge (FAR bounded exact offset)
+  kPrisms,     ///< 1 prism per triangle: the triangle shifted by +-r n (FAR bounded exact offset)
+  kTriangles,  ///< the triangle itself, unfattened (CULLIDE)
+};
+constexpr int kNumPieceSets = 4;
+
+/// One GPU instance, in the frame A of its object's anchor (object frame shifted to the
+/// middle of the object, so that float32 coordinates stay small). 56 bytes.
+struct PieceInstance {
+  /// kUobb/kEdgeBoxes: center, unit axis u, unit axis v, half extents (u, v, n) before growth.
+  /// kPrisms: corners a, b, c and the unit normal n. kTriangles: corners a, b, c, unused.
+  std::array<std::array<float, 3>, 4> p;
+  uint32_t triangle = 0;  ///< triangle index in the object's mesh
+  uint32_t slot = 0;      ///< the object's slot in the renderer
+};
+static_assert(sizeof(PieceInstance) == 56);
+
+/// GL_RENDERER of the context current on this thread, or "" when none is current.
+std::string CurrentGlRenderer();
+
+/// Instances per triangle of each set.
+int InstancesPerTriangle(PieceSet set);
+
+/// Builds the instances of one triangle (corners given in frame A) for `set`.
+void AppendPieces(PieceSet set, uint32_t slot, uint32_t triangle, const Eigen::Vector3d& a,
+                  const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                  std::vector<PieceInstance>* out);
+
+/// An object taking part in one axis view.
+struct ViewObject {
+  uint32_t slot = 0;   ///< where its instances are
+  uint32_t group = 0;  ///< self-exclusion unit: primitives of one group never cull each other
+  uint32_t first_primitive = 0;  ///< primitive index of its first sub-object
+  uint32_t num_triangles = 0;
+  Eigen::Isometry3d X_WA = Eigen::Isometry3d::Identity();  ///< anchor frame A in world
+  double local_extent = 0;  ///< max |coordinate| of its instances in frame A
+};
+
+/// One orthographic view along `axis` of the objects, in the given draw order.
+struct AxisView {
+  int axis = 2;  ///< view direction: 0 = X (screen Y,Z), 1 = Y (screen Z,X), 2 = Z (screen X,Y)
+  Projection projection;
+  std::span<const ViewObject> objects;
+  int triangles_per_primitive = 0;  ///< sub-object size k; 0 = one primitive per object
+  int num_primitives = 0;
+  std::span<const uint8_t> alive;  ///< per primitive: 1 if still in the PCS
+  std::span<const PieceSet> sets;  ///< what to draw for each triangle
+};
+
+/// Counters of the GPU work a view did.
+struct RenderCounters {
+  int64_t draws = 0;
+  int64_t queries = 0;
+  int64_t instances = 0;       ///< piece instances submitted
+  int64_t bytes_uploaded = 0;  ///< piece and per-object data sent to the GPU
+};
+
+/// The GL side of culling: persistent piece buffers and the two visibility mechanisms.
+/// Owned by the GL thread (see GlContext's threading contract).
+class CullingRenderer {
+ public:
+  /// Creates framebuffers of `raster`'s size and format and compiles the shaders.
+  /// @pre a GL 4.5 context is current. Errors: kInternal (shader or framebuffer failure).
+  static Result<std::unique_ptr<CullingRenderer>> Create(const RasterFormat& raster);
+  ~CullingRenderer();
+  CullingRenderer(const CullingRenderer&) = delete;
+  CullingRenderer& operator=(const CullingRenderer&) = delete;
+
+  const RasterFormat& raster() const { return raster_; }
+
+  /// Replaces the instances of `slot` in `set` (uploaded on the next view that draws `set`).
+  void SetPieces(PieceSet set, uint32_t slot, std::vector<PieceInstance> pieces);
+  /// Drops `slot` from every set.
+  void RemoveSlot(uint32_t slot);
+  /// True if `slot` has instances in `set`.
+  bool HasPieces(PieceSet set, uint32_t slot) const;
+
+  /// Renders one axis view and returns, per primitive, 1 if it is not fully visible against
+  /// the other groups (it stays in the PCS) and 0 if it is (pruned). Dead primitives get 0.
+  Result<std::vector<uint8_t>> RenderView(const AxisView& view, QueryMechanism mechanism,
+                                          RenderCounters* counters);
+
+ private:
+  struct Impl;
+  explicit CullingRenderer(std::unique_ptr<Impl> impl, const RasterFormat& raster);
+  std::unique_ptr<Impl> impl_;
+  RasterFormat raster_;
+};
+
+}  // namespace far::internal

@@ -1,0 +1,47 @@
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "far/model/result.h"
+
+namespace far {
+
+/// Which EGL platform a context may come from.
+enum class GlPlatform {
+  kAuto,         ///< EGL device platform (hardware first), then Mesa surfaceless
+  kDevice,       ///< EGL_EXT_platform_device only
+  kSurfaceless,  ///< EGL_MESA_platform_surfaceless only (llvmpipe on machines with no GPU)
+};
+
+/// A headless OpenGL 4.5 core context made with EGL (no X server, no window).
+///
+/// Threading contract: the context is made current on the thread that calls Create and must only
+/// be used (and destroyed) on that thread. Every far class that issues GL calls (the culling
+/// renderers, Pipeline) inherits this contract: one GL thread owns them. A process may hold one
+/// context per thread.
+class GlContext {
+ public:
+  /// Creates a context and makes it current on the calling thread. Tries, in order (kAuto): EGL
+  /// devices that are not software renderers, then software devices, then the surfaceless
+  /// platform. Returns kUnavailable with every attempt and its EGL error listed when none works.
+  static Result<std::unique_ptr<GlContext>> Create(GlPlatform platform = GlPlatform::kAuto);
+
+  ~GlContext();
+  GlContext(const GlContext&) = delete;
+  GlContext& operator=(const GlContext&) = delete;
+
+  /// GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)" or "NVIDIA H100 PCIe/PCIe/SSE2".
+  const std::string& renderer() const;
+  /// GL_VERSION, e.g. "4.5 (Core Profile) Mesa 22.3.6".
+  const std::string& version() const;
+  /// How the context was made, e.g. "EGL device 0 (EGL_MESA_device_software)" or "surfaceless".
+  const std::string& platform_description() const;
+
+ private:
+  struct Impl;
+  explicit GlContext(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace far

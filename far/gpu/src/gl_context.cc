@@ -1,0 +1,184 @@
+#include "far/gpu/gl_context.h"
+
+#include <string>
+#include <vector>
+
+#include <epoxy/egl.h>
+#include <epoxy/gl.h>
+
+namespace far {
+
+namespace {
+
+// What a made context holds; GlContext::Impl wraps it.
+struct EglState {
+  EGLDisplay display = EGL_NO_DISPLAY;
+  EGLContext context = EGL_NO_CONTEXT;
+  std::string renderer, version, platform;
+};
+
+std::string EglErrorName(EGLint error) {
+  switch (error) {
+    case EGL_SUCCESS:
+      return "EGL_SUCCESS";
+    case EGL_NOT_INITIALIZED:
+      return "EGL_NOT_INITIALIZED";
+    case EGL_BAD_ACCESS:
+      return "EGL_BAD_ACCESS";
+    case EGL_BAD_ALLOC:
+      return "EGL_BAD_ALLOC";
+    case EGL_BAD_ATTRIBUTE:
+      return "EGL_BAD_ATTRIBUTE";
+    case EGL_BAD_CONFIG:
+      return "EGL_BAD_CONFIG";
+    case EGL_BAD_CONTEXT:
+      return "EGL_BAD_CONTEXT";
+    case EGL_BAD_DISPLAY:
+      return "EGL_BAD_DISPLAY";
+    case EGL_BAD_MATCH:
+      return "EGL_BAD_MATCH";
+    case EGL_BAD_PARAMETER:
+      return "EGL_BAD_PARAMETER";
+    default:
+      return "EGL error " + std::to_string(error);
+  }
+}
+
+bool HasExtension(const char* list, const std::string& name) {
+  if (list == nullptr) return false;
+  const std::string all = std::string(" ") + list + " ";
+  return all.find(" " + name + " ") != std::string::npos;
+}
+
+// Initializes `display` and creates a current GL 4.5 core context on it (surfaceless: the
+// renderers draw into their own framebuffer objects). On failure says why in `why`.
+bool MakeContext(EGLDisplay display, EglState* impl, std::string* why) {
+  EGLint major = 0, minor = 0;
+  if (display == EGL_NO_DISPLAY) {
+    *why = "no display (" + EglErrorName(eglGetError()) + ")";
+    return false;
+  }
+  if (!eglInitialize(display, &major, &minor)) {
+    *why = "eglInitialize failed (" + EglErrorName(eglGetError()) + ")";
+    return false;
+  }
+  if (!HasExtension(eglQueryString(display, EGL_EXTENSIONS), "EGL_KHR_surfaceless_context")) {
+    *why = "no EGL_KHR_surfaceless_context";
+    eglTerminate(display);
+    return false;
+  }
+  if (!eglBindAPI(EGL_OPENGL_API)) {
+    *why = "eglBindAPI(EGL_OPENGL_API) failed (" + EglErrorName(eglGetError()) + ")";
+    eglTerminate(display);
+    return false;
+  }
+  const EGLint config_attributes[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+  EGLConfig config = nullptr;
+  EGLint num_configs = 0;
+  // Surfaceless contexts need no particular config; take any GL-capable one, or none at all.
+  if (!eglChooseConfig(display, config_attributes, &config, 1, &num_configs) || num_configs == 0) {
+    config = EGL_NO_CONFIG_KHR;
+  }
+  // Core 4.5 is the highest profile llvmpipe gives (4.6 fails on Mesa 22.3).
+  const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                       4,
+                                       EGL_CONTEXT_MINOR_VERSION,
+                                       5,
+                                       EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                       EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                       EGL_NONE};
+  EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attributes);
+  if (context == EGL_NO_CONTEXT) {
+    *why = "eglCreateContext(OpenGL 4.5 core) failed (" + EglErrorName(eglGetError()) + ")";
+    eglTerminate(display);
+    return false;
+  }
+  if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
+    *why = "eglMakeCurrent failed (" + EglErrorName(eglGetError()) + ")";
+    eglDestroyContext(display, context);
+    eglTerminate(display);
+    return false;
+  }
+  impl->display = display;
+  impl->context = context;
+  impl->renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  impl->version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+  return true;
+}
+
+}  // namespace
+
+struct GlContext::Impl : EglState {};
+
+Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform) {
+  auto impl = std::make_unique<Impl>();
+  std::vector<std::string> attempts;
+  const char* client_extensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+
+  // 1. The EGL device platform: a real GPU with no X server. Hardware devices first; software
+  //    ones (EGL_MESA_device_software) only after them, so llvmpipe never shadows a GPU.
+  if (platform != GlPlatform::kSurfaceless) {
+    if (!HasExtension(client_extensions, "EGL_EXT_platform_device") ||
+        !HasExtension(client_extensions, "EGL_EXT_device_enumeration")) {
+      attempts.push_back("EGL device platform: not offered by this EGL");
+    } else {
+      EGLint num_devices = 0;
+      eglQueryDevicesEXT(0, nullptr, &num_devices);
+      std::vector<EGLDeviceEXT> devices(static_cast<size_t>(std::max(num_devices, 0)));
+      eglQueryDevicesEXT(num_devices, devices.data(), &num_devices);
+      if (num_devices == 0) attempts.push_back("EGL device platform: no devices");
+      for (bool want_software : {false, true}) {
+        for (int i = 0; i < num_devices; ++i) {
+          const bool software = HasExtension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS),
+                                             "EGL_MESA_device_software");
+          if (software != want_software) continue;
+          const std::string name = "EGL device " + std::to_string(i) +
+                                   (software ? " (EGL_MESA_device_software)" : " (hardware)");
+          EGLDisplay display =
+              eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
+          std::string why;
+          if (MakeContext(display, impl.get(), &why)) {
+            impl->platform = name;
+            return std::unique_ptr<GlContext>(new GlContext(std::move(impl)));
+          }
+          attempts.push_back(name + ": " + why);
+        }
+      }
+    }
+  }
+
+  // 2. Mesa's surfaceless platform (llvmpipe on machines with no GPU).
+  if (platform != GlPlatform::kDevice) {
+    if (!HasExtension(client_extensions, "EGL_MESA_platform_surfaceless")) {
+      attempts.push_back("surfaceless platform: not offered by this EGL");
+    } else {
+      EGLDisplay display =
+          eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+      std::string why;
+      if (MakeContext(display, impl.get(), &why)) {
+        impl->platform = "surfaceless";
+        return std::unique_ptr<GlContext>(new GlContext(std::move(impl)));
+      }
+      attempts.push_back("surfaceless platform: " + why);
+    }
+  }
+
+  std::string message = "no OpenGL 4.5 core context could be made; tried:";
+  for (const auto& attempt : attempts) message += "\n  - " + attempt;
+  message += "\n(install libegl-mesa0 and libgl1-mesa-dri for the software renderer)";
+  return MakeError(ErrorCode::kUnavailable, message);
+}
+
+GlContext::GlContext(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+GlContext::~GlContext() {
+  eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  eglDestroyContext(impl_->display, impl_->context);
+  eglTerminate(impl_->display);
+}
+
+const std::string& GlContext::renderer() const { return impl_->renderer; }
+const std::string& GlContext::version() const { return impl_->version; }
+const std::string& GlContext::platform_description() const { return impl_->platform; }
+
+}  // namespace far

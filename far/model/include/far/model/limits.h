@@ -1,0 +1,30 @@
+#pragma once
+
+// Every limit on what a client, a scene file or a caller may ask of far, named once. The
+// pipeline, the scene model, the protocol's validation and the daemon all check against these.
+
+#include <cstdint>
+
+namespace far {
+
+/// Object ids: every uint32, 0 and 2^32 - 1 included, in scene files, the update ring, the
+/// pipeline and replies alike.
+inline constexpr uint32_t kMinObjectId = 0;
+inline constexpr uint32_t kMaxObjectId = UINT32_MAX;
+
+/// The most vertices or triangles one mesh may hold: Mesh::num_vertices() and num_triangles()
+/// return int.
+inline constexpr uint64_t kMaxMeshElements = 0x7fffffff;
+
+/// Step requests: the viewport is resolution x resolution pixels.
+inline constexpr int kMinResolution = 8;
+inline constexpr int kMaxResolution = 8192;
+/// Triangles per sub-object (k).
+inline constexpr int kMaxSubobjectSize = 1 << 20;
+/// The largest distance D of a localized distance query (world units).
+inline constexpr double kMaxDistance = 1e12;
+
+/// Poses: a rotation quaternion is accepted when | |q| - 1 | <= this, then normalized.
+inline constexpr double kQuaternionTolerance = 1e-6;
+
+}  // namespace far

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <optional>
+#include <string_view>
+
+namespace far {
+
+/// Depth buffer formats a culling pass can render with.
+enum class DepthFormat { kDepth16, kDepth24, kDepth32F };
+
+/// How a step finds its potentially colliding set.
+enum class Method {
+  kAabb,            ///< CPU sweep-and-prune on object AABBs only (I-COLLIDE baseline)
+  kCullide,         ///< CULLIDE: unfattened primitives on the GPU; can miss (not reliable)
+  kFar,             ///< FAR with UOBB bounding offsets: reliable
+  kFarExactOffset,  ///< FAR with bounded exact offsets: reliable, tighter, more vertices
+  kFcl,             ///< FCL dynamic AABB tree broadphase + BVHModel<OBBRSS> collide
+  kExact,           ///< brute-force exact reference (every cross-object triangle pair)
+};
+
+/// How the GPU answers "is this primitive fully visible against the other objects".
+enum class QueryMechanism {
+  kOcclusionQuery,  ///< per-primitive occlusion queries, two passes (the paper)
+  kIdBuffer,        ///< a fixed number of draws per axis with an object-id buffer (DESIGN.md)
+};
+
+/// The deepest output a step computes; later stages do not run.
+enum class Output {
+  kObjectPcs,      ///< objects that may collide
+  kObjectPairs,    ///< candidate object pairs (sweep-and-prune on the PCS objects)
+  kPrimitivePcs,   ///< per object, the triangles that may collide
+  kContacts,       ///< exact intersecting triangle pairs
+  kDistancePairs,  ///< exact triangle pairs within the distance D (requires distance)
+};
+
+/// What one step computes and how.
+struct StepRequest {
+  Method method = Method::kFar;
+  QueryMechanism mechanism = QueryMechanism::kIdBuffer;
+  int resolution = 1024;  ///< viewport is resolution x resolution
+  DepthFormat depth_format = DepthFormat::kDepth24;
+  int subobject_size = 1;          ///< triangles per sub-object (k)
+  std::optional<double> distance;  ///< D for localized distance culling (world units)
+  Output output = Output::kContacts;
+};
+
+/// Names used on command lines and in messages: "aabb", "cullide", "far", "far-exact-offset",
+/// "fcl", "exact"; "occlusion-query", "id-buffer"; "object-pcs", "pairs", "pcs", "contacts",
+/// "distance"; "depth16", "depth24", "depth32f". Parse* return nullopt for unknown names.
+std::string_view ToString(Method method);
+std::string_view ToString(QueryMechanism mechanism);
+std::string_view ToString(Output output);
+std::string_view ToString(DepthFormat format);
+std::optional<Method> ParseMethod(std::string_view name);
+std::optional<QueryMechanism> ParseMechanism(std::string_view name);
+std::optional<Output> ParseOutput(std::string_view name);
+std::optional<DepthFormat> ParseDepthFormat(std::string_view name);
+
+}  // namespace far

@@ -1,0 +1,46 @@
+#pragma once
+
+// What one step answers and what it cost: the reply of far::Pipeline::Step, of the daemon and
+// of far::client::Client::Step alike.
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "far/model/contact_pair.h"
+
+namespace far {
+
+/// Time and work of one stage of a step.
+struct StageStats {
+  std::string name;  ///< "update", "object_cull", "sweep_and_prune", "primitive_cull", "exact"
+  double ms = 0;
+};
+
+/// What a step did and cost.
+struct StepStats {
+  std::vector<StageStats> stages;
+  double total_ms = 0;
+  int64_t primitives_rendered = 0;  ///< object and sub-object primitives drawn, all views
+  int64_t draws = 0;
+  int64_t queries = 0;
+  int64_t bytes_uploaded = 0;    ///< to the GPU this step
+  int64_t object_pairs = 0;      ///< candidate object pairs after sweep-and-prune
+  int64_t pairs_considered = 0;  ///< candidate triangle pairs (PCS x PCS over object pairs)
+  int64_t pairs_tested = 0;      ///< triangle pairs that reached an exact test
+  double object_radius = 0;      ///< offset radius r of the last object-level view
+  double primitive_radius = 0;   ///< offset radius r of the last sub-object view
+};
+
+/// The answer of one step. Ids and triangle indices are as in the scene (docs/scene-format.md).
+struct StepResult {
+  std::vector<uint32_t> pcs_objects;                         ///< sorted ids
+  std::vector<ObjectPair> object_pairs;                      ///< sorted, object_a < object_b
+  std::map<uint32_t, std::vector<uint32_t>> pcs_primitives;  ///< id -> sorted triangles
+  std::vector<ContactPair> contacts;                         ///< sorted
+  std::vector<DistancePair> distance_pairs;                  ///< sorted
+  StepStats stats;
+};
+
+}  // namespace far

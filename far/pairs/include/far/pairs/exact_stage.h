@@ -1,0 +1,44 @@
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "far/model/contact_pair.h"
+#include "far/pairs/thread_pool.h"
+#include "far/pairs/world_object.h"
+
+namespace far {
+
+/// Which triangle pairs to test exactly: for every object pair, the listed triangles of the
+/// first object against the listed triangles of the second.
+struct ExactQuery {
+  std::span<const WorldObjectView> objects;  ///< ids unique
+  std::span<const ObjectPair> object_pairs;  ///< ids of `objects`, object_a < object_b
+  /// Optional per-object triangle subsets, indexed like `objects` (the primitive PCS). Empty
+  /// span: every triangle of every object.
+  std::span<const std::vector<uint32_t>> triangle_subsets;
+  bool want_contacts = true;           ///< compute intersecting pairs
+  std::optional<double> max_distance;  ///< also compute pairs with distance <= this
+};
+
+/// Exact answers, sorted ascending (object_a < object_b).
+struct ExactResult {
+  std::vector<ContactPair> contacts;
+  std::vector<DistancePair> distance_pairs;
+  size_t pairs_considered = 0;  ///< triangle pairs before the AABB prefilter
+  size_t pairs_tested = 0;      ///< triangle pairs that reached an exact test
+};
+
+/// Runs exact triangle-triangle tests (TrianglesIntersect, TrianglesWithinDistance) on the
+/// query's candidate pairs, with a per-pair AABB prefilter, on `pool`.
+/// @pre every id in object_pairs is in objects; subsets hold valid triangle indices.
+ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool);
+
+/// The brute-force reference: every cross-object triangle pair (AABB prefilter only). The
+/// oracle every culling path is tested against.
+ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
+                                std::optional<double> max_distance, ThreadPool& pool);
+
+}  // namespace far

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "far/model/contact_pair.h"
+
+namespace far {
+
+/// An object's id and its world-frame axis-aligned bounding box.
+struct IdBox {
+  uint32_t id = 0;
+  Eigen::AlignedBox3d box_W;
+};
+
+/// Object-level sweep-and-prune (I-COLLIDE style), incremental across steps: the sorted
+/// endpoint lists are kept between calls and repaired by insertion sort, so objects that did not
+/// move cost no re-sorting. Thread safety: none (one owner).
+class SweepAndPrune {
+ public:
+  /// Replaces the set of boxes (any order, ids unique; ids absent from `boxes` are removed)
+  /// and returns every pair whose boxes are within `margin` of each other (boxes closed:
+  /// touching counts), sorted ascending with object_a < object_b. @pre margin >= 0.
+  std::vector<ObjectPair> Update(std::span<const IdBox> boxes, double margin = 0.0);
+
+  /// Number of endpoint swaps the last Update performed (0 when nothing moved).
+  size_t last_swaps() const { return last_swaps_; }
+
+ private:
+  // One endpoint of one object's grown interval on one axis.
+  struct Endpoint {
+    double value;
+    uint32_t slot;
+    bool is_max;
+  };
+  // A tracked object: its id, its grown box and when it was last seen.
+  struct Slot {
+    uint32_t id = 0;
+    bool live = false;
+    bool empty = false;  // empty or non-finite input box: pairs with nothing
+    uint64_t stamp = 0;  // the Update that last saw it
+    double lo[3] = {0, 0, 0};
+    double hi[3] = {0, 0, 0};
+  };
+  std::vector<Endpoint> axes_[3];  // sorted by (value, min before max)
+  std::vector<Slot> slots_;
+  std::vector<uint32_t> free_slots_;
+  std::unordered_map<uint32_t, uint32_t> id_slots_;  // id -> slot
+  std::unordered_set<uint64_t> overlaps_;  // slot pairs (low << 32 | high) overlapping on all axes
+  uint64_t stamp_ = 0;
+  size_t last_swaps_ = 0;
+};
+
+}  // namespace far

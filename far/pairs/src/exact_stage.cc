@@ -1,0 +1,345 @@
+#include "far/pairs/exact_stage.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+#include "far/geometry/triangle_tests.h"
+
+// The exact stage: for every candidate object pair, the candidate triangles of one object against
+// those of the other, an AABB prefilter, then the exact predicates.
+//
+// The prefilter never rejects a pair that an exact predicate would accept:
+// - contacts: two closed triangles that share a point have closed AABBs that share it too. The
+//   boxes hold the corner coordinates themselves (min/max are exact) and `b.lo - a.hi > 0` is
+//   exact in IEEE arithmetic (x - y == 0 only if x == y, thanks to gradual underflow).
+// - distance D: triangles within distance d have boxes whose gap is <= d on every axis, and
+//   TrianglesWithinDistance may accept up to D + its documented error bound, so the boxes are
+//   compared with slack D + bound. Rounding to nearest is monotone, so a computed gap is <= the
+//   (double) slack whenever the exact gap is.
+//
+// Pair finding between two triangle lists is a one-axis sort-and-sweep: each object's candidate
+// triangle boxes are built and sorted by their x minimum once per call, then every triangle looks
+// forward in the other list from its own x minimum until the x gap exceeds the slack. A pair is
+// met exactly once (by whichever of the two starts first in x; ties go to the first object). For
+// lists of n and m triangles the cost is O((n + m) log(n + m) + k_x) with k_x the pairs that
+// overlap in x, instead of O(n m) box tests.
+//
+// The work is split into items (a range of one list's triangles of one object pair) that run on
+// the thread pool and fill their own output vectors; these are concatenated and sorted, so the
+// output does not depend on the number of threads.
+
+namespace far {
+namespace {
+
+// A triangle's closed world-frame AABB.
+struct TriangleBox {
+  double lo[3];
+  double hi[3];
+  uint32_t triangle;
+};
+
+// The candidate triangles of one object, sorted by lo[0].
+using SortedBoxes = std::vector<TriangleBox>;
+
+TrianglePoints Corners(const WorldObjectView& object, uint32_t triangle) {
+  const TriangleIndices& v = object.triangles[triangle];
+  return {object.p_WV[v[0]], object.p_WV[v[1]], object.p_WV[v[2]]};
+}
+
+TriangleBox BoxOf(const WorldObjectView& object, uint32_t triangle) {
+  const TrianglePoints p = Corners(object, triangle);
+  TriangleBox box;
+  box.triangle = triangle;
+  for (int axis = 0; axis < 3; ++axis) {
+    box.lo[axis] = std::min({p.a[axis], p.b[axis], p.c[axis]});
+    box.hi[axis] = std::max({p.a[axis], p.b[axis], p.c[axis]});
+  }
+  return box;
+}
+
+// True iff the closed boxes are within `slack` of each other on every axis (slack 0: they
+// share a point). Exact for slack 0; never stricter than the exact gap for slack > 0.
+bool BoxesWithin(const TriangleBox& a, const TriangleBox& b, double slack) {
+  for (int axis = 0; axis < 3; ++axis) {
+    if (b.lo[axis] - a.hi[axis] > slack || a.lo[axis] - b.hi[axis] > slack) return false;
+  }
+  return true;
+}
+
+// The largest absolute corner coordinate of the given triangles (0 if none).
+double Magnitude(const SortedBoxes& boxes) {
+  double magnitude = 0;
+  for (const TriangleBox& box : boxes) {
+    for (int axis = 0; axis < 3; ++axis) {
+      magnitude = std::max({magnitude, std::abs(box.lo[axis]), std::abs(box.hi[axis])});
+    }
+  }
+  return magnitude;
+}
+
+// The prefilter slack for a distance query whose triangles have coordinates of magnitude at most
+// `magnitude`: never smaller than the limit TrianglesWithinDistance compares with.
+// triangle_distance.cc: TrianglesWithinDistance(s, t, D) first returns false when the largest
+// axis gap of the two triangles' boxes, computed exactly as BoxesWithin computes it, exceeds
+// D + 256 eps L (eps = 2^-53, L the diagonal of the six vertices' box), and otherwise accepts only
+// pairs that pass that same box test. L <= 2 sqrt(3) magnitude, and 256 eps L is computed with a
+// few ulps of error, so 2048 eps magnitude (a factor 2.3 above) dominates it; D + that rounds to
+// a double >= D + 256 eps L rounded, because rounding to nearest is monotone. So the prefilter
+// rejects only pairs the predicate rejects.
+double DistanceSlack(double max_distance, double magnitude) {
+  constexpr double kEps = 0x1p-53;
+  return max_distance + 2048 * kEps * magnitude;
+}
+
+// What to compute for one candidate triangle pair.
+struct Wanted {
+  bool contacts = false;
+  bool distance = false;
+  double max_distance = 0;
+  double slack = 0;  // the prefilter slack: 0 for contacts only, else DistanceSlack
+};
+
+// One work item's output.
+struct Partial {
+  std::vector<ContactPair> contacts;
+  std::vector<DistancePair> distance_pairs;
+  size_t pairs_tested = 0;
+};
+
+// Runs the exact tests on triangles `a` of object `object_a` and `b` of `object_b` (ids
+// object_a.id < object_b.id) whose boxes passed the prefilter with wanted.slack.
+void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
+                      const WorldObjectView& object_b, const TriangleBox& b, const Wanted& wanted,
+                      Partial& out) {
+  ++out.pairs_tested;
+  const TrianglePoints s = Corners(object_a, a.triangle);
+  const TrianglePoints t = Corners(object_b, b.triangle);
+  const ContactPair pair{object_a.id, a.triangle, object_b.id, b.triangle};
+  // Intersection needs the boxes to touch; when they do not, only the distance test can pass.
+  bool intersects = false;
+  if (wanted.contacts && (wanted.slack == 0 || BoxesWithin(a, b, 0))) {
+    intersects = TrianglesIntersect(s, t);
+    if (intersects) out.contacts.push_back(pair);
+  }
+  if (wanted.distance) {
+    // Intersecting triangles are within any distance, at distance 0.
+    if (intersects) {
+      out.distance_pairs.push_back({pair, 0.0});
+    } else if (TrianglesWithinDistance(s, t, wanted.max_distance)) {
+      out.distance_pairs.push_back({pair, TriangleDistance(s, t)});
+    }
+  }
+}
+
+// A range of one side's triangles of one object pair: each looks forward in the other side.
+struct WorkItem {
+  uint32_t object_a;  // index into objects, the smaller id
+  uint32_t object_b;  // index into objects, the larger id
+  bool from_b;        // the range is of object_b's list (else of object_a's)
+  uint32_t begin, end;
+};
+
+// Runs one work item: every triangle of the range meets the other side's triangles that start at
+// or after it in x (strictly after when it is object_b's, so that ties are met once, from a) and
+// within the slack of its x maximum.
+void RunItem(const WorkItem& item, std::span<const WorldObjectView> objects,
+             const std::vector<SortedBoxes>& boxes, const Wanted& wanted, Partial& out) {
+  const WorldObjectView& object_a = objects[item.object_a];
+  const WorldObjectView& object_b = objects[item.object_b];
+  const SortedBoxes& own = boxes[item.from_b ? item.object_b : item.object_a];
+  const SortedBoxes& other = boxes[item.from_b ? item.object_a : item.object_b];
+  // The first candidate in `other` for the range's first triangle; it only moves forward.
+  const auto starts_before = [&](const TriangleBox& o, double lo) {
+    return item.from_b ? o.lo[0] <= lo : o.lo[0] < lo;
+  };
+  size_t first =
+      static_cast<size_t>(std::partition_point(other.begin(), other.end(),
+                                               [&](const TriangleBox& o) {
+                                                 return starts_before(o, own[item.begin].lo[0]);
+                                               }) -
+                          other.begin());
+  for (uint32_t i = item.begin; i < item.end; ++i) {
+    const TriangleBox& mine = own[i];
+    while (first < other.size() && starts_before(other[first], mine.lo[0])) ++first;
+    for (size_t k = first; k < other.size() && other[k].lo[0] - mine.hi[0] <= wanted.slack; ++k) {
+      if (!BoxesWithin(mine, other[k], wanted.slack)) continue;
+      if (item.from_b) {
+        TestTrianglePair(object_a, other[k], object_b, mine, wanted, out);
+      } else {
+        TestTrianglePair(object_a, mine, object_b, other[k], wanted, out);
+      }
+    }
+  }
+}
+
+// Each side of an object pair is cut into ranges of this many triangles, a work item each.
+constexpr uint32_t kItemTriangles = 512;
+
+// Concatenates the partial outputs and sorts them.
+ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered) {
+  ExactResult result;
+  result.pairs_considered = pairs_considered;
+  for (Partial& partial : partials) {
+    result.contacts.insert(result.contacts.end(), partial.contacts.begin(), partial.contacts.end());
+    result.distance_pairs.insert(result.distance_pairs.end(), partial.distance_pairs.begin(),
+                                 partial.distance_pairs.end());
+    result.pairs_tested += partial.pairs_tested;
+  }
+  std::sort(result.contacts.begin(), result.contacts.end());
+  std::sort(result.distance_pairs.begin(), result.distance_pairs.end());
+  return result;
+}
+
+}  // namespace
+
+ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
+  const std::span<const WorldObjectView> objects = query.objects;
+  assert(query.triangle_subsets.empty() || query.triangle_subsets.size() == objects.size());
+
+  // Map ids to indices.
+  std::vector<std::pair<uint32_t, uint32_t>> id_index(objects.size());
+  for (uint32_t i = 0; i < objects.size(); ++i) id_index[i] = {objects[i].id, i};
+  std::sort(id_index.begin(), id_index.end());
+  const auto index_of = [&](uint32_t id) -> int64_t {
+    auto it =
+        std::lower_bound(id_index.begin(), id_index.end(), std::pair<uint32_t, uint32_t>{id, 0});
+    return it != id_index.end() && it->first == id ? it->second : -1;
+  };
+
+  // The object pairs as indices, smaller id first, each once (unknown ids and self pairs break
+  // the precondition and are skipped).
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+  pairs.reserve(query.object_pairs.size());
+  for (const ObjectPair& pair : query.object_pairs) {
+    const int64_t a = index_of(std::min(pair.object_a, pair.object_b));
+    const int64_t b = index_of(std::max(pair.object_a, pair.object_b));
+    assert(a >= 0 && b >= 0 && a != b);
+    if (a < 0 || b < 0 || a == b) continue;
+    pairs.emplace_back(static_cast<uint32_t>(a), static_cast<uint32_t>(b));
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+
+  // Build and sort the candidate triangle boxes of every object in some pair, once.
+  std::vector<uint32_t> used;
+  for (const auto& [a, b] : pairs) {
+    used.push_back(a);
+    used.push_back(b);
+  }
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  std::vector<SortedBoxes> boxes(objects.size());
+  pool.ParallelFor(used.size(), 1, [&](size_t begin, size_t end) {
+    for (size_t u = begin; u < end; ++u) {
+      const uint32_t o = used[u];
+      const WorldObjectView& object = objects[o];
+      const auto num_triangles = static_cast<uint32_t>(object.triangles.size());
+      SortedBoxes& list = boxes[o];
+      if (query.triangle_subsets.empty() || o >= query.triangle_subsets.size()) {
+        list.reserve(num_triangles);
+        for (uint32_t t = 0; t < num_triangles; ++t) list.push_back(BoxOf(object, t));
+      } else {
+        // A subset counts each valid triangle once.
+        std::vector<uint32_t> subset = query.triangle_subsets[o];
+        std::sort(subset.begin(), subset.end());
+        subset.erase(std::unique(subset.begin(), subset.end()), subset.end());
+        assert(subset.empty() || subset.back() < num_triangles);
+        list.reserve(subset.size());
+        for (uint32_t t : subset) {
+          if (t < num_triangles) list.push_back(BoxOf(object, t));
+        }
+      }
+      std::sort(list.begin(), list.end(), [](const TriangleBox& x, const TriangleBox& y) {
+        return x.lo[0] < y.lo[0] || (x.lo[0] == y.lo[0] && x.triangle < y.triangle);
+      });
+    }
+  });
+
+  // Decide what to compute and the prefilter slack. A negative or NaN max_distance finds nothing.
+  Wanted wanted;
+  wanted.contacts = query.want_contacts;
+  wanted.distance = query.max_distance.has_value() && *query.max_distance >= 0;
+  if (wanted.distance) {
+    wanted.max_distance = *query.max_distance;
+    double magnitude = 0;
+    for (uint32_t o : used) magnitude = std::max(magnitude, Magnitude(boxes[o]));
+    wanted.slack = DistanceSlack(wanted.max_distance, magnitude);
+  }
+
+  // Cut every object pair into work items of about kItemTriangles triangles.
+  size_t pairs_considered = 0;
+  std::vector<WorkItem> items;
+  for (const auto& [a, b] : pairs) {
+    const auto size_a = static_cast<uint32_t>(boxes[a].size());
+    const auto size_b = static_cast<uint32_t>(boxes[b].size());
+    pairs_considered += static_cast<size_t>(size_a) * size_b;
+    if (size_a == 0 || size_b == 0 || !(wanted.contacts || wanted.distance)) continue;
+    for (bool from_b : {false, true}) {
+      const uint32_t size = from_b ? size_b : size_a;
+      for (uint32_t begin = 0; begin < size; begin += kItemTriangles) {
+        items.push_back({a, b, from_b, begin, std::min(size, begin + kItemTriangles)});
+      }
+    }
+  }
+
+  // Run the items on the pool, each chunk of items into its own output.
+  const size_t threads = static_cast<size_t>(pool.num_threads());
+  const size_t grain = std::clamp<size_t>(items.size() / (8 * threads), 1, 64);
+  std::vector<Partial> partials((items.size() + grain - 1) / grain);
+  pool.ParallelFor(items.size(), grain, [&](size_t begin, size_t end) {
+    Partial& out = partials[begin / grain];
+    for (size_t i = begin; i < end; ++i) RunItem(items[i], objects, boxes, wanted, out);
+  });
+  return Merge(partials, pairs_considered);
+}
+
+ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
+                                std::optional<double> max_distance, ThreadPool& pool) {
+  // Objects in id order; every triangle's box.
+  std::vector<const WorldObjectView*> sorted;
+  for (const WorldObjectView& object : objects) sorted.push_back(&object);
+  std::sort(sorted.begin(), sorted.end(),
+            [](const WorldObjectView* x, const WorldObjectView* y) { return x->id < y->id; });
+  std::vector<SortedBoxes> boxes(sorted.size());
+  double magnitude = 0;
+  for (size_t o = 0; o < sorted.size(); ++o) {
+    for (uint32_t t = 0; t < sorted[o]->triangles.size(); ++t) {
+      boxes[o].push_back(BoxOf(*sorted[o], t));
+    }
+    magnitude = std::max(magnitude, Magnitude(boxes[o]));
+  }
+  Wanted wanted;
+  wanted.contacts = true;
+  wanted.distance = max_distance.has_value() && *max_distance >= 0;
+  if (wanted.distance) {
+    wanted.max_distance = *max_distance;
+    wanted.slack = DistanceSlack(wanted.max_distance, magnitude);
+  }
+
+  // Every object pair i < j, every triangle of i against every triangle of j.
+  std::vector<Partial> partials;
+  size_t pairs_considered = 0;
+  constexpr size_t kGrain = 64;
+  for (size_t i = 0; i < sorted.size(); ++i) {
+    for (size_t j = i + 1; j < sorted.size(); ++j) {
+      pairs_considered += boxes[i].size() * boxes[j].size();
+      const size_t first = partials.size();
+      partials.resize(first + (boxes[i].size() + kGrain - 1) / kGrain);
+      pool.ParallelFor(boxes[i].size(), kGrain, [&](size_t begin, size_t end) {
+        Partial& out = partials[first + begin / kGrain];
+        for (size_t ta = begin; ta < end; ++ta) {
+          for (size_t tb = 0; tb < boxes[j].size(); ++tb) {
+            if (!BoxesWithin(boxes[i][ta], boxes[j][tb], wanted.slack)) continue;
+            TestTrianglePair(*sorted[i], boxes[i][ta], *sorted[j], boxes[j][tb], wanted, out);
+          }
+        }
+      });
+    }
+  }
+  return Merge(partials, pairs_considered);
+}
+
+}  // namespace far

@@ -1,0 +1,352 @@
+// The reliability tests of the GPU culling (label gpu; llvmpipe in CI): FAR never misses a
+// contact of the brute-force reference, the two query mechanisms agree, CULLIDE can miss
+// where FAR does not, and the answer does not depend on where the scene is.
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "hard_cases.h"
+#include "test_scenes.h"
+#include <gtest/gtest.h>
+
+#include "far/pipeline/pipeline.h"
+
+namespace far {
+namespace {
+
+using testing::RandomSoup;
+using testing::ReferenceAnswer;
+
+// One pipeline (one GL context) for the whole suite: contexts are slow to make.
+class PipelineCullingTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto pipeline = Pipeline::Create();
+    ASSERT_TRUE(pipeline.ok()) << ToString(pipeline.error());
+    pipeline_ = std::move(*pipeline).release();
+  }
+  static void TearDownTestSuite() {
+    delete pipeline_;
+    pipeline_ = nullptr;
+  }
+
+  // Replaces the pipeline's scene with `objects`.
+  void Load(const std::vector<SceneObject>& objects) {
+    for (uint32_t id : loaded_) ASSERT_TRUE(pipeline_->RemoveObject(id).ok());
+    loaded_.clear();
+    for (const auto& object : objects) {
+      auto ok = pipeline_->AddObject(object.id, object.mesh, object.motion, object.X_WO);
+      ASSERT_TRUE(ok.ok()) << ToString(ok.error());
+      loaded_.push_back(object.id);
+    }
+  }
+
+  StepResult Run(const StepRequest& request) {
+    auto result = pipeline_->Step(request);
+    EXPECT_TRUE(result.ok()) << ToString(result.error());
+    return result.ok() ? std::move(*result) : StepResult{};
+  }
+
+  // Every reference contact is in the PCS (objects and primitives) and in the contacts.
+  static void ExpectNoMiss(const ExactResult& reference, const StepResult& result,
+                           const std::string& what) {
+    const std::set<uint32_t> pcs(result.pcs_objects.begin(), result.pcs_objects.end());
+    for (const ContactPair& c : reference.contacts) {
+      ASSERT_TRUE(pcs.count(c.object_a) && pcs.count(c.object_b))
+          << what << ": objects of contact " << c.object_a << "/" << c.triangle_a << " - "
+          << c.object_b << "/" << c.triangle_b << " not in the object PCS";
+      for (auto [object, triangle] :
+           {std::pair{c.object_a, c.triangle_a}, std::pair{c.object_b, c.triangle_b}}) {
+        auto it = result.pcs_primitives.find(object);
+        ASSERT_TRUE(it != result.pcs_primitives.end() &&
+                    std::binary_search(it->second.begin(), it->second.end(), triangle))
+            << what << ": triangle " << triangle << " of object " << object
+            << " not in the primitive PCS";
+      }
+    }
+    EXPECT_EQ(result.contacts, reference.contacts) << what;
+  }
+
+  static inline Pipeline* pipeline_ = nullptr;
+  static inline std::vector<uint32_t> loaded_;
+  ThreadPool pool_{2};
+};
+
+constexpr int kResolutions[] = {32, 64, 128, 256, 512, 1024, 2048};
+constexpr DepthFormat kDepths[] = {DepthFormat::kDepth24, DepthFormat::kDepth32F,
+                                   DepthFormat::kDepth16};
+
+TEST_F(PipelineCullingTest, ReliableMethodsNeverMissOnRandomScenes) {
+  int scenes = 0, contacts = 0;
+  for (uint64_t seed = 0; seed < 240; ++seed) {
+    const int num_objects = 3 + static_cast<int>(seed % 6);
+    const auto objects = RandomSoup(seed, num_objects, 4 + static_cast<int>(seed % 13), 2.0, 0.6);
+    Load(objects);
+    const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+    contacts += static_cast<int>(reference.contacts.size());
+    StepRequest request;
+    // Resolutions 32..2048 (the big ones less often: each view costs more on llvmpipe).
+    request.resolution = kResolutions[(seed * 7 + seed / 7) % 5 + (seed % 8 == 0 ? 2 : 0)];
+    request.depth_format = kDepths[seed % 3];
+    request.subobject_size = 1 + static_cast<int>(seed % 3);
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+      request.method = method;
+      ExpectNoMiss(reference, Run(request),
+                   "seed " + std::to_string(seed) + " " + std::string(ToString(method)) + " res " +
+                       std::to_string(request.resolution) + " " +
+                       std::string(ToString(request.depth_format)));
+      if (HasFatalFailure()) return;
+    }
+    ++scenes;
+  }
+  EXPECT_GT(contacts, 100) << "the random scenes should have many contacts to test";
+  std::printf("%d scenes, %d reference contacts, no miss\n", scenes, contacts);
+}
+
+TEST_F(PipelineCullingTest, BothMechanismsGiveTheSamePcs) {
+  for (uint64_t seed = 100; seed < 160; ++seed) {
+    const auto objects =
+        RandomSoup(seed, 4 + static_cast<int>(seed % 4), 6 + static_cast<int>(seed % 9), 2.0, 0.6);
+    Load(objects);
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kCullide}) {
+      StepRequest request;
+      request.method = method;
+      request.resolution = kResolutions[seed % 7];
+      request.depth_format = kDepths[seed % 3];
+      request.output = Output::kPrimitivePcs;
+      request.mechanism = QueryMechanism::kIdBuffer;
+      const StepResult ids = Run(request);
+      request.mechanism = QueryMechanism::kOcclusionQuery;
+      const StepResult queries = Run(request);
+      const std::string what = "seed " + std::to_string(seed) + " " +
+                               std::string(ToString(method)) + " res " +
+                               std::to_string(request.resolution);
+      EXPECT_EQ(ids.pcs_objects, queries.pcs_objects) << what;
+      EXPECT_EQ(ids.pcs_primitives, queries.pcs_primitives) << what;
+      EXPECT_GT(queries.stats.queries, 0) << what;
+    }
+  }
+}
+
+// Two needles thinner than a pixel crossing each other: their rasterization samples no pixel
+// center where both are, so CULLIDE's unfattened visibility test calls both fully visible.
+std::vector<SceneObject> CrossingNeedles() {
+  std::vector<SceneObject> objects(2);
+  objects[0].id = 1;
+  objects[0].mesh.p_MV = {{0.013, 0.5117, 0.0}, {1.013, 0.5117, 0.0}, {1.013, 0.5124, 0.0}};
+  objects[1].id = 2;
+  objects[1].mesh.p_MV = {{0.5071, 0.0119, -0.2}, {0.5071, 1.0119, 0.2}, {0.5078, 1.0119, 0.2}};
+  for (auto& object : objects) object.mesh.triangles = {{0, 1, 2}};
+  return objects;
+}
+
+TEST_F(PipelineCullingTest, CullideMissesThinCrossingWhereFarDoesNot) {
+  const auto objects = CrossingNeedles();
+  Load(objects);
+  const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+  ASSERT_EQ(reference.contacts.size(), 1u) << "the needles must really intersect";
+  for (QueryMechanism mechanism : {QueryMechanism::kIdBuffer, QueryMechanism::kOcclusionQuery}) {
+    StepRequest request;
+    request.resolution = 32;
+    request.mechanism = mechanism;
+    // Same scene, same views, same mechanism: only the fattening differs.
+    request.method = Method::kCullide;
+    const StepResult cullide = Run(request);
+    EXPECT_TRUE(cullide.pcs_objects.empty()) << "CULLIDE was expected to prune both needles";
+    EXPECT_TRUE(cullide.contacts.empty());
+    for (Method method : {Method::kFar, Method::kFarExactOffset}) {
+      request.method = method;
+      ExpectNoMiss(reference, Run(request), std::string(ToString(method)));
+    }
+  }
+}
+
+TEST_F(PipelineCullingTest, ContactsDoNotChangeWhenTheSceneMoves) {
+  const Eigen::Isometry3d shift(Eigen::Translation3d(1e5, -1e5, 1e5));
+  const Eigen::Isometry3d turn(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()));
+  for (uint64_t seed = 300; seed < 330; ++seed) {
+    const auto objects = RandomSoup(seed, 5, 10, 2.0, 0.6);
+    Load(objects);
+    StepRequest request;
+    request.resolution = kResolutions[seed % 6];
+    request.method = seed % 2 ? Method::kFar : Method::kFarExactOffset;
+    const StepResult base = Run(request);
+    for (const auto& X : {shift, turn, Eigen::Isometry3d(shift * turn)}) {
+      Load(testing::Transformed(objects, X));
+      const StepResult moved = Run(request);
+      EXPECT_EQ(moved.contacts, base.contacts) << "seed " << seed;
+    }
+  }
+}
+
+TEST_F(PipelineCullingTest, HardCasesFarFromOriginAndTinyFeatures) {
+  // Features of 1e-3 at 1e5 and 1e6 from the origin.
+  for (double origin : {1e5, 1e6}) {
+    for (uint64_t seed = 0; seed < 12; ++seed) {
+      const auto objects =
+          RandomSoup(seed, 5, 8, 4e-3, 1e-3, Eigen::Vector3d(origin, -origin, origin));
+      Load(objects);
+      const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+      StepRequest request;
+      request.resolution = kResolutions[seed % 7];
+      for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+        request.method = method;
+        ExpectNoMiss(reference, Run(request),
+                     "origin " + std::to_string(origin) + " seed " + std::to_string(seed));
+      }
+    }
+  }
+}
+
+TEST_F(PipelineCullingTest, ReliableMethodsGetEveryHardCaseRight) {
+  // The exact-geometry hard-case suite (coplanar, touching, slivers, collinear, points,
+  // coordinates at 1e5/1e6, 1e-9 separations), each pair as two one-triangle objects.
+  const auto cases = reference::MakeHardCases();
+  ASSERT_GT(cases.size(), 100u);
+  int checked = 0;
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const auto& hard = cases[i];
+    std::vector<SceneObject> objects(2);
+    objects[0].id = 1;
+    objects[0].mesh.p_MV = {hard.s.a, hard.s.b, hard.s.c};
+    objects[1].id = 2;
+    objects[1].mesh.p_MV = {hard.t.a, hard.t.b, hard.t.c};
+    for (auto& object : objects) object.mesh.triangles = {{0, 1, 2}};
+    Load(objects);
+    StepRequest request;
+    request.resolution = kResolutions[i % 7];
+    request.depth_format = kDepths[i % 3];
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+      request.method = method;
+      const StepResult result = Run(request);
+      const bool found = !result.contacts.empty();
+      ASSERT_EQ(found, hard.intersect)
+          << hard.name << " " << ToString(method) << " res " << request.resolution;
+      if (hard.intersect) {
+        EXPECT_EQ(result.pcs_objects, (std::vector<uint32_t>{1, 2})) << hard.name;
+      }
+      ++checked;
+    }
+  }
+  std::printf("%d hard-case runs, all right\n", checked);
+}
+
+TEST_F(PipelineCullingTest, OneHugeObjectWithManyTinyOnes) {
+  std::vector<SceneObject> objects(1);
+  objects[0].id = 1000;
+  objects[0].mesh = testing::SphereMesh(Eigen::Vector3d::Zero(), 1000.0, 24, 48);
+  // Tiny clusters at the sphere's surface (some cross it, most do not).
+  auto tiny = RandomSoup(7, 40, 4, 1.0, 0.02);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal;
+  for (auto& object : tiny) {
+    const Eigen::Vector3d direction =
+        Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    // On a facet of the tessellated sphere the surface is up to ~2 units inside radius 1000.
+    object.X_WO.translation =
+        (998.0 + 4.0 * std::uniform_real_distribution<double>(0, 1)(rng)) * direction;
+    objects.push_back(object);
+  }
+  Load(objects);
+  const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+  for (int resolution : {64, 512, 2048}) {
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+      StepRequest request;
+      request.method = method;
+      request.resolution = resolution;
+      ExpectNoMiss(reference, Run(request),
+                   std::string(ToString(method)) + " res " + std::to_string(resolution));
+    }
+  }
+}
+
+TEST_F(PipelineCullingTest, DistanceCullingNeverMissesAPairCloserThanD) {
+  for (uint64_t seed = 500; seed < 540; ++seed) {
+    const auto objects = RandomSoup(seed, 5, 6, 3.0, 0.5);
+    Load(objects);
+    const double D = 0.05 + 0.1 * static_cast<double>(seed % 4);
+    const ExactResult reference = ReferenceAnswer(objects, D, pool_);
+    StepRequest request;
+    request.distance = D;
+    request.output = Output::kDistancePairs;
+    request.resolution = kResolutions[seed % 7];
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+      request.method = method;
+      const StepResult result = Run(request);
+      EXPECT_EQ(result.distance_pairs, reference.distance_pairs)
+          << "seed " << seed << " " << ToString(method);
+    }
+  }
+}
+
+TEST_F(PipelineCullingTest, OnlyWhatChangedIsRecomputed) {
+  // A static object, a rigid one and a deformable one.
+  std::vector<SceneObject> objects = RandomSoup(42, 3, 10, 1.0, 0.5);
+  objects[0].motion = Motion::kStatic;
+  objects[1].motion = Motion::kRigid;
+  objects[2].motion = Motion::kDeformable;
+  Load(objects);
+  StepRequest request;
+  (void)Run(request);
+  const SceneCounters first = pipeline_->counters();
+  // Nothing changed: nothing is recomputed or re-uploaded.
+  (void)Run(request);
+  EXPECT_EQ(pipeline_->counters().world_updates, first.world_updates);
+  EXPECT_EQ(pipeline_->counters().piece_builds, first.piece_builds);
+  EXPECT_EQ(pipeline_->counters().piece_bytes, first.piece_bytes);
+  // A pose: the rigid object's world vertices only; its GPU pieces stay (they are in its frame).
+  Pose moved = objects[1].X_WO;
+  moved.translation.x() += 0.1;
+  ASSERT_TRUE(pipeline_->SetPose(objects[1].id, moved).ok());
+  (void)Run(request);
+  EXPECT_EQ(pipeline_->counters().world_updates, first.world_updates + 1);
+  EXPECT_EQ(pipeline_->counters().piece_builds, first.piece_builds);
+  // New vertices: the deformable object's pieces are rebuilt, no other object's.
+  auto vertices = objects[2].mesh.p_MV;
+  for (auto& p : vertices) p *= 1.01;
+  ASSERT_TRUE(pipeline_->SetVertices(objects[2].id, vertices).ok());
+  (void)Run(request);
+  EXPECT_EQ(pipeline_->counters().world_updates, first.world_updates + 2);
+  EXPECT_EQ(pipeline_->counters().piece_builds, first.piece_builds + 1);
+  // Static objects refuse poses; rigid ones refuse vertices.
+  EXPECT_EQ(pipeline_->SetPose(objects[0].id, moved).error().code, ErrorCode::kInvalidArgument);
+  EXPECT_EQ(pipeline_->SetVertices(objects[1].id, vertices).error().code,
+            ErrorCode::kInvalidArgument);
+}
+
+TEST_F(PipelineCullingTest, StagesPastTheDeepestOutputDoNotRun) {
+  Load(RandomSoup(9, 6, 10, 2.0, 0.6));
+  const std::pair<Output, std::vector<std::string>> cases[] = {
+      {Output::kObjectPcs, {"update", "object_cull"}},
+      {Output::kObjectPairs, {"update", "object_cull", "sweep_and_prune"}},
+      {Output::kPrimitivePcs, {"update", "object_cull", "sweep_and_prune", "primitive_cull"}},
+      {Output::kContacts, {"update", "object_cull", "sweep_and_prune", "primitive_cull", "exact"}}};
+  for (const auto& [output, stages] : cases) {
+    StepRequest request;
+    request.output = output;
+    const StepResult result = Run(request);
+    std::vector<std::string> ran;
+    for (const auto& stage : result.stats.stages) ran.push_back(stage.name);
+    EXPECT_EQ(ran, stages) << ToString(output);
+    if (output < Output::kContacts) {
+      EXPECT_TRUE(result.contacts.empty());
+    }
+  }
+}
+
+TEST_F(PipelineCullingTest, RejectsBadRequests) {
+  StepRequest request;
+  request.resolution = 4;
+  EXPECT_EQ(pipeline_->Step(request).error().code, ErrorCode::kInvalidArgument);
+  request = {};
+  request.output = Output::kDistancePairs;
+  auto result = pipeline_->Step(request);
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.error().message.find("distance"), std::string::npos);
+  request = {};
+  request.distance = -1.0;
+  EXPECT_EQ(pipeline_->Step(request).error().code, ErrorCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace far

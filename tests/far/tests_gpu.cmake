@@ -1,0 +1,15 @@
+# Scene generators shared by the GPU tests and the studies.
+add_library(far_test_scenes STATIC support/test_scenes.cc)
+target_include_directories(far_test_scenes PUBLIC support)
+target_link_libraries(far_test_scenes PUBLIC far::pairs far::scenes PRIVATE far_warnings)
+
+# GPU tests: headless GL (llvmpipe in CI). Label gpu.
+far_add_test(far_gpu_test gpu far/gpu/gl_context_test.cc far/pipeline/pipeline_culling_test.cc)
+target_link_libraries(far_gpu_test PRIVATE far::pipeline far_test_scenes far_hard_cases)
+
+
+# With no EGL driver at all (GLVND pointed at no vendor), far-daemon exits with one clear line
+# that lists what it tried, instead of crashing.
+add_test(NAME GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gpu/no_driver_test.sh $<TARGET_FILE:far-daemon>)
+set_tests_properties(GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried PROPERTIES LABELS gpu)
