@@ -3,6 +3,7 @@
 #include <climits>
 #include <cstring>
 
+#include "far/model/limits.h"
 #include "far/protocol/version.h"
 
 namespace far::protocol {
@@ -96,19 +97,17 @@ far_lcm::step_request_t MakeStepRequest(int64_t session_id, int64_t request_id, 
   return message;
 }
 
-Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output output,
-                                            const StepResult& result) {
-  far_lcm::step_reply_t reply = EmptyReply(ids);
-  SetStatus(reply, nullptr);
-  reply.output = ToString(output);
+namespace {
 
-  // Bytes of the arrays, checked before anything is allocated.
+// Checks the size of a result's arrays against the reply cap and the wire's int32 counts,
+// before anything is allocated.
+Result<void> CheckReplySize(const StepResult& result) {
   size_t primitive_total = 0;
   for (const auto& [id, triangles] : result.pcs_primitives) primitive_total += triangles.size();
   const uint64_t array_bytes =
-      4 * uint64_t{result.pcs_objects.size()} + 8 * uint64_t{result.object_pairs.size()} +
-      8 * uint64_t{result.pcs_primitives.size()} + 4 * uint64_t{primitive_total} +
-      16 * uint64_t{result.contacts.size()} + 24 * uint64_t{result.distance_pairs.size()};
+      8 * uint64_t{result.pcs_objects.size()} + 16 * uint64_t{result.object_pairs.size()} +
+      12 * uint64_t{result.pcs_primitives.size()} + 4 * uint64_t{primitive_total} +
+      24 * uint64_t{result.contacts.size()} + 32 * uint64_t{result.distance_pairs.size()};
   if (array_bytes > kMaxStepReplyBytes - 4096) {
     return MakeError(ErrorCode::kLimitExceeded, "step_reply_t: " + std::to_string(array_bytes) +
                                                     " bytes of results exceed the " +
@@ -125,68 +124,58 @@ Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output outp
         {"stages", result.stats.stages.size()}}) {
     if (count > INT32_MAX) return TooMany(what, count);
   }
+  return {};
+}
 
-  // Ids and indices travel as int32; every one is <= INT32_MAX when it came through the ring.
-  bool id_overflow = false;
-  auto wire = [&id_overflow](uint32_t value) {
-    if (value > INT32_MAX) id_overflow = true;
-    return static_cast<int32_t>(value);
-  };
+// Object ids travel as int64 (every uint32 fits); triangle indices as int32, which every index
+// of a valid mesh fits (at most kMaxMeshElements triangles).
+int64_t WireId(uint32_t id) { return static_cast<int64_t>(id); }
+int32_t WireIndex(uint32_t index, bool* overflow) {
+  if (index > INT32_MAX) *overflow = true;
+  return static_cast<int32_t>(index);
+}
 
+// The object PCS, the object pairs and the primitive PCS.
+void SetCullingArrays(far_lcm::step_reply_t& reply, const StepResult& result, bool* overflow) {
   reply.num_pcs_objects = static_cast<int32_t>(result.pcs_objects.size());
-  reply.pcs_objects.reserve(result.pcs_objects.size());
-  for (const uint32_t id : result.pcs_objects) reply.pcs_objects.push_back(wire(id));
-
+  for (const uint32_t object : result.pcs_objects) reply.pcs_objects.push_back(WireId(object));
   reply.num_object_pairs = static_cast<int32_t>(result.object_pairs.size());
-  reply.object_pair_a.reserve(result.object_pairs.size());
-  reply.object_pair_b.reserve(result.object_pairs.size());
   for (const ObjectPair& pair : result.object_pairs) {
-    reply.object_pair_a.push_back(wire(pair.object_a));
-    reply.object_pair_b.push_back(wire(pair.object_b));
+    reply.object_pair_a.push_back(WireId(pair.object_a));
+    reply.object_pair_b.push_back(WireId(pair.object_b));
   }
-
   reply.num_pcs_primitive_objects = static_cast<int32_t>(result.pcs_primitives.size());
-  reply.num_pcs_primitives = static_cast<int32_t>(primitive_total);
-  reply.pcs_primitive_triangle.reserve(primitive_total);
-  for (const auto& [id, triangles] : result.pcs_primitives) {
-    reply.pcs_primitive_object.push_back(wire(id));
+  int32_t total = 0;
+  for (const auto& [object, triangles] : result.pcs_primitives) {
+    reply.pcs_primitive_object.push_back(WireId(object));
     reply.pcs_primitive_count.push_back(static_cast<int32_t>(triangles.size()));
-    for (const uint32_t t : triangles) reply.pcs_primitive_triangle.push_back(wire(t));
+    for (const uint32_t t : triangles)
+      reply.pcs_primitive_triangle.push_back(WireIndex(t, overflow));
+    total += static_cast<int32_t>(triangles.size());
   }
+  reply.num_pcs_primitives = total;
+}
 
-  const size_t contacts = result.contacts.size();
-  reply.num_contacts = static_cast<int32_t>(contacts);
-  reply.contact_object_a.reserve(contacts);
-  reply.contact_triangle_a.reserve(contacts);
-  reply.contact_object_b.reserve(contacts);
-  reply.contact_triangle_b.reserve(contacts);
+// The contact pairs and the distance pairs.
+void SetPairArrays(far_lcm::step_reply_t& reply, const StepResult& result, bool* overflow) {
+  reply.num_contacts = static_cast<int32_t>(result.contacts.size());
   for (const ContactPair& pair : result.contacts) {
-    reply.contact_object_a.push_back(wire(pair.object_a));
-    reply.contact_triangle_a.push_back(wire(pair.triangle_a));
-    reply.contact_object_b.push_back(wire(pair.object_b));
-    reply.contact_triangle_b.push_back(wire(pair.triangle_b));
+    reply.contact_object_a.push_back(WireId(pair.object_a));
+    reply.contact_triangle_a.push_back(WireIndex(pair.triangle_a, overflow));
+    reply.contact_object_b.push_back(WireId(pair.object_b));
+    reply.contact_triangle_b.push_back(WireIndex(pair.triangle_b, overflow));
   }
-
-  const size_t distances = result.distance_pairs.size();
-  reply.num_distance_pairs = static_cast<int32_t>(distances);
-  reply.distance_object_a.reserve(distances);
-  reply.distance_triangle_a.reserve(distances);
-  reply.distance_object_b.reserve(distances);
-  reply.distance_triangle_b.reserve(distances);
-  reply.distance.reserve(distances);
+  reply.num_distance_pairs = static_cast<int32_t>(result.distance_pairs.size());
   for (const DistancePair& pair : result.distance_pairs) {
-    reply.distance_object_a.push_back(wire(pair.pair.object_a));
-    reply.distance_triangle_a.push_back(wire(pair.pair.triangle_a));
-    reply.distance_object_b.push_back(wire(pair.pair.object_b));
-    reply.distance_triangle_b.push_back(wire(pair.pair.triangle_b));
+    reply.distance_object_a.push_back(WireId(pair.pair.object_a));
+    reply.distance_triangle_a.push_back(WireIndex(pair.pair.triangle_a, overflow));
+    reply.distance_object_b.push_back(WireId(pair.pair.object_b));
+    reply.distance_triangle_b.push_back(WireIndex(pair.pair.triangle_b, overflow));
     reply.distance.push_back(pair.distance);
   }
-  if (id_overflow) {
-    return MakeError(ErrorCode::kInternal,
-                     "step_reply_t: an object id or triangle index is over INT32_MAX");
-  }
+}
 
-  const StepStats& stats = result.stats;
+void SetStats(far_lcm::step_reply_t& reply, const StepStats& stats) {
   reply.num_stages = static_cast<int32_t>(stats.stages.size());
   for (const StageStats& stage : stats.stages) {
     reply.stage_name.push_back(stage.name);
@@ -202,6 +191,23 @@ Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output outp
   reply.pairs_tested = stats.pairs_tested;
   reply.object_radius = stats.object_radius;
   reply.primitive_radius = stats.primitive_radius;
+}
+
+}  // namespace
+
+Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output output,
+                                            const StepResult& result) {
+  if (auto ok = CheckReplySize(result); !ok) return ok.error();
+  far_lcm::step_reply_t reply = EmptyReply(ids);
+  SetStatus(reply, nullptr);
+  reply.output = ToString(output);
+  bool index_overflow = false;
+  SetCullingArrays(reply, result, &index_overflow);
+  SetPairArrays(reply, result, &index_overflow);
+  if (index_overflow) {
+    return MakeError(ErrorCode::kInternal, "step_reply_t: a triangle index is over INT32_MAX");
+  }
+  SetStats(reply, result.stats);
   return reply;
 }
 
@@ -224,15 +230,11 @@ far_lcm::error_t MakeErrorMessage(int64_t session_id, int64_t request_id, const 
   return message;
 }
 
-Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply) {
-  if (reply.reply_in_shm) {
-    return MakeError(ErrorCode::kInvalidArgument,
-                     "step_reply_t.reply_in_shm: this is a stub; read the full reply from the "
-                     "reply ring first (ReceiveStepReply)");
-  }
-  if (reply.status != kWireOk) {
-    return MakeError(FromWireStatus(reply.status), reply.message);
-  }
+namespace {
+
+// Checks a reply's arrays: sizes equal to their counts, object ids in [0, 2^32 - 1], indices
+// and counts >= 0, primitive counts that add up.
+Result<void> CheckReplyArrays(const far_lcm::step_reply_t& reply) {
   // A decoded reply has every array sized by its count; a hand-built one may not.
   const auto sized = [](size_t size, int32_t count) {
     return count >= 0 && size == static_cast<size_t>(count);
@@ -256,32 +258,35 @@ Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply) {
       !sized(reply.stage_ms.size(), reply.num_stages)) {
     return BadReply("num_*", "an array's size differs from its count");
   }
-  // Check the values and the sums.
-  auto check_ids = [](std::string_view field, const std::vector<int32_t>& values) -> Result<void> {
+  // Check the values and the sums: object ids are uint32 values, triangle indices >= 0.
+  auto check = [](std::string_view field, const auto& values, int64_t max) -> Result<void> {
     for (size_t i = 0; i < values.size(); ++i) {
-      if (values[i] < 0) {
-        return BadReply(
-            field, "[" + std::to_string(i) + "] = " + std::to_string(values[i]) + " is negative");
+      if (values[i] < 0 || values[i] > max) {
+        return BadReply(field, "[" + std::to_string(i) + "] = " + std::to_string(values[i]) +
+                                   " is outside [0, " + std::to_string(max) + "]");
       }
     }
     return {};
   };
   for (const auto& [field, values] :
-       {std::pair<const char*, const std::vector<int32_t>*>{"pcs_objects", &reply.pcs_objects},
+       {std::pair<const char*, const std::vector<int64_t>*>{"pcs_objects", &reply.pcs_objects},
         {"object_pair_a", &reply.object_pair_a},
         {"object_pair_b", &reply.object_pair_b},
         {"pcs_primitive_object", &reply.pcs_primitive_object},
-        {"pcs_primitive_count", &reply.pcs_primitive_count},
-        {"pcs_primitive_triangle", &reply.pcs_primitive_triangle},
         {"contact_object_a", &reply.contact_object_a},
-        {"contact_triangle_a", &reply.contact_triangle_a},
         {"contact_object_b", &reply.contact_object_b},
-        {"contact_triangle_b", &reply.contact_triangle_b},
         {"distance_object_a", &reply.distance_object_a},
-        {"distance_triangle_a", &reply.distance_triangle_a},
-        {"distance_object_b", &reply.distance_object_b},
-        {"distance_triangle_b", &reply.distance_triangle_b}}) {
-    if (auto ok = check_ids(field, *values); !ok) return ok.error();
+        {"distance_object_b", &reply.distance_object_b}}) {
+    if (auto ok = check(field, *values, int64_t{kMaxObjectId}); !ok) return ok.error();
+  }
+  for (const auto& [field, values] : {std::pair<const char*, const std::vector<int32_t>*>{
+                                          "pcs_primitive_count", &reply.pcs_primitive_count},
+                                      {"pcs_primitive_triangle", &reply.pcs_primitive_triangle},
+                                      {"contact_triangle_a", &reply.contact_triangle_a},
+                                      {"contact_triangle_b", &reply.contact_triangle_b},
+                                      {"distance_triangle_a", &reply.distance_triangle_a},
+                                      {"distance_triangle_b", &reply.distance_triangle_b}}) {
+    if (auto ok = check(field, *values, int64_t{INT32_MAX}); !ok) return ok.error();
   }
   int64_t primitive_sum = 0;
   for (const int32_t count : reply.pcs_primitive_count) primitive_sum += count;
@@ -291,8 +296,13 @@ Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply) {
                                                std::to_string(reply.num_pcs_primitives));
   }
 
-  StepResult result;
-  result.pcs_objects.assign(reply.pcs_objects.begin(), reply.pcs_objects.end());
+  return {};
+}
+
+// The object PCS, pairs and primitive PCS of a checked reply.
+Result<void> ReadCullingArrays(const far_lcm::step_reply_t& reply, StepResult& result) {
+  for (const int64_t object : reply.pcs_objects)
+    result.pcs_objects.push_back(static_cast<uint32_t>(object));
   for (int32_t i = 0; i < reply.num_object_pairs; ++i) {
     result.object_pairs.push_back({static_cast<uint32_t>(reply.object_pair_a[i]),
                                    static_cast<uint32_t>(reply.object_pair_b[i])});
@@ -309,6 +319,11 @@ Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply) {
                      reply.pcs_primitive_triangle.begin() + static_cast<ptrdiff_t>(next + count));
     next += count;
   }
+  return {};
+}
+
+// The contact and distance pairs of a checked reply.
+void ReadPairArrays(const far_lcm::step_reply_t& reply, StepResult& result) {
   result.contacts.reserve(static_cast<size_t>(reply.num_contacts));
   for (int32_t i = 0; i < reply.num_contacts; ++i) {
     result.contacts.push_back({static_cast<uint32_t>(reply.contact_object_a[i]),
@@ -326,6 +341,9 @@ Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply) {
     pair.distance = reply.distance[i];
     result.distance_pairs.push_back(pair);
   }
+}
+
+void ReadStats(const far_lcm::step_reply_t& reply, StepResult& result) {
   StepStats& stats = result.stats;
   for (int32_t i = 0; i < reply.num_stages; ++i) {
     stats.stages.push_back({reply.stage_name[i], reply.stage_ms[i]});
@@ -340,6 +358,24 @@ Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply) {
   stats.pairs_tested = reply.pairs_tested;
   stats.object_radius = reply.object_radius;
   stats.primitive_radius = reply.primitive_radius;
+}
+
+}  // namespace
+
+Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply) {
+  if (reply.reply_in_shm) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "step_reply_t.reply_in_shm: this is a stub; read the full reply from the "
+                     "reply ring first (ReceiveStepReply)");
+  }
+  if (reply.status != kWireOk) {
+    return MakeError(FromWireStatus(reply.status), reply.message);
+  }
+  if (auto ok = CheckReplyArrays(reply); !ok) return ok.error();
+  StepResult result;
+  if (auto ok = ReadCullingArrays(reply, result); !ok) return ok.error();
+  ReadPairArrays(reply, result);
+  ReadStats(reply, result);
   return result;
 }
 

@@ -107,24 +107,24 @@ constexpr std::array kStepReply{
     Scalar("shm_reply_bytes", 8),            // 13
     Scalar("shm_reply_hash", 32),            // 14
     Count("num_pcs_objects"),                // 15
-    Array("pcs_objects", 4, 15),             // 16
+    Array("pcs_objects", 8, 15),             // 16
     Count("num_object_pairs"),               // 17
-    Array("object_pair_a", 4, 17),           // 18
-    Array("object_pair_b", 4, 17),           // 19
+    Array("object_pair_a", 8, 17),           // 18
+    Array("object_pair_b", 8, 17),           // 19
     Count("num_pcs_primitive_objects"),      // 20
-    Array("pcs_primitive_object", 4, 20),    // 21
+    Array("pcs_primitive_object", 8, 20),    // 21
     Array("pcs_primitive_count", 4, 20),     // 22
     Count("num_pcs_primitives"),             // 23
     Array("pcs_primitive_triangle", 4, 23),  // 24
     Count("num_contacts"),                   // 25
-    Array("contact_object_a", 4, 25),        // 26
+    Array("contact_object_a", 8, 25),        // 26
     Array("contact_triangle_a", 4, 25),      // 27
-    Array("contact_object_b", 4, 25),        // 28
+    Array("contact_object_b", 8, 25),        // 28
     Array("contact_triangle_b", 4, 25),      // 29
     Count("num_distance_pairs"),             // 30
-    Array("distance_object_a", 4, 30),       // 31
+    Array("distance_object_a", 8, 30),       // 31
     Array("distance_triangle_a", 4, 30),     // 32
-    Array("distance_object_b", 4, 30),       // 33
+    Array("distance_object_b", 8, 30),       // 33
     Array("distance_triangle_b", 4, 30),     // 34
     Array("distance", 8, 30),                // 35
     Count("num_stages"),                     // 36

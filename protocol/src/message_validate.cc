@@ -144,26 +144,10 @@ Result<StepCommand> ValidateStepRequest(const far_lcm::step_request_t& message) 
                    Quote(message.depth_format) + " is not one of depth16, depth24, depth32f");
   }
 
-  // Ranges.
-  if (message.resolution < kMinResolution || message.resolution > kMaxResolution) {
-    return Invalid(kType, "resolution",
-                   std::to_string(message.resolution) + " is outside [" +
-                       std::to_string(kMinResolution) + ", " + std::to_string(kMaxResolution) +
-                       "]");
-  }
+  // Ranges and combinations: the model's rule, shared with the pipeline.
   request.resolution = message.resolution;
-  if (message.subobject_size < 1 || message.subobject_size > kMaxSubobjectSize) {
-    return Invalid(kType, "subobject_size",
-                   std::to_string(message.subobject_size) + " is outside [1, " +
-                       std::to_string(kMaxSubobjectSize) + "]");
-  }
   request.subobject_size = message.subobject_size;
   if (message.has_distance) {
-    if (!std::isfinite(message.distance) || message.distance < 0 ||
-        message.distance > kMaxDistance) {
-      return Invalid(kType, "distance",
-                     FormatDouble(message.distance) + " is not a finite number in [0, 1e12]");
-    }
     request.distance = message.distance;
   } else if (message.distance != 0) {
     // Not fatal for the pipeline, but a client that sets a distance without has_distance has
@@ -171,14 +155,8 @@ Result<StepCommand> ValidateStepRequest(const far_lcm::step_request_t& message) 
     return Invalid(kType, "distance",
                    FormatDouble(message.distance) + " is set but has_distance is false");
   }
-
-  // Combinations.
-  if (request.output == Output::kDistancePairs && !request.distance) {
-    return Invalid(kType, "output", "'distance' needs has_distance and a distance D");
-  }
-  if (request.method == Method::kFcl && request.distance) {
-    return Invalid(kType, "method",
-                   "'fcl' answers contacts only; distance queries need far, aabb or exact");
+  if (auto ok = CheckStepRequest(request); !ok) {
+    return MakeError(ok.error().code, std::string(kType) + "." + ok.error().message);
   }
   return command;
 }

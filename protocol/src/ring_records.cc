@@ -69,14 +69,6 @@ Result<void> CheckSize(const RecordErrors& errors, uint32_t size, uint64_t expec
   return {};
 }
 
-Result<void> CheckId(const RecordErrors& errors, uint32_t id, const RingLimits& limits) {
-  if (id > limits.max_object_id) {
-    return errors.Invalid("object_id", std::to_string(id) + " is over the largest id " +
-                                           std::to_string(limits.max_object_id));
-  }
-  return {};
-}
-
 Result<void> CheckCount(const RecordErrors& errors, const char* field, uint32_t count,
                         uint32_t limit) {
   if (count == 0) return errors.Invalid(field, "0 is not >= 1");
@@ -121,17 +113,11 @@ Result<Pose> LoadPose(const RecordErrors& errors, std::span<const uint8_t> bytes
       return errors.Invalid(kNames[i], FormatDouble(v[i]) + " is not finite");
     }
   }
-  const double norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
-  if (!(std::abs(norm - 1.0) <= limits.quaternion_tolerance)) {
-    return errors.Invalid("X_WO.q", "quaternion (" + FormatDouble(v[3]) + ", " +
-                                        FormatDouble(v[4]) + ", " + FormatDouble(v[5]) + ", " +
-                                        FormatDouble(v[6]) + ") has norm " + FormatDouble(norm) +
-                                        ", not 1 within " +
-                                        FormatDouble(limits.quaternion_tolerance));
-  }
   Pose pose;
   pose.translation = Eigen::Vector3d(v[0], v[1], v[2]);
   pose.rotation = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
+  // The unit-quaternion rule is the model's (far::CheckPose), as for every other pose.
+  if (auto ok = CheckPose(pose); !ok) return errors.Invalid("X_WO", ok.error().message);
   return pose;
 }
 
@@ -184,6 +170,92 @@ std::span<const uint8_t> BytesOf(std::span<const T> values) {
   return {reinterpret_cast<const uint8_t*>(values.data()), values.size_bytes()};
 }
 
+// One parser per record type; the header (size, type) is checked by ParseUpdateRecord.
+Result<RingUpdate> ParseAddObject(const RecordErrors& errors, std::span<const uint8_t> record,
+                                  const RingLimits& limits) {
+  if (record.size() < sizeof(AddObjectRecord)) {
+    return errors.Invalid(
+        "size", std::to_string(record.size()) + " is smaller than an add_object record (88 bytes)");
+  }
+  const auto fixed = Load<AddObjectRecord>(record, 0);
+  if (fixed.motion > static_cast<uint32_t>(WireMotion::kDeformable)) {
+    return errors.Invalid(
+        "motion", std::to_string(fixed.motion) + " is not 0 (static), 1 (rigid) or 2 (deformable)");
+  }
+  if (auto ok = CheckCount(errors, "vertex_count", fixed.vertex_count, limits.max_vertices); !ok)
+    return ok.error();
+  if (auto ok = CheckCount(errors, "triangle_count", fixed.triangle_count, limits.max_triangles);
+      !ok) {
+    return ok.error();
+  }
+  // 64-bit: 24 * 2^32 + 12 * 2^32 cannot overflow.
+  const uint64_t expected = AddObjectRecordSize(fixed.vertex_count, fixed.triangle_count);
+  if (auto ok = CheckSize(errors, static_cast<uint32_t>(record.size()), expected,
+                          "vertex_count " + std::to_string(fixed.vertex_count) +
+                              " and triangle_count " + std::to_string(fixed.triangle_count));
+      !ok) {
+    return ok.error();
+  }
+  auto pose = LoadPose(errors, record, offsetof(AddObjectRecord, X_WO), limits);
+  if (!pose) return pose.error();
+  auto positions =
+      LoadPositions(errors, record, sizeof(AddObjectRecord), fixed.vertex_count, limits);
+  if (!positions) return positions.error();
+  far::AddObject add{fixed.object_id, {}, static_cast<Motion>(fixed.motion), *pose};
+  add.mesh.p_MV = std::move(*positions);
+  add.mesh.triangles.resize(fixed.triangle_count);
+  const size_t triangles_offset =
+      sizeof(AddObjectRecord) + size_t{fixed.vertex_count} * sizeof(Eigen::Vector3d);
+  std::memcpy(add.mesh.triangles.data(), record.data() + triangles_offset,
+              size_t{fixed.triangle_count} * sizeof(TriangleIndices));
+  for (uint32_t t = 0; t < fixed.triangle_count; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = add.mesh.triangles[t][k];
+      if (v >= fixed.vertex_count) {
+        return errors.Invalid(
+            "triangles[" + std::to_string(t) + "][" + std::to_string(k) + "]",
+            std::to_string(v) + " is not < vertex_count " + std::to_string(fixed.vertex_count));
+      }
+    }
+  }
+  return RingUpdate(std::move(add));
+}
+
+Result<RingUpdate> ParseSetPose(const RecordErrors& errors, std::span<const uint8_t> record,
+                                const RingLimits& limits) {
+  if (auto ok = CheckSize(errors, static_cast<uint32_t>(record.size()), sizeof(SetPoseRecord),
+                          "set_pose");
+      !ok) {
+    return ok.error();
+  }
+  const auto fixed = Load<SetPoseRecord>(record, 0);
+  if (auto ok = CheckReserved(errors, fixed.reserved); !ok) return ok.error();
+  auto pose = LoadPose(errors, record, offsetof(SetPoseRecord, X_WO), limits);
+  if (!pose) return pose.error();
+  return RingUpdate(far::SetPose{fixed.object_id, *pose});
+}
+
+Result<RingUpdate> ParseSetVertices(const RecordErrors& errors, std::span<const uint8_t> record,
+                                    const RingLimits& limits) {
+  if (record.size() < sizeof(SetVerticesRecord)) {
+    return errors.Invalid("size", std::to_string(record.size()) +
+                                      " is smaller than a set_vertices record (24 bytes)");
+  }
+  const auto fixed = Load<SetVerticesRecord>(record, 0);
+  if (auto ok = CheckCount(errors, "vertex_count", fixed.vertex_count, limits.max_vertices); !ok)
+    return ok.error();
+  if (auto ok = CheckSize(errors, static_cast<uint32_t>(record.size()),
+                          SetVerticesRecordSize(fixed.vertex_count),
+                          "vertex_count " + std::to_string(fixed.vertex_count));
+      !ok) {
+    return ok.error();
+  }
+  auto positions =
+      LoadPositions(errors, record, sizeof(SetVerticesRecord), fixed.vertex_count, limits);
+  if (!positions) return positions.error();
+  return RingUpdate(far::SetVertices{fixed.object_id, std::move(*positions)});
+}
+
 }  // namespace
 
 Result<RingUpdate> ParseUpdateRecord(std::span<const uint8_t> record, const RingLimits& limits) {
@@ -199,103 +271,21 @@ Result<RingUpdate> ParseUpdateRecord(std::span<const uint8_t> record, const Ring
                                       std::to_string(record.size()) + " bytes copied");
   }
   switch (static_cast<RecordType>(header.type)) {
-    case RecordType::kAddObject: {
-      if (header.size < sizeof(AddObjectRecord)) {
-        return errors.Invalid("size", std::to_string(header.size) +
-                                          " is smaller than an add_object record (88 bytes)");
-      }
-      const auto fixed = Load<AddObjectRecord>(record, 0);
-      if (auto ok = CheckId(errors, fixed.object_id, limits); !ok) return ok.error();
-      if (fixed.motion > static_cast<uint32_t>(WireMotion::kDeformable)) {
-        return errors.Invalid("motion", std::to_string(fixed.motion) +
-                                            " is not 0 (static), 1 (rigid) or 2 (deformable)");
-      }
-      if (auto ok = CheckCount(errors, "vertex_count", fixed.vertex_count, limits.max_vertices);
-          !ok) {
-        return ok.error();
-      }
-      if (auto ok =
-              CheckCount(errors, "triangle_count", fixed.triangle_count, limits.max_triangles);
-          !ok) {
-        return ok.error();
-      }
-      // 64-bit: 24 * 2^32 + 12 * 2^32 cannot overflow.
-      const uint64_t expected = AddObjectRecordSize(fixed.vertex_count, fixed.triangle_count);
-      if (auto ok = CheckSize(errors, header.size, expected,
-                              "vertex_count " + std::to_string(fixed.vertex_count) +
-                                  " and triangle_count " + std::to_string(fixed.triangle_count));
-          !ok) {
-        return ok.error();
-      }
-      auto pose = LoadPose(errors, record, offsetof(AddObjectRecord, X_WO), limits);
-      if (!pose) return pose.error();
-      auto positions =
-          LoadPositions(errors, record, sizeof(AddObjectRecord), fixed.vertex_count, limits);
-      if (!positions) return positions.error();
-      AddObject add;
-      add.id = fixed.object_id;
-      add.motion = static_cast<Motion>(fixed.motion);
-      add.X_WO = *pose;
-      add.mesh.p_MV = std::move(*positions);
-      add.mesh.triangles.resize(fixed.triangle_count);
-      const size_t triangles_offset =
-          sizeof(AddObjectRecord) + size_t{fixed.vertex_count} * sizeof(Eigen::Vector3d);
-      std::memcpy(add.mesh.triangles.data(), record.data() + triangles_offset,
-                  size_t{fixed.triangle_count} * sizeof(TriangleIndices));
-      for (uint32_t t = 0; t < fixed.triangle_count; ++t) {
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t v = add.mesh.triangles[t][k];
-          if (v >= fixed.vertex_count) {
-            return errors.Invalid(
-                "triangles[" + std::to_string(t) + "][" + std::to_string(k) + "]",
-                std::to_string(v) + " is not < vertex_count " + std::to_string(fixed.vertex_count));
-          }
-        }
-      }
-      return RingUpdate(std::move(add));
-    }
+    case RecordType::kAddObject:
+      return ParseAddObject(errors, record, limits);
     case RecordType::kRemoveObject: {
       if (auto ok = CheckSize(errors, header.size, sizeof(RemoveObjectRecord), "remove_object");
           !ok) {
         return ok.error();
       }
       const auto fixed = Load<RemoveObjectRecord>(record, 0);
-      if (auto ok = CheckId(errors, fixed.object_id, limits); !ok) return ok.error();
       if (auto ok = CheckReserved(errors, fixed.reserved); !ok) return ok.error();
-      return RingUpdate(RemoveObject{fixed.object_id});
+      return RingUpdate(far::RemoveObject{fixed.object_id});
     }
-    case RecordType::kSetPose: {
-      if (auto ok = CheckSize(errors, header.size, sizeof(SetPoseRecord), "set_pose"); !ok) {
-        return ok.error();
-      }
-      const auto fixed = Load<SetPoseRecord>(record, 0);
-      if (auto ok = CheckId(errors, fixed.object_id, limits); !ok) return ok.error();
-      if (auto ok = CheckReserved(errors, fixed.reserved); !ok) return ok.error();
-      auto pose = LoadPose(errors, record, offsetof(SetPoseRecord, X_WO), limits);
-      if (!pose) return pose.error();
-      return RingUpdate(SetPose{fixed.object_id, *pose});
-    }
-    case RecordType::kSetVertices: {
-      if (header.size < sizeof(SetVerticesRecord)) {
-        return errors.Invalid("size", std::to_string(header.size) +
-                                          " is smaller than a set_vertices record (24 bytes)");
-      }
-      const auto fixed = Load<SetVerticesRecord>(record, 0);
-      if (auto ok = CheckId(errors, fixed.object_id, limits); !ok) return ok.error();
-      if (auto ok = CheckCount(errors, "vertex_count", fixed.vertex_count, limits.max_vertices);
-          !ok) {
-        return ok.error();
-      }
-      if (auto ok = CheckSize(errors, header.size, SetVerticesRecordSize(fixed.vertex_count),
-                              "vertex_count " + std::to_string(fixed.vertex_count));
-          !ok) {
-        return ok.error();
-      }
-      auto positions =
-          LoadPositions(errors, record, sizeof(SetVerticesRecord), fixed.vertex_count, limits);
-      if (!positions) return positions.error();
-      return RingUpdate(SetVertices{fixed.object_id, std::move(*positions)});
-    }
+    case RecordType::kSetPose:
+      return ParseSetPose(errors, record, limits);
+    case RecordType::kSetVertices:
+      return ParseSetVertices(errors, record, limits);
     case RecordType::kStepReply:
       break;
   }

@@ -214,7 +214,7 @@ TEST_F(BadInputTest, WrongProtocolVersionIsAVersionMismatch) {
   ASSERT_TRUE(bytes.ok());
   ASSERT_TRUE(raw_->PublishRequest(*bytes).ok());
   EXPECT_TRUE(ErrorReply(*raw_, -1, ErrorCode::kVersionMismatch, false,
-                         {"step_request_t.protocol_version: got 2, expected 1"}));
+                         {"step_request_t.protocol_version: got 3, expected 2"}));
 
   // An open request of protocol version 2 gets a version_mismatch open_session_reply_t.
   auto listener = Listener::Create(TestLcmUrl());
@@ -236,7 +236,7 @@ TEST_F(BadInputTest, WrongProtocolVersionIsAVersionMismatch) {
   EXPECT_EQ(reply->request_id, open.request_id);
   EXPECT_EQ(reply->status, ToWireStatus(ErrorCode::kVersionMismatch));
   EXPECT_EQ(reply->status_name, "version_mismatch");
-  EXPECT_NE(reply->message.find("protocol_version: got 2, expected 1"), std::string::npos)
+  EXPECT_NE(reply->message.find("protocol_version: got 3, expected 2"), std::string::npos)
       << reply->message;
   EXPECT_EQ(reply->session_id, 0);
   EXPECT_EQ(reply->shm_name, "");
@@ -411,7 +411,7 @@ TEST_F(BadInputTest, TriangleIndexOutOfRangeIsRejectedAndTheStepIsDiscarded) {
   // Scene-level checks: an unknown id, a pose for a static object.
   ASSERT_TRUE(raw_->writer().RemoveObject(77).ok());
   ASSERT_TRUE(raw_->SendStep(2, SmallRequest()).ok());
-  EXPECT_TRUE(StepFails(*raw_, 2, ErrorCode::kNotFound, {"object 77", "no such object"}));
+  EXPECT_TRUE(StepFails(*raw_, 2, ErrorCode::kNotFound, {"object 77", "is not in the scene"}));
   ASSERT_TRUE(raw_->writer().AddObject(3, TriangleRow(1), Motion::kStatic, Pose{}).ok());
   ASSERT_TRUE(raw_->writer().SetPose(3, Pose{}).ok());
   ASSERT_TRUE(raw_->SendStep(3, SmallRequest()).ok());
@@ -461,11 +461,12 @@ TEST_F(BadInputTest, NonFiniteVerticesAndPosesAreRejected) {
   unnormalized.rotation = Eigen::Quaterniond(2, 0, 0, 0);
   ASSERT_TRUE(raw_->writer().SetPose(1, unnormalized).ok());
   ASSERT_TRUE(raw_->SendStep(6, SmallRequest()).ok());
-  EXPECT_TRUE(StepFails(*raw_, 6, ErrorCode::kInvalidArgument, {"X_WO.q", "norm 2"}));
+  EXPECT_TRUE(StepFails(*raw_, 6, ErrorCode::kInvalidArgument, {"X_WO: rotation_wxyz", "norm 2"}));
   // Wrong vertex count for the object.
   ASSERT_TRUE(raw_->writer().SetVertices(1, TriangleRow(1).p_MV).ok());
   ASSERT_TRUE(raw_->SendStep(7, SmallRequest()).ok());
-  EXPECT_TRUE(StepFails(*raw_, 7, ErrorCode::kInvalidArgument, {"3 vertices, the object has 6"}));
+  EXPECT_TRUE(
+      StepFails(*raw_, 7, ErrorCode::kInvalidArgument, {"3 vertices given, object 1 has 6"}));
 
   ExpectSessionStillWorks(8);
   EXPECT_TRUE(HealthyClientSteps());
@@ -815,7 +816,7 @@ TEST_F(LimitsTest, CountsOverTheLimitsAreLimitExceeded) {
   ASSERT_TRUE(raw.writer().AddObject(2, TriangleFan(150), Motion::kRigid, Pose{}).ok());
   ASSERT_TRUE(raw.SendStep(3, SmallRequest()).ok());
   EXPECT_TRUE(StepFails(raw, 3, ErrorCode::kLimitExceeded,
-                        {"the session would have 300 triangles (limit 200)"}));
+                        {"the scene would have 300 triangles (limit 200)"}));
   // Objects: 9 > 8.
   for (uint32_t id = 1; id <= 9; ++id) {
     ASSERT_TRUE(raw.writer().AddObject(id, TriangleRow(1), Motion::kRigid, Pose{}).ok());

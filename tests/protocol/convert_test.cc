@@ -141,7 +141,8 @@ TEST(ConvertTest, ParseStepReplyRejectsInconsistentReplies) {
   reply.contact_triangle_b = {-4};
   auto parsed = ParseStepReply(reply);
   ASSERT_FALSE(parsed);
-  EXPECT_NE(parsed.error().message.find("step_reply_t.contact_triangle_b: [0] = -4 is negative"),
+  EXPECT_NE(parsed.error().message.find(
+                "step_reply_t.contact_triangle_b: [0] = -4 is outside [0, 2147483647]"),
             std::string::npos);
 
   reply = testing::SampleStepReply();
@@ -164,12 +165,37 @@ TEST(ConvertTest, ParseStepReplyRejectsInconsistentReplies) {
   EXPECT_EQ(parsed.error().code, ErrorCode::kInvalidArgument);
 }
 
-TEST(ConvertTest, MakeStepReplyRejectsIdsThatDoNotFitTheWire) {
+TEST(ConvertTest, EveryUint32IdRoundTrips) {
   StepResult result;
-  result.pcs_objects = {0x80000000u};
-  auto reply = MakeStepReply({1, 1, 1, 0}, Output::kObjectPcs, result);
+  result.pcs_objects = {0, 0x80000000u, 0xFFFFFFFFu};
+  result.contacts = {{0, 1, 0xFFFFFFFFu, 2}};
+  auto reply = MakeStepReply({1, 1, 1, 0}, Output::kContacts, result);
+  ASSERT_TRUE(reply) << reply.error().message;
+  auto parsed = ParseStepReply(*reply);
+  ASSERT_TRUE(parsed) << parsed.error().message;
+  EXPECT_EQ(parsed->pcs_objects, result.pcs_objects);
+  EXPECT_EQ(parsed->contacts, result.contacts);
+}
+
+TEST(ConvertTest, MakeStepReplyRejectsTriangleIndicesThatDoNotFitTheWire) {
+  StepResult result;
+  result.contacts = {{1, 0x80000000u, 2, 0}};
+  auto reply = MakeStepReply({1, 1, 1, 0}, Output::kContacts, result);
   ASSERT_FALSE(reply);
   EXPECT_EQ(reply.error().code, ErrorCode::kInternal);
+}
+
+TEST(ConvertTest, ParseStepReplyRejectsIdsBeyondUint32) {
+  StepResult result;
+  result.pcs_objects = {7};
+  auto reply = MakeStepReply({1, 1, 1, 0}, Output::kObjectPcs, result);
+  ASSERT_TRUE(reply);
+  reply->pcs_objects[0] = int64_t{1} << 32;
+  auto parsed = ParseStepReply(*reply);
+  ASSERT_FALSE(parsed);
+  EXPECT_NE(parsed.error().message.find("step_reply_t.pcs_objects: [0] = 4294967296 is outside"),
+            std::string::npos)
+      << parsed.error().message;
 }
 
 }  // namespace

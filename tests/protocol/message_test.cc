@@ -84,11 +84,11 @@ TEST(MessageTest, FingerprintsArePinned) {
   EXPECT_EQ(far_lcm::close_session_t::getHash(), static_cast<int64_t>(0x774cca24acd09ab9ull));
   EXPECT_EQ(far_lcm::heartbeat_t::getHash(), static_cast<int64_t>(0xf641100dce8b2bbeull));
   EXPECT_EQ(far_lcm::step_request_t::getHash(), static_cast<int64_t>(0xa80851807485adfdull));
-  EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0x5f9c87824a3ce364ull));
+  EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0x90462997ae93c19cull));
   EXPECT_EQ(far_lcm::error_t::getHash(), static_cast<int64_t>(0xb22a7284ae722a4full));
   EXPECT_EQ(far_lcm::status_request_t::getHash(), static_cast<int64_t>(0x232a6c3597e1b397ull));
   EXPECT_EQ(far_lcm::status_reply_t::getHash(), static_cast<int64_t>(0x6cf89a8321868d65ull));
-  EXPECT_EQ(kProtocolVersion, 1);
+  EXPECT_EQ(kProtocolVersion, 2);
 }
 
 TEST(MessageTest, EmptyArraysAndStringsRoundTrip) {
@@ -163,21 +163,21 @@ TEST(MessageTest, RejectsWrongProtocolVersion) {
   auto message = SampleStepRequest();
   message.protocol_version = kProtocolVersion + 1;
   ExpectDecodeError<far_lcm::step_request_t>(Encode(message), ErrorCode::kVersionMismatch,
-                                             "step_request_t.protocol_version: got 2, expected 1");
+                                             "step_request_t.protocol_version: got 3, expected 2");
 }
 
 TEST(MessageTest, RejectsAForgedHugeArrayLengthWithoutAllocating) {
   // A small message that claims 2^31 - 1 object ids: LCM's decode would resize a vector to
-  // 8 GiB before noticing the bytes are not there.
+  // 16 GiB before noticing the bytes are not there.
   auto message = SampleStepReply();
   message.num_pcs_objects = 1;
   message.pcs_objects = {0x5A5A5A5A};
   auto bytes = Encode(message);
-  const size_t at = Find(bytes, {0, 0, 0, 1, 0x5A, 0x5A, 0x5A, 0x5A});
+  const size_t at = Find(bytes, {0, 0, 0, 1, 0, 0, 0, 0, 0x5A, 0x5A, 0x5A, 0x5A});
   PutBigEndian32(bytes, at, 0x7FFFFFFF);
   ExpectDecodeError<far_lcm::step_reply_t>(
       bytes, ErrorCode::kParseError,
-      "step_reply_t.pcs_objects: 2147483647 elements of 4 bytes need 8589934588 bytes");
+      "step_reply_t.pcs_objects: 2147483647 elements of 8 bytes need 17179869176 bytes");
   ExpectDecodeError<far_lcm::step_reply_t>(bytes, ErrorCode::kParseError,
                                            "(num_pcs_objects is too large)");
 }
@@ -187,7 +187,7 @@ TEST(MessageTest, RejectsNegativeCountsThatWouldMakeLcmThrow) {
   message.num_pcs_objects = 1;
   message.pcs_objects = {0x5A5A5A5A};
   auto bytes = Encode(message);
-  PutBigEndian32(bytes, Find(bytes, {0, 0, 0, 1, 0x5A, 0x5A, 0x5A, 0x5A}), 0xFFFFFFFF);
+  PutBigEndian32(bytes, Find(bytes, {0, 0, 0, 1, 0, 0, 0, 0, 0x5A, 0x5A, 0x5A, 0x5A}), 0xFFFFFFFF);
   // What the pre-scan protects against: LCM 1.3.1's decode resizes to size_t(-1) and throws.
   far_lcm::step_reply_t raw;
   EXPECT_ANY_THROW(raw.decode(bytes.data(), 0, static_cast<int>(bytes.size())));

@@ -113,7 +113,7 @@ TEST(ValidateStepRequestTest, ChecksSubobjectSizeRange) {
 TEST(ValidateStepRequestTest, ChecksDistance) {
   auto m = SampleStepRequest();
   m.distance = std::numeric_limits<double>::quiet_NaN();
-  ExpectInvalid(m, "step_request_t.distance: nan is not a finite number in [0, 1e12]");
+  ExpectInvalid(m, "step_request_t.distance: nan is not a finite number in [0, 1e+12]");
   m.distance = std::numeric_limits<double>::infinity();
   ExpectInvalid(m, "step_request_t.distance: inf is not a finite number");
   m.distance = -0.5;
@@ -132,7 +132,7 @@ TEST(ValidateStepRequestTest, ChecksCombinations) {
   auto m = SampleStepRequest();
   m.has_distance = false;
   m.distance = 0;
-  ExpectInvalid(m, "step_request_t.output: 'distance' needs has_distance and a distance D");
+  ExpectInvalid(m, "step_request_t.output: 'distance' needs a distance D");
   m = SampleStepRequest();
   m.method = "fcl";
   ExpectInvalid(m, "step_request_t.method: 'fcl' answers contacts only");

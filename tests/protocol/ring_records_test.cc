@@ -409,22 +409,27 @@ TEST(ParseUpdateRecordTest, RejectsNonFinitePoses) {
 }
 
 TEST(ParseUpdateRecordTest, RejectsNonUnitQuaternions) {
+  // The rule is the model's (far::CheckPose); the record names the field it came from.
   ExpectParseError(ForgeSetPose(1, 5, {0, 0, 0, 1, 1, 0, 0}), ErrorCode::kInvalidArgument,
-                   "X_WO.q: quaternion (1, 1, 0, 0) has norm 1.4142135623730951, not 1 within "
-                   "1e-06");
+                   "record 1 (set_pose): X_WO: rotation_wxyz: not a unit quaternion (norm "
+                   "1.41421356)");
   ExpectParseError(ForgeSetPose(1, 5, {0, 0, 0, 0, 0, 0, 0}), ErrorCode::kInvalidArgument,
-                   "has norm 0");
+                   "not a unit quaternion (norm 0)");
   ExpectParseError(ForgeSetPose(1, 5, {0, 0, 0, 1 + 2e-6, 0, 0, 0}), ErrorCode::kInvalidArgument,
-                   "not 1 within");
+                   "not a unit quaternion (norm 1.000002)");
   // Within the tolerance: accepted.
   EXPECT_TRUE(ParseUpdateRecord(ForgeSetPose(1, 5, {0, 0, 0, 1 + 5e-7, 0, 0, 0}), RingLimits{}));
 }
 
-TEST(ParseUpdateRecordTest, RejectsUnknownMotionIdsOverTheLimitAndReservedBits) {
+TEST(ParseUpdateRecordTest, RejectsUnknownMotionAndReservedBitsAcceptsEveryId) {
   ExpectParseError(ForgeAddObject(1, 5, 3, 3, 1, kIdentity, kTriangle, {0, 1, 2}),
                    ErrorCode::kInvalidArgument, "motion: 3 is not 0 (static), 1 (rigid) or 2");
-  ExpectParseError(ForgeRemove(1, 0x80000000u), ErrorCode::kInvalidArgument,
-                   "object_id: 2147483648 is over the largest id 2147483647");
+  // Ids are every uint32, as in scene files (far/model/limits.h).
+  for (uint32_t id : {0u, 0x80000000u, 0xFFFFFFFFu}) {
+    auto parsed = ParseUpdateRecord(ForgeRemove(1, id), RingLimits{});
+    ASSERT_TRUE(parsed) << parsed.error().message;
+    EXPECT_EQ(std::get<far::RemoveObject>(*parsed).id, id);
+  }
   ExpectParseError(ForgeRemove(1, 5, 1), ErrorCode::kInvalidArgument, "reserved: 1 is not 0");
   ExpectParseError(ForgeSetPose(1, 5, kIdentity, 7), ErrorCode::kInvalidArgument,
                    "reserved: 7 is not 0");

@@ -138,18 +138,17 @@ TEST(ShmReplyTest, FullRingIsBusyUntilTheClientReads) {
   Session session;
   const SessionKey& key = session.daemon->session_key();
   std::vector<std::vector<uint8_t>> stubs;
-  // 100k contacts are ~1.6 MB; the 4 MiB ring holds two.
+  // 70k contacts are ~1.7 MB (24 bytes each); the 4 MiB ring holds two.
   for (int i = 0; i < 2; ++i) {
-    auto bytes =
-        EncodeStepReplyForTransport(FullReply(100000, i + 1), *session.daemon_replies, key);
+    auto bytes = EncodeStepReplyForTransport(FullReply(70000, i + 1), *session.daemon_replies, key);
     ASSERT_TRUE(bytes) << bytes.error().message;
     stubs.push_back(*bytes);
   }
-  auto third = EncodeStepReplyForTransport(FullReply(100000, 3), *session.daemon_replies, key);
+  auto third = EncodeStepReplyForTransport(FullReply(70000, 3), *session.daemon_replies, key);
   ASSERT_FALSE(third);
   EXPECT_EQ(third.error().code, ErrorCode::kBusy);
   ASSERT_TRUE(ReceiveStepReply(stubs[0].data(), stubs[0].size(), key, *session.client_replies));
-  EXPECT_TRUE(EncodeStepReplyForTransport(FullReply(100000, 3), *session.daemon_replies, key));
+  EXPECT_TRUE(EncodeStepReplyForTransport(FullReply(70000, 3), *session.daemon_replies, key));
 }
 
 // The whole path over LCM, in process: memq:// never touches the network. Subscribed through

@@ -1,7 +1,12 @@
 #include "far/model/step_request.h"
 
 #include <array>
+#include <charconv>
+#include <cmath>
+#include <string>
 #include <utility>
+
+#include "far/model/limits.h"
 
 namespace far {
 namespace {
@@ -43,7 +48,46 @@ std::optional<Enum> ValueOf(const NameTable<Enum, N>& table, std::string_view na
   return std::nullopt;
 }
 
+Error Invalid(const std::string& field, const std::string& what) {
+  return MakeError(ErrorCode::kInvalidArgument, field + ": " + what);
+}
+
+std::string Range(int low, int high) {
+  return "[" + std::to_string(low) + ", " + std::to_string(high) + "]";
+}
+
+// The shortest text that reads back as the same double ("0.1", "1e+13", "nan", "-inf").
+std::string FormatDouble(double value) {
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof(text), value);
+  return std::string(text, result.ptr);
+}
+
 }  // namespace
+
+Result<void> CheckStepRequest(const StepRequest& request) {
+  if (request.resolution < kMinResolution || request.resolution > kMaxResolution) {
+    return Invalid("resolution", std::to_string(request.resolution) + " is outside " +
+                                     Range(kMinResolution, kMaxResolution));
+  }
+  if (request.subobject_size < 1 || request.subobject_size > kMaxSubobjectSize) {
+    return Invalid("subobject_size", std::to_string(request.subobject_size) + " is outside " +
+                                         Range(1, kMaxSubobjectSize));
+  }
+  if (request.distance && !(std::isfinite(*request.distance) && *request.distance >= 0 &&
+                            *request.distance <= kMaxDistance)) {
+    return Invalid("distance", FormatDouble(*request.distance) + " is not a finite number in [0, " +
+                                   FormatDouble(kMaxDistance) + "]");
+  }
+  if (request.output == Output::kDistancePairs && !request.distance) {
+    return Invalid("output", "'distance' needs a distance D");
+  }
+  if (request.method == Method::kFcl && request.distance) {
+    return Invalid("method",
+                   "'fcl' answers contacts only; distance queries need far, aabb or exact");
+  }
+  return {};
+}
 
 std::string_view ToString(Method method) { return NameOf(kMethodNames, method); }
 std::string_view ToString(QueryMechanism mechanism) { return NameOf(kMechanismNames, mechanism); }

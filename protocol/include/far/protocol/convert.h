@@ -34,10 +34,10 @@ struct StepReplyIds {
   uint64_t ring_applied_sequence = 0;  ///< last update ring record applied
 };
 
-/// Builds the full reply of a successful step (auth zero). Object ids and triangle indices
-/// must be <= INT32_MAX (the update ring guarantees it). Errors: kLimitExceeded when a count
-/// exceeds INT32_MAX or the encoding would exceed kMaxStepReplyBytes; kInternal when an id is
-/// over INT32_MAX.
+/// Builds the full reply of a successful step (auth zero). Object ids travel as int64, triangle
+/// indices as int32 (a valid mesh's always fit). Errors: kLimitExceeded when a count exceeds
+/// INT32_MAX or the encoding would exceed kMaxStepReplyBytes; kInternal when a triangle index
+/// is over INT32_MAX.
 Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output output,
                                             const StepResult& result);
 
@@ -50,8 +50,8 @@ far_lcm::error_t MakeErrorMessage(int64_t session_id, int64_t request_id, const 
 
 /// Client side: turns a (full, not a stub) step reply into a StepResult. When status != 0,
 /// returns the Error it carries (code from FromWireStatus, the daemon's message). Errors:
-/// kParseError for inconsistent arrays (negative ids, counts that do not add up), naming the
-/// field; kInvalidArgument when called with a stub (reply_in_shm).
+/// kParseError for inconsistent arrays (object ids outside [0, 2^32-1], negative indices,
+/// counts that do not add up), naming the field; kInvalidArgument when called with a stub.
 Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply);
 
 }  // namespace far::protocol

@@ -14,12 +14,8 @@
 
 namespace far::protocol {
 
-/// Ranges of client values (the same as far::Pipeline checks, so a request that passes here
-/// is not rejected there for its shape).
-inline constexpr int kMinResolution = 8;
-inline constexpr int kMaxResolution = 8192;
-inline constexpr int kMaxSubobjectSize = 1 << 20;
-inline constexpr double kMaxDistance = 1e12;
+/// The longest client name (open_session_t.client_name). Step request ranges are the model's
+/// (far/model/limits.h, far::CheckStepRequest), shared with far::Pipeline.
 inline constexpr size_t kMaxClientNameLength = 64;
 
 /// A checked open_session_t.
@@ -45,9 +41,8 @@ struct StepCommand {
 
 /// Checks a step_request_t: session_id > 0, request_id, step_id, ring_commit_sequence >= 0,
 /// known method/mechanism/output/depth_format names (the message lists the known names),
-/// resolution in [8, 8192], subobject_size in [1, 2^20], has_distance with a finite distance
-/// in [0, 1e12] (and distance 0 without), output "distance" only with a distance, method
-/// "fcl" only without. Errors: kInvalidArgument naming the field.
+/// distance 0 unless has_distance, then far::CheckStepRequest (ranges and combinations). Errors:
+/// kInvalidArgument naming the field.
 Result<StepCommand> ValidateStepRequest(const far_lcm::step_request_t& message);
 
 /// Checks the common part of a session message: session_id > 0 and request_id >= 0.

@@ -109,7 +109,7 @@ inline constexpr int kPoseDoubles = 7;
 /// size == AddObjectRecordSize(vertex_count, triangle_count).
 struct AddObjectRecord {
   RecordHeader header;        ///< type kAddObject
-  uint32_t object_id;         ///< <= INT32_MAX, not alive in the session
+  uint32_t object_id;         ///< any uint32, not alive in the session
   uint32_t motion;            ///< WireMotion
   uint32_t vertex_count;      ///< >= 1, <= the session's vertex limit
   uint32_t triangle_count;    ///< >= 1, <= the session's triangle limit

@@ -15,7 +15,7 @@
 //     stay. The client must open a new session.
 //   - A commit sequence beyond what was written consumes nothing (kInvalidArgument).
 // Checks that need the scene (object alive, motion kind, vertex count of an existing object)
-// are the daemon's, when it applies the updates in order.
+// are far::SceneModel's, when the daemon applies the updates in order (far::Pipeline::Apply).
 
 #include <chrono>
 #include <cstdint>
@@ -27,7 +27,7 @@
 
 #include "far/model/mesh.h"
 #include "far/model/result.h"
-#include "far/model/scene.h"
+#include "far/model/scene_update.h"
 #include "far/protocol/ring.h"
 #include "far/protocol/ring_layout.h"
 
@@ -35,35 +35,13 @@ namespace far::protocol {
 
 /// What the daemon accepts from a client's update ring.
 struct RingLimits {
-  uint32_t max_vertices = 1u << 22;     ///< per add_object / set_vertices record
-  uint32_t max_triangles = 1u << 22;    ///< per add_object record
-  uint32_t max_object_id = 0x7fffffff;  ///< ids travel as int32 in replies
-  double max_abs_coordinate = 1e12;     ///< |x|, |y|, |z| of positions and translations
-  double quaternion_tolerance = 1e-6;   ///< | |q| - 1 | of rotations
+  uint32_t max_vertices = 1u << 22;   ///< per add_object / set_vertices record
+  uint32_t max_triangles = 1u << 22;  ///< per add_object record
+  double max_abs_coordinate = 1e12;   ///< |x|, |y|, |z| of positions and translations
 };
 
-/// An add_object record.
-struct AddObject {
-  uint32_t id = 0;
-  Mesh mesh;  ///< vertex positions in the object frame; every index < vertex count
-  Motion motion = Motion::kStatic;
-  Pose X_WO;
-};
-/// A remove_object record.
-struct RemoveObject {
-  uint32_t id = 0;
-};
-/// A set_pose record.
-struct SetPose {
-  uint32_t id = 0;
-  Pose X_WO;
-};
-/// A set_vertices record.
-struct SetVertices {
-  uint32_t id = 0;
-  std::vector<Eigen::Vector3d> p_MV;
-};
-using RingUpdate = std::variant<AddObject, RemoveObject, SetPose, SetVertices>;
+/// A record's update: far's own update types (far/model/scene_update.h).
+using RingUpdate = SceneUpdate;
 
 /// A validated update and the record it came from.
 struct SequencedUpdate {
@@ -73,10 +51,11 @@ struct SequencedUpdate {
 
 /// Parses and validates one record (a private copy: RawRecord::bytes; its header already
 /// framing-checked by RingReader). Checks: known update type, size equal to the size its
-/// counts imply (64-bit arithmetic), counts in [1, limit], id <= max_object_id, reserved
-/// fields zero, every double finite and within max_abs_coordinate, unit quaternions, motion
-/// known, every triangle index < vertex_count. Errors (message names the record sequence,
-/// the field and the value): kInvalidArgument, kLimitExceeded for counts over limits.
+/// counts imply (64-bit arithmetic), counts in [1, limit], reserved fields zero, every double
+/// finite and within max_abs_coordinate, poses by far::CheckPose (unit quaternions), motion
+/// known, every triangle index < vertex_count. Every uint32 is a valid object id. Errors (message
+/// names the record sequence, the field and the value): kInvalidArgument, kLimitExceeded for counts
+/// over limits.
 Result<RingUpdate> ParseUpdateRecord(std::span<const uint8_t> record, const RingLimits& limits);
 
 /// The client side of the update ring. Each call writes one record and publishes it; put
@@ -116,7 +95,6 @@ class UpdateReader {
 
   uint64_t last_sequence() const { return ring_.last_sequence(); }
   bool corrupt() const { return ring_.corrupt(); }
-  const RingLimits& limits() const { return limits_; }
   RingReader& ring() { return ring_; }
 
  private:

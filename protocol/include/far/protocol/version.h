@@ -10,7 +10,7 @@ namespace far::protocol {
 
 /// Carried in every far_lcm message's `protocol_version`; bumped with every change of meaning
 /// (a change of a message's fields also changes its LCM fingerprint).
-inline constexpr int32_t kProtocolVersion = 1;
+inline constexpr int32_t kProtocolVersion = 2;
 
 /// Byte caps checked before decoding. Control messages (open, close, heartbeat, step and
 /// status requests, error, open reply) are small; step replies may be large (shm path).

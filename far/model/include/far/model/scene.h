@@ -1,44 +1,19 @@
 #pragma once
 
 // A scene: objects with meshes, motion kinds and poses, plus an optional animation (frames).
-// Read and written as `far-scene/1` JSON by far/scene_io.h; the format is documented in
+// Read and written as `far-scene/1` JSON by far/io/scene_io.h; the format is documented in
 // docs/scene-format.md.
 
 #include <cstdint>
-#include <optional>
 #include <string>
-#include <string_view>
 #include <utility>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 #include "far/model/mesh.h"
+#include "far/model/pose.h"
 #include "far/model/result.h"
 
 namespace far {
-
-/// How an object may change over the frames of a scene.
-enum class Motion {
-  kStatic,      ///< never moves: no pose or vertex updates
-  kRigid,       ///< moves by pose updates
-  kDeformable,  ///< moves by pose and vertex updates (same triangles, new positions)
-};
-
-/// Returns the scene-file name of `motion`: "static", "rigid" or "deformable".
-const char* ToString(Motion motion);
-
-/// Parses "static", "rigid" or "deformable"; nullopt for anything else.
-std::optional<Motion> ParseMotion(std::string_view text);
-
-/// A rigid transform: a rotation, then a translation. Default: identity.
-struct Pose {
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();  ///< unit quaternion
-
-  /// Returns the transform x -> rotation * x + translation.
-  Eigen::Isometry3d ToIsometry() const;
-};
 
 /// One object of a scene.
 struct SceneObject {
@@ -72,12 +47,12 @@ struct Scene {
   std::vector<FrameUpdate> frames;
 };
 
-/// Checks the meaning of a scene (what ReadScene checks after the JSON shape): every mesh
-/// valid, unique ids, unit rotation quaternions (norm within 1e-6 of 1) and finite poses, and,
-/// frame by frame with the id bookkeeping applied in order: removals of alive ids, additions of
-/// ids not alive, poses only for alive rigid or deformable objects, vertices only for alive
-/// deformable objects with the same vertex count and triangles, at most one pose and one vertex
-/// update per id and frame. Errors name the place as a JSON path, e.g.
+/// Checks the meaning of a scene (what ReadScene checks after the JSON shape) with the rules of
+/// far::SceneModel, update by update in frame order (removals, additions, poses, vertices):
+/// valid meshes, unique ids, valid poses (CheckPose), poses only for alive rigid or deformable
+/// objects, vertices only for alive deformable objects with the same vertex count; plus the
+/// file format's own rules: vertex files with the object's triangles, at most one pose and one
+/// vertex update per id and frame. Errors name the place as a JSON path, e.g.
 /// "frames[1].poses[0].id: object 4 is static; static objects take no poses":
 /// kInvalidArgument for bad values, kNotFound for ids that are not alive.
 Result<void> ValidateScene(const Scene& scene);

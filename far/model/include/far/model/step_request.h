@@ -3,6 +3,7 @@
 #include <optional>
 #include <string_view>
 
+#include "far/model/result.h"
 namespace far {
 
 /// Depth buffer formats a culling pass can render with.
@@ -55,5 +56,12 @@ std::optional<Method> ParseMethod(std::string_view name);
 std::optional<QueryMechanism> ParseMechanism(std::string_view name);
 std::optional<Output> ParseOutput(std::string_view name);
 std::optional<DepthFormat> ParseDepthFormat(std::string_view name);
+
+/// Checks a request against the limits of far/model/limits.h: resolution in [kMinResolution,
+/// kMaxResolution], subobject_size in [1, kMaxSubobjectSize], a distance that is finite and in
+/// [0, kMaxDistance], output "distance" only with a distance, method "fcl" only without one.
+/// The pipeline and the protocol's validation both call it. Errors (kInvalidArgument) start
+/// with the field: "resolution: 5 is outside [8, 8192]".
+Result<void> CheckStepRequest(const StepRequest& request);
 
 }  // namespace far

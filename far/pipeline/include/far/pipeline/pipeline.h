@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -12,6 +13,8 @@
 #include "far/model/mesh.h"
 #include "far/model/result.h"
 #include "far/model/scene.h"
+#include "far/model/scene_model.h"
+#include "far/model/scene_update.h"
 #include "far/model/step_request.h"
 #include "far/model/step_result.h"
 
@@ -26,6 +29,8 @@ struct PipelineOptions {
   /// current and alive while the pipeline lives) instead of making one: how a daemon serves
   /// many scenes from one context.
   bool use_current_context = false;
+  /// Budgets of the scene (a daemon session's); updates that would exceed them are refused.
+  SceneLimits scene_limits;
 };
 
 /// Work the scene bookkeeping did since the pipeline was made: what "only what changed is
@@ -50,15 +55,17 @@ class Pipeline {
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
 
-  /// Adds an object. Errors (kInvalidArgument): id in use, no triangles, index out of range,
-  /// non-finite position or pose.
+  /// Applies a batch of updates in order, all or nothing: every update is checked by the scene
+  /// model (far/model/scene_model.h: ids alive, static objects never move, vertices only for
+  /// deformable objects, valid meshes and poses, the scene limits) before any is applied.
+  /// Errors: the model's (kInvalidArgument, kNotFound, kLimitExceeded), prefixed with
+  /// `where(i)` for the i-th update (default "update <i> (<kind>) "); nothing changed.
+  Result<void> Apply(std::vector<SceneUpdate> updates,
+                     const std::function<std::string(size_t)>& where = {});
+  /// One update at a time (errors as Apply, without the prefix).
   Result<void> AddObject(uint32_t id, Mesh mesh, Motion motion, const Pose& X_WO = {});
-  /// Removes an object. Errors: kNotFound.
   Result<void> RemoveObject(uint32_t id);
-  /// Moves a rigid object. Errors: kNotFound, kInvalidArgument (static object, bad pose).
   Result<void> SetPose(uint32_t id, const Pose& X_WO);
-  /// Replaces a deformable object's vertices (same count; triangles unchanged).
-  /// Errors: kNotFound, kInvalidArgument (not deformable, wrong count, non-finite).
   Result<void> SetVertices(uint32_t id, std::vector<Eigen::Vector3d> p_MV);
   /// Adds every object of `scene` (frames are the caller's to apply).
   Result<void> LoadScene(const Scene& scene);

@@ -1,0 +1,63 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <span>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "scene_cache.h"
+#include <Eigen/Geometry>
+
+#include "far/gpu/culling_renderer.h"
+#include "far/model/result.h"
+#include "far/model/step_request.h"
+#include "far/model/step_result.h"
+
+namespace far::internal {
+
+/// The GPU stages of a step (FAR, FAR with exact offsets, CULLIDE): object-level and
+/// sub-object-level culling with three axis views each. Keeps one renderer per raster format,
+/// each with the GPU pieces of every object, rebuilt only when the object's vertices change.
+/// Owned by the GL thread (see far::GlContext).
+class GpuCuller {
+ public:
+  /// `counters` gets the piece builds; aliased, must outlive *this.
+  explicit GpuCuller(SceneCounters& counters) : counters_(counters) {}
+
+  /// Culls whole objects: returns, indexed like `objects`, 1 for objects in the object PCS.
+  Result<std::vector<uint8_t>> CullObjects(const StepRequest& request,
+                                           std::span<const CachedObject* const> objects,
+                                           StepStats& stats);
+
+  /// Culls sub-objects of k = request.subobject_size triangles of the objects `paired`
+  /// (indices into `objects`): returns, indexed like `objects`, the sorted triangles of each
+  /// object that stay in the primitive PCS.
+  Result<std::vector<std::vector<uint32_t>>> CullPrimitives(
+      const StepRequest& request, std::span<const CachedObject* const> objects,
+      std::span<const size_t> paired, StepStats& stats);
+
+  /// Frees a removed object's pieces in every renderer.
+  void RemoveSlot(uint32_t slot);
+
+ private:
+  struct RendererEntry {
+    std::unique_ptr<CullingRenderer> renderer;
+    std::map<std::pair<uint32_t, int>, uint64_t> built;  // (slot, set) -> geometry stamp
+  };
+
+  Result<RendererEntry*> RendererFor(const StepRequest& request);
+  void EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
+                    std::span<const PieceSet> sets);
+  Result<void> CullLevel(RendererEntry& entry, const StepRequest& request,
+                         std::span<const ViewObject> view_objects, int k,
+                         std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
+                         std::vector<uint8_t>& alive, StepStats& stats, double* radius);
+
+  SceneCounters& counters_;
+  std::map<std::tuple<int, int, int>, RendererEntry> renderers_;
+};
+
+}  // namespace far::internal

@@ -1,0 +1,103 @@
+#include "scene_cache.h"
+
+#include <algorithm>
+
+#include "far/offsets/bounding_offset.h"
+
+namespace far::internal {
+
+int64_t SceneCache::Apply(SceneUpdate update) {
+  return std::visit(
+      [this](auto& u) -> int64_t {
+        using T = std::decay_t<decltype(u)>;
+        if constexpr (std::is_same_v<T, AddObject>) {
+          CachedObject object;
+          object.id = u.id;
+          object.motion = u.motion;
+          object.mesh = std::move(u.mesh);
+          object.X_WM = NormalizedPose(u.X_WO).ToIsometry();
+          if (!free_slots_.empty()) {
+            object.slot = free_slots_.back();
+            free_slots_.pop_back();
+          } else {
+            object.slot = next_slot_++;
+          }
+          RefreshGeometry(object);
+          objects_.insert_or_assign(u.id, std::move(object));
+        } else if constexpr (std::is_same_v<T, RemoveObject>) {
+          auto it = objects_.find(u.id);
+          const uint32_t slot = it->second.slot;
+          free_slots_.push_back(slot);
+          objects_.erase(it);
+          return slot;
+        } else if constexpr (std::is_same_v<T, SetPose>) {
+          CachedObject& object = objects_.at(u.id);
+          const Eigen::Isometry3d X_WM = NormalizedPose(u.X_WO).ToIsometry();
+          // A pose equal to the current one changes nothing: static-looking rigid objects
+          // keep their world vertices.
+          if (!X_WM.isApprox(object.X_WM, 0.0)) {
+            object.X_WM = X_WM;
+            object.world_dirty = true;
+          }
+        } else {
+          CachedObject& object = objects_.at(u.id);
+          object.mesh.p_MV = std::move(u.p_MV);
+          RefreshGeometry(object);
+        }
+        return -1;
+      },
+      update);
+}
+
+void SceneCache::RefreshGeometry(CachedObject& object) {
+  object.geometry_stamp = next_stamp_++;
+  Eigen::AlignedBox3d box_M;
+  for (const auto& p : object.mesh.p_MV) box_M.extend(p);
+  object.anchor_M = box_M.center();
+  double extent = 0;
+  for (const auto& p : object.mesh.p_MV)
+    extent = std::max(extent, (p - object.anchor_M).cwiseAbs().maxCoeff());
+  // A rectangle corner is within one edge length (<= 2 extent) of a vertex.
+  object.local_extent = 3.0 * extent;
+  object.rect_boxes_M.resize(object.mesh.triangles.size());
+  object.rect_box_M.setEmpty();
+  for (size_t t = 0; t < object.mesh.triangles.size(); ++t) {
+    const auto& tri = object.mesh.triangles[t];
+    const Obb rect = TriangleRectangle(object.mesh.p_MV[tri[0]], object.mesh.p_MV[tri[1]],
+                                       object.mesh.p_MV[tri[2]]);
+    object.rect_boxes_M[t] = ObbAabb(rect);
+    object.rect_box_M.extend(object.rect_boxes_M[t]);
+  }
+  object.world_dirty = true;
+}
+
+void SceneCache::RefreshWorld() {
+  for (auto& [id, object] : objects_) {
+    if (!object.world_dirty) continue;
+    object.p_WV.resize(object.mesh.p_MV.size());
+    object.box_W.setEmpty();
+    for (size_t v = 0; v < object.p_WV.size(); ++v) {
+      object.p_WV[v] = object.X_WM * object.mesh.p_MV[v];
+      object.box_W.extend(object.p_WV[v]);
+    }
+    object.world_dirty = false;
+    counters_.world_updates++;
+  }
+}
+
+std::vector<const CachedObject*> SceneCache::Objects() const {
+  std::vector<const CachedObject*> all;
+  all.reserve(objects_.size());
+  for (const auto& [id, object] : objects_) all.push_back(&object);
+  return all;
+}
+
+std::vector<WorldObjectView> SceneCache::WorldViews() const {
+  std::vector<WorldObjectView> world;
+  world.reserve(objects_.size());
+  for (const auto& [id, object] : objects_)
+    world.push_back({id, object.p_WV, object.mesh.triangles});
+  return world;
+}
+
+}  // namespace far::internal

@@ -1,0 +1,68 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "far/model/mesh.h"
+#include "far/model/pose.h"
+#include "far/model/scene_update.h"
+#include "far/pairs/world_object.h"
+#include "far/pipeline/pipeline.h"
+
+namespace far::internal {
+
+/// One object of a pipeline's scene and what is derived from it. Vertex-derived data is
+/// recomputed only when the vertices change, world data only when the pose or vertices change.
+struct CachedObject {
+  uint32_t id = 0;
+  uint32_t slot = 0;  ///< dense index reused after removals: the renderers' per-object slot
+  Motion motion = Motion::kStatic;
+  Mesh mesh;  ///< frame M
+  Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
+  uint64_t geometry_stamp = 0;  ///< changes whenever p_MV changes
+  // From p_MV:
+  Eigen::Vector3d anchor_M = Eigen::Vector3d::Zero();  ///< middle of the mesh: frame A's origin
+  double local_extent = 0;                             ///< bound on |x| of pieces in frame A
+  std::vector<Eigen::AlignedBox3d> rect_boxes_M;       ///< per triangle, its rectangle's AABB
+  Eigen::AlignedBox3d rect_box_M;                      ///< union of rect_boxes_M
+  // From p_MV and the pose:
+  bool world_dirty = true;
+  std::vector<Eigen::Vector3d> p_WV;
+  Eigen::AlignedBox3d box_W;  ///< AABB of the world vertices
+
+  Eigen::Isometry3d X_WA() const { return X_WM * Eigen::Translation3d(anchor_M); }
+};
+
+/// The objects of a pipeline by id (deterministic order), kept up to date by updates that the
+/// scene model has already accepted. Thread safety: none (the pipeline's thread).
+class SceneCache {
+ public:
+  /// Applies one update. @pre far::SceneModel accepted it (ids alive, sizes and poses valid).
+  /// Returns the slot an object removal freed (its GPU pieces must go), or -1.
+  int64_t Apply(SceneUpdate update);
+
+  /// Recomputes the world-frame vertices of objects that moved or deformed.
+  void RefreshWorld();
+
+  /// Every object in id order, and their world views (valid until the next Apply).
+  std::vector<const CachedObject*> Objects() const;
+  std::vector<WorldObjectView> WorldViews() const;
+
+  int size() const { return static_cast<int>(objects_.size()); }
+  const SceneCounters& counters() const { return counters_; }
+  SceneCounters& counters() { return counters_; }
+
+ private:
+  void RefreshGeometry(CachedObject& object);
+
+  std::map<uint32_t, CachedObject> objects_;
+  std::vector<uint32_t> free_slots_;
+  uint32_t next_slot_ = 0;
+  uint64_t next_stamp_ = 1;
+  SceneCounters counters_;
+};
+
+}  // namespace far::internal
