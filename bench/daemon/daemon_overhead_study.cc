@@ -16,17 +16,14 @@
 #include "daemon.h"
 
 #include "far/client/client.h"
+#include "far/model/quantile.h"
 #include "far/pipeline/pipeline.h"
 #include "far/scenes/scenes.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Quantile(std::vector<double> v, double q) {
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
-}
+using far::Quantile;
 
 }  // namespace
 

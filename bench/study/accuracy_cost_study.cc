@@ -49,6 +49,7 @@
 
 #include "far/gpu/gl_context.h"
 #include "far/io/mesh_io.h"
+#include "far/model/quantile.h"
 #include "far/model/step_request.h"
 #include "far/pipeline/pipeline.h"
 
@@ -62,6 +63,7 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using far::Quantile;
 
 double MillisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
@@ -282,15 +284,6 @@ struct Config {
 };
 
 // Quantile q of `values` (linear interpolation); 0 for none.
-double Quantile(std::vector<double> values, double q) {
-  if (values.empty()) return 0;
-  std::sort(values.begin(), values.end());
-  const double position = q * static_cast<double>(values.size() - 1);
-  const auto low = static_cast<size_t>(std::floor(position));
-  const size_t high = std::min(low + 1, values.size() - 1);
-  return values[low] + (position - static_cast<double>(low)) * (values[high] - values[low]);
-}
-
 template <typename F>
 double MedianOf(const std::vector<Sample>& samples, F field) {
   std::vector<double> values;

@@ -14,10 +14,12 @@
 
 #include "far/client/client.h"
 #include "far/io/scene_io.h"
+#include "far/model/quantile.h"
 #include "far/scenes/scenes.h"
 
 namespace {
 
+using far::Quantile;
 using far::client::Client;
 using far::client::ClientOptions;
 using Clock = std::chrono::steady_clock;
@@ -26,15 +28,6 @@ using nlohmann::json;
 int Fail(const far::Error& error) {
   std::fprintf(stderr, "far-client: %s\n", far::ToString(error).c_str());
   return 1;
-}
-
-double Quantile(std::vector<double> samples, double q) {
-  if (samples.empty()) return 0;
-  const size_t rank =
-      std::min(samples.size() - 1, static_cast<size_t>(q * static_cast<double>(samples.size())));
-  std::nth_element(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(rank),
-                   samples.end());
-  return samples[rank];
 }
 
 // Options shared by the commands that run steps.

@@ -1,7 +1,10 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <memory>
+#include <string>
+#include <string_view>
 
 #include "daemon_config.h"
 
@@ -9,17 +12,25 @@
 
 namespace far::server {
 
-/// far-daemon: serves many simulator sessions from one GL context.
-///
-/// Threads: the calling thread of Run handles LCM (open, close, heartbeats, status, step
-/// requests -> the fair scheduler) and closes sessions that stopped sending heartbeats; one GL
-/// thread owns the context and every session's pipeline, drains rings, runs steps (exact tests
-/// on a CPU pool) and publishes replies. Nothing a client sends reaches far/ unvalidated.
+/// Test seams of a Daemon; production code leaves them empty.
+struct DaemonTestHooks {
+  /// Runs on the LCM thread before each message is handled; may throw, to prove that a
+  /// handler's exception becomes an error reply instead of ending the daemon.
+  std::function<void(std::string_view channel)> before_message;
+};
+
+/// far-daemon: serves many simulator sessions from one GL context. Three parts:
+///  - the session registry (session_registry.h): open sessions and their queued steps;
+///  - the message handlers (message_handlers.h) on the calling thread of Run: LCM open,
+///    session and status messages, each behind one try/catch, and the heartbeat reaper;
+///  - the step runner (step_runner.h) on the GL thread: rings, scene updates, steps, replies.
+/// Nothing a client sends reaches far/ unvalidated.
 class Daemon {
  public:
   /// Connects LCM and removes shared-memory segments left by dead daemons. The GL context is
-  /// made by Run on its own thread. Errors: kUnavailable (LCM).
-  static Result<std::unique_ptr<Daemon>> Create(const DaemonConfig& config);
+  /// made by Run on its own thread. Errors: kInvalidArgument (config), kUnavailable (LCM).
+  static Result<std::unique_ptr<Daemon>> Create(const DaemonConfig& config,
+                                                DaemonTestHooks hooks = {});
   ~Daemon();
 
   /// Serves until Stop (or `stop_flag` becomes true): makes the GL context (kUnavailable, with

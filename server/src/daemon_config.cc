@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "far/model/step_request.h"
+#include "far/model/limits.h"
 
 namespace far::server {
 namespace {
@@ -31,15 +31,9 @@ Result<DaemonConfig> LoadDaemonConfig(const std::filesystem::path& path, DaemonC
     for (const auto& [key, value] : json.items()) {
       if (key == "lcm_url")
         config.lcm_url = value.get<std::string>();
-      else if (key == "default_resolution")
-        config.default_resolution = value.get<int>();
       else if (key == "max_resolution")
         config.max_resolution = value.get<int>();
-      else if (key == "depth_format") {
-        auto format = ParseDepthFormat(value.get<std::string>());
-        if (!format) return Invalid(key, "unknown depth format " + value.dump());
-        config.depth_format = *format;
-      } else if (key == "gl_platform") {
+      else if (key == "gl_platform") {
         const auto name = value.get<std::string>();
         if (name == "auto")
           config.gl_platform = GlPlatform::kAuto;
@@ -83,13 +77,10 @@ Result<DaemonConfig> LoadDaemonConfig(const std::filesystem::path& path, DaemonC
 
 Result<void> ValidateDaemonConfig(const DaemonConfig& config) {
   if (config.lcm_url.empty()) return Invalid("lcm_url", "empty");
-  if (config.default_resolution < 8 || config.default_resolution > 8192) {
-    return Invalid("default_resolution",
-                   std::to_string(config.default_resolution) + " is outside [8, 8192]");
-  }
-  if (config.max_resolution < config.default_resolution || config.max_resolution > 8192) {
-    return Invalid("max_resolution", std::to_string(config.max_resolution) +
-                                         " is outside [default_resolution, 8192]");
+  if (config.max_resolution < kMinResolution || config.max_resolution > kMaxResolution) {
+    return Invalid("max_resolution", std::to_string(config.max_resolution) + " is outside [" +
+                                         std::to_string(kMinResolution) + ", " +
+                                         std::to_string(kMaxResolution) + "]");
   }
   if (config.max_sessions < 1) return Invalid("max_sessions", "must be >= 1");
   if (config.max_triangles_per_session < 1)
@@ -118,6 +109,23 @@ Result<void> ValidateDaemonConfig(const DaemonConfig& config) {
     return Invalid("log_level",
                    "'" + config.log_level + "' is not one of trace, debug, info, warn, error");
   return {};
+}
+
+SceneLimits SceneLimitsOf(const DaemonConfig& config) {
+  SceneLimits limits;
+  limits.max_objects = config.max_objects_per_session;
+  limits.max_triangles = config.max_triangles_per_session;
+  limits.max_vertices = 3 * config.max_triangles_per_session;
+  return limits;
+}
+
+protocol::RingLimits RingLimitsOf(const DaemonConfig& config) {
+  protocol::RingLimits limits;
+  limits.max_vertices =
+      static_cast<uint32_t>(std::min<int64_t>(config.max_triangles_per_session * 3, 1 << 30));
+  limits.max_triangles =
+      static_cast<uint32_t>(std::min<int64_t>(config.max_triangles_per_session, 1 << 30));
+  return limits;
 }
 
 }  // namespace far::server

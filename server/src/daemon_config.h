@@ -6,8 +6,9 @@
 
 #include "far/gpu/gl_context.h"
 #include "far/model/result.h"
-#include "far/offsets/bounding_offset.h"
+#include "far/model/scene_model.h"
 #include "far/protocol/channels.h"
+#include "far/protocol/ring_records.h"
 
 namespace far::server {
 
@@ -15,9 +16,7 @@ namespace far::server {
 /// Read from a JSON file (keys as below) and overridden by command-line flags.
 struct DaemonConfig {
   std::string lcm_url = std::string(protocol::kDefaultLcmUrl);  ///< docs/protocol.md
-  int default_resolution = 1024;  ///< viewport used when a request names none
-  int max_resolution = 4096;      ///< larger requests are refused: one GL thread serves all
-  DepthFormat depth_format = DepthFormat::kDepth24;
+  int max_resolution = 4096;  ///< larger requests are refused: one GL thread serves all
   GlPlatform gl_platform = GlPlatform::kAuto;
   int max_sessions = 64;
   int64_t max_triangles_per_session = 2'000'000;
@@ -39,5 +38,13 @@ Result<DaemonConfig> LoadDaemonConfig(const std::filesystem::path& path, DaemonC
 
 /// Checks ranges. Errors: kInvalidArgument naming the field and value.
 Result<void> ValidateDaemonConfig(const DaemonConfig& config);
+
+/// A session's scene budgets (max_objects_per_session, max_triangles_per_session; vertices at
+/// most three per triangle).
+SceneLimits SceneLimitsOf(const DaemonConfig& config);
+
+/// What one record of a session's update ring may carry (a record never exceeds the session's
+/// budgets, nor 2^30 elements).
+protocol::RingLimits RingLimitsOf(const DaemonConfig& config);
 
 }  // namespace far::server

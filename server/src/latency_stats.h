@@ -1,8 +1,9 @@
 #pragma once
 
-#include <algorithm>
 #include <cstddef>
 #include <vector>
+
+#include "far/model/quantile.h"
 
 namespace far::server {
 
@@ -21,16 +22,8 @@ class LatencyWindow {
     ++count_;
   }
 
-  /// Returns the q-quantile (0..1) of the window by nearest rank, 0 when empty.
-  double Quantile(double q) const {
-    if (samples_.empty()) return 0;
-    std::vector<double> sorted = samples_;
-    const size_t rank =
-        std::min(sorted.size() - 1, static_cast<size_t>(q * static_cast<double>(sorted.size())));
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(rank),
-                     sorted.end());
-    return sorted[rank];
-  }
+  /// Returns the q-quantile (0..1) of the window (far::Quantile), 0 when empty.
+  double Quantile(double q) const { return far::Quantile(samples_, q); }
 
   size_t count() const { return count_; }
 

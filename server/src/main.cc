@@ -8,7 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
-#include "far/model/step_request.h"
+#include "far/model/version.h"
 
 namespace {
 
@@ -21,15 +21,11 @@ void OnSignal(int) { g_stop = true; }  // async-signal-safe: a lock-free atomic 
 int main(int argc, char** argv) {
   using far::server::DaemonConfig;
   CLI::App app{"far-daemon: GPU collision culling (FAR) for simulators over LCM + shared memory"};
-  std::string config_path, depth_format, gl_platform;
+  app.set_version_flag("--version", std::string("far-daemon ") + far::kVersion);
+  std::string config_path, gl_platform;
   DaemonConfig flags;
   app.add_option("--config", config_path, "JSON config file (docs/daemon.md); flags override it");
   auto* url = app.add_option("--lcm-url", flags.lcm_url, "LCM URL")->capture_default_str();
-  auto* resolution =
-      app.add_option("--resolution", flags.default_resolution, "default viewport size")
-          ->capture_default_str();
-  auto* depth =
-      app.add_option("--depth-format", depth_format, "depth16, depth24 (default) or depth32f");
   auto* platform =
       app.add_option("--gl-platform", gl_platform, "auto (default), device or surfaceless");
   auto* sessions =
@@ -70,15 +66,6 @@ int main(int argc, char** argv) {
     config = *loaded;
   }
   if (*url) config.lcm_url = flags.lcm_url;
-  if (*resolution) config.default_resolution = flags.default_resolution;
-  if (*depth) {
-    auto format = far::ParseDepthFormat(depth_format);
-    if (!format) {
-      std::fprintf(stderr, "far-daemon: --depth-format: unknown '%s'\n", depth_format.c_str());
-      return 2;
-    }
-    config.depth_format = *format;
-  }
   if (*platform) {
     if (gl_platform == "auto")
       config.gl_platform = far::GlPlatform::kAuto;

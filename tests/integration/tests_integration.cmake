@@ -17,8 +17,10 @@ add_executable(far_integration_test
   integration/integration_scenes.cc
   integration/end_to_end_test.cc
   integration/bad_input_test.cc
-  integration/session_lifetime_test.cc)
+  integration/session_lifetime_test.cc
+  integration/dispatch_test.cc)
 target_link_libraries(far_integration_test PRIVATE far::client far::protocol far::scenes far::io
+                      far_server_core
                       far_test_scenes nlohmann_json::nlohmann_json GTest::gtest far_warnings
                       Threads::Threads)
 target_compile_definitions(far_integration_test PRIVATE

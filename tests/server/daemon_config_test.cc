@@ -18,11 +18,11 @@ TEST(DaemonConfigTest, DefaultsAreValid) { EXPECT_TRUE(ValidateDaemonConfig(Daem
 
 TEST(DaemonConfigTest, ReadsKnownKeys) {
   auto config =
-      LoadDaemonConfig(WriteTemp("ok", R"({"default_resolution": 512, "depth_format": "depth32f",
+      LoadDaemonConfig(WriteTemp("ok", R"({"max_resolution": 512, "gl_platform": "surfaceless",
       "max_sessions": 3, "log_level": "debug", "lcm_url": "memq://"})"));
   ASSERT_TRUE(config.ok()) << ToString(config.error());
-  EXPECT_EQ(config->default_resolution, 512);
-  EXPECT_EQ(config->depth_format, DepthFormat::kDepth32F);
+  EXPECT_EQ(config->max_resolution, 512);
+  EXPECT_EQ(config->gl_platform, GlPlatform::kSurfaceless);
   EXPECT_EQ(config->max_sessions, 3);
   EXPECT_EQ(config->lcm_url, "memq://");
 }
@@ -31,7 +31,8 @@ TEST(DaemonConfigTest, RejectsUnknownKeysWrongTypesAndRanges) {
   const std::pair<const char*, const char*> cases[] = {
       {R"({"max_sesions": 3})", "max_sesions"},
       {R"({"max_sessions": "three"})", "wrong type"},
-      {R"({"default_resolution": 4})", "default_resolution"},
+      {R"({"max_resolution": 4})", "max_resolution"},
+      {R"({"default_resolution": 512})", "default_resolution"},
       {R"({"ring_bytes": 100000})", "ring_bytes"},
       {R"({"log_level": "loud"})", "log_level"},
       {R"({"depth_format": "depth8"})", "depth_format"},

@@ -71,8 +71,9 @@ TEST(FairSchedulerTest, TotalBoundHoldsAcrossSessions) {
 TEST(LatencyWindowTest, QuantilesOfRecentSamples) {
   LatencyWindow window(100);
   for (int i = 1; i <= 100; ++i) window.Add(i);
-  EXPECT_DOUBLE_EQ(window.Quantile(0.5), 51);
-  EXPECT_DOUBLE_EQ(window.Quantile(0.99), 100);
+  EXPECT_DOUBLE_EQ(window.Quantile(0.5), 50.5);  // far::Quantile interpolates
+  EXPECT_DOUBLE_EQ(window.Quantile(0.99), 99.01);
+  EXPECT_DOUBLE_EQ(window.Quantile(1.0), 100);
   for (int i = 0; i < 100; ++i) window.Add(1000);  // the window forgets old samples
   EXPECT_DOUBLE_EQ(window.Quantile(0.5), 1000);
   EXPECT_EQ(window.count(), 200u);

@@ -75,7 +75,8 @@ struct RenderCounters {
   int64_t bytes_uploaded = 0;  ///< piece and per-object data sent to the GPU
 };
 
-/// The GL side of culling: persistent piece buffers and the two visibility mechanisms.
+/// The GL side of culling: persistent piece buffers (src/piece_buffers.h) and the two
+/// visibility mechanisms, one file each (src/id_buffer_culler.cc, src/occlusion_query_culler.cc).
 /// Owned by the GL thread (see GlContext's threading contract).
 class CullingRenderer {
  public:
@@ -92,8 +93,6 @@ class CullingRenderer {
   void SetPieces(PieceSet set, uint32_t slot, std::vector<PieceInstance> pieces);
   /// Drops `slot` from every set.
   void RemoveSlot(uint32_t slot);
-  /// True if `slot` has instances in `set`.
-  bool HasPieces(PieceSet set, uint32_t slot) const;
 
   /// Renders one axis view and returns, per primitive, 1 if it is not fully visible against
   /// the other groups (it stays in the PCS) and 0 if it is (pruned). Dead primitives get 0.

@@ -1,0 +1,172 @@
+#include "piece_buffers.h"
+
+#include <algorithm>
+
+namespace far::internal {
+namespace {
+
+// glMultiDrawElementsIndirect's command layout.
+struct DrawCommand {
+  GLuint count;
+  GLuint instance_count;
+  GLuint first_index;
+  GLint base_vertex;
+  GLuint base_instance;
+};
+
+GLsizei CornerCount(PieceSet set) {
+  return static_cast<GLsizei>(CornerIndices(ShapeOf(set)).size());
+}
+
+}  // namespace
+
+PieceBuffers::PieceBuffers() {
+  for (Shape shape : {Shape::kBox, Shape::kPrism, Shape::kTriangle}) {
+    const auto indices = CornerIndices(shape);
+    GLuint& buffer = index_buffers_[static_cast<size_t>(shape)];
+    glCreateBuffers(1, &buffer);
+    glNamedBufferStorage(buffer, static_cast<GLsizeiptr>(indices.size()), indices.data(), 0);
+  }
+  // One instance per draw instance: four vec3 (p0..p3), then triangle and slot.
+  for (int set = 0; set < kNumPieceSets; ++set) {
+    Store& s = stores_[static_cast<size_t>(set)];
+    glCreateBuffers(1, &s.buffer);
+    glCreateBuffers(1, &s.indirect_buffer);
+    glCreateVertexArrays(1, &s.vao);
+    glVertexArrayElementBuffer(
+        s.vao, index_buffers_[static_cast<size_t>(ShapeOf(static_cast<PieceSet>(set)))]);
+    glVertexArrayVertexBuffer(s.vao, 0, s.buffer, 0, sizeof(PieceInstance));
+    glVertexArrayBindingDivisor(s.vao, 0, 1);
+    for (GLuint i = 0; i < 4; ++i) {
+      glEnableVertexArrayAttrib(s.vao, i);
+      glVertexArrayAttribFormat(s.vao, i, 3, GL_FLOAT, GL_FALSE, i * 12);
+      glVertexArrayAttribBinding(s.vao, i, 0);
+    }
+    for (GLuint i = 4; i < 6; ++i) {
+      glEnableVertexArrayAttrib(s.vao, i);
+      glVertexArrayAttribIFormat(s.vao, i, 1, GL_UNSIGNED_INT, 48 + (i - 4) * 4);
+      glVertexArrayAttribBinding(s.vao, i, 0);
+    }
+  }
+}
+
+PieceBuffers::~PieceBuffers() {
+  for (Store& s : stores_) {
+    glDeleteBuffers(1, &s.buffer);
+    glDeleteBuffers(1, &s.indirect_buffer);
+    glDeleteVertexArrays(1, &s.vao);
+  }
+  glDeleteBuffers(kNumShapes, index_buffers_.data());
+}
+
+void PieceBuffers::SetPieces(PieceSet set, uint32_t slot, std::vector<PieceInstance> pieces) {
+  Store& s = store(set);
+  if (slot >= s.slots.size()) {
+    s.slots.resize(slot + 1);
+    s.dirty.resize(slot + 1, 0);
+    s.layout_changed = true;
+  }
+  if (s.slots[slot].size() != pieces.size()) s.layout_changed = true;
+  s.slots[slot] = std::move(pieces);
+  s.dirty[slot] = 1;
+}
+
+void PieceBuffers::RemoveSlot(uint32_t slot) {
+  for (Store& s : stores_) {
+    if (slot < s.slots.size() && !s.slots[slot].empty()) {
+      s.slots[slot].clear();
+      s.layout_changed = true;
+    }
+  }
+}
+
+size_t PieceBuffers::num_slots() const {
+  size_t n = 0;
+  for (const Store& s : stores_) n = std::max(n, s.slots.size());
+  return n;
+}
+
+void PieceBuffers::Sync(PieceSet set, RenderCounters* counters) {
+  Store& s = store(set);
+  if (s.layout_changed) {
+    s.first.assign(s.slots.size(), 0);
+    s.total = 0;
+    for (size_t slot = 0; slot < s.slots.size(); ++slot) {
+      s.first[slot] = s.total;
+      s.total += s.slots[slot].size();
+    }
+    std::vector<PieceInstance> all;
+    all.reserve(s.total);
+    for (const auto& slot : s.slots) all.insert(all.end(), slot.begin(), slot.end());
+    const auto bytes = static_cast<GLsizeiptr>(all.size() * sizeof(PieceInstance));
+    glNamedBufferData(s.buffer, std::max<GLsizeiptr>(bytes, 1), all.data(), GL_STATIC_DRAW);
+    counters->bytes_uploaded += bytes;
+  } else {
+    for (size_t slot = 0; slot < s.slots.size(); ++slot) {
+      if (!s.dirty[slot] || s.slots[slot].empty()) continue;
+      const auto bytes = static_cast<GLsizeiptr>(s.slots[slot].size() * sizeof(PieceInstance));
+      glNamedBufferSubData(s.buffer, static_cast<GLintptr>(s.first[slot] * sizeof(PieceInstance)),
+                           bytes, s.slots[slot].data());
+      counters->bytes_uploaded += bytes;
+    }
+  }
+  std::fill(s.dirty.begin(), s.dirty.end(), 0);
+  s.layout_changed = false;
+}
+
+void PieceBuffers::PrepareViewDraws(PieceSet set, std::span<const ViewObject> objects,
+                                    int64_t* bytes) {
+  Store& s = store(set);
+  std::vector<DrawCommand> commands;
+  s.view_instances = 0;
+  for (const ViewObject& object : objects) {
+    if (object.slot >= s.slots.size() || s.slots[object.slot].empty()) continue;
+    const auto count = static_cast<GLuint>(s.slots[object.slot].size());
+    commands.push_back({static_cast<GLuint>(CornerCount(set)), count, 0, 0,
+                        static_cast<GLuint>(s.first[object.slot])});
+    s.view_instances += count;
+  }
+  s.view_commands = commands.size();
+  glNamedBufferData(
+      s.indirect_buffer,
+      static_cast<GLsizeiptr>(std::max<size_t>(commands.size(), 1) * sizeof(DrawCommand)),
+      commands.data(), GL_STREAM_DRAW);
+  *bytes += static_cast<int64_t>(commands.size() * sizeof(DrawCommand));
+}
+
+void PieceBuffers::DrawView(PieceSet set, RenderCounters* counters) {
+  const Store& s = store(set);
+  if (s.view_commands == 0) return;
+  glBindVertexArray(s.vao);
+  glBindBuffer(GL_DRAW_INDIRECT_BUFFER, s.indirect_buffer);
+  glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_BYTE, nullptr,
+                              static_cast<GLsizei>(s.view_commands), 0);
+  counters->draws++;
+  counters->instances += static_cast<int64_t>(s.view_instances);
+}
+
+void PieceBuffers::Draw(PieceSet set, uint64_t first, uint64_t count, RenderCounters* counters) {
+  if (count == 0) return;
+  glBindVertexArray(store(set).vao);
+  glDrawElementsInstancedBaseInstance(GL_TRIANGLES, CornerCount(set), GL_UNSIGNED_BYTE, nullptr,
+                                      static_cast<GLsizei>(count), static_cast<GLuint>(first));
+  counters->draws++;
+  counters->instances += static_cast<int64_t>(count);
+}
+
+std::pair<uint64_t, uint64_t> PieceBuffers::PrimitiveRange(PieceSet set, const ViewObject& object,
+                                                           int triangles_per_primitive,
+                                                           int local) const {
+  const Store& s = store(set);
+  const uint64_t per = static_cast<uint64_t>(InstancesPerTriangle(set));
+  uint64_t first = s.first[object.slot], count = s.slots[object.slot].size();
+  if (triangles_per_primitive > 0) {
+    const uint64_t k = static_cast<uint64_t>(triangles_per_primitive);
+    const uint64_t begin = static_cast<uint64_t>(local) * k * per;
+    count = std::min(count - std::min(count, begin), k * per);
+    first += begin;
+  }
+  return {first, count};
+}
+
+}  // namespace far::internal

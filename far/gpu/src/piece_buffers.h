@@ -1,0 +1,64 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "culling_shaders.h"
+#include <epoxy/gl.h>
+
+#include "far/gpu/culling_renderer.h"
+
+namespace far::internal {
+
+/// The GPU instances of the four piece sets: per set a CPU copy per slot and one GL buffer with
+/// the slots laid out in order, re-uploaded only where a slot changed. Draws whole views with
+/// one multi-draw-indirect per set, or one primitive's instances at a time. GL thread only.
+class PieceBuffers {
+ public:
+  /// Makes the buffers, vertex layouts and corner index lists. @pre a GL context is current.
+  PieceBuffers();
+  ~PieceBuffers();
+  PieceBuffers(const PieceBuffers&) = delete;
+  PieceBuffers& operator=(const PieceBuffers&) = delete;
+
+  void SetPieces(PieceSet set, uint32_t slot, std::vector<PieceInstance> pieces);
+  void RemoveSlot(uint32_t slot);
+  /// The largest slot number in use, plus one.
+  size_t num_slots() const;
+
+  /// Uploads a set's changed slots: only changed bytes when no slot changed size.
+  void Sync(PieceSet set, RenderCounters* counters);
+  /// Prepares one indirect command per object of the view (its instances in `set`), so that a
+  /// pass draws only the view's objects with one call.
+  void PrepareViewDraws(PieceSet set, std::span<const ViewObject> objects, int64_t* bytes);
+  /// Draws every instance of the view's objects in `set` (after PrepareViewDraws).
+  void DrawView(PieceSet set, RenderCounters* counters);
+  /// Draws instances [first, first + count) of a set.
+  void Draw(PieceSet set, uint64_t first, uint64_t count, RenderCounters* counters);
+  /// The instance range of sub-object `local` of `object` (the whole object when k = 0).
+  std::pair<uint64_t, uint64_t> PrimitiveRange(PieceSet set, const ViewObject& object,
+                                               int triangles_per_primitive, int local) const;
+
+ private:
+  struct Store {
+    std::vector<std::vector<PieceInstance>> slots;
+    std::vector<uint64_t> first;  // first instance of each slot in the GL buffer
+    std::vector<uint8_t> dirty;
+    bool layout_changed = true;
+    GLuint buffer = 0, vao = 0;
+    uint64_t total = 0;
+    GLuint indirect_buffer = 0;  // this view's draw commands
+    size_t view_commands = 0;
+    uint64_t view_instances = 0;
+  };
+  Store& store(PieceSet set) { return stores_[static_cast<size_t>(set)]; }
+  const Store& store(PieceSet set) const { return stores_[static_cast<size_t>(set)]; }
+
+  std::array<Store, kNumPieceSets> stores_;
+  std::array<GLuint, kNumShapes> index_buffers_{};  // per shape: CornerIndices
+};
+
+}  // namespace far::internal

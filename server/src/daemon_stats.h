@@ -1,0 +1,70 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+
+#include "latency_stats.h"
+
+namespace far::server {
+
+/// The daemon-wide counters its status reports. Thread-safe.
+class DaemonStats {
+ public:
+  /// Counts one error of `kind` (an ErrorCode name: "invalid_argument", "internal", ...).
+  void CountError(const std::string& kind) {
+    std::lock_guard lock(mutex_);
+    errors_by_kind_[kind]++;
+    errors_total_++;
+  }
+  /// Counts one message dropped before it reached a session: an error of its code, and one
+  /// more rejected message (each rejection is counted once in errors_total).
+  void CountRejected(const std::string& kind) {
+    std::lock_guard lock(mutex_);
+    errors_by_kind_[kind]++;
+    errors_total_++;
+    rejected_total_++;
+  }
+  /// Counts one step served in `ms` (request received to reply published).
+  void CountStep(double ms) {
+    std::lock_guard lock(mutex_);
+    latency_.Add(ms);
+    steps_total_++;
+  }
+
+  struct Snapshot {
+    std::map<std::string, int64_t> errors_by_kind;
+    int64_t errors_total = 0, rejected_total = 0, steps_total = 0, latency_samples = 0;
+    double p50_ms = 0, p90_ms = 0, p99_ms = 0, max_ms = 0;
+  };
+  Snapshot Read() const {
+    std::lock_guard lock(mutex_);
+    Snapshot snapshot;
+    snapshot.errors_by_kind = errors_by_kind_;
+    snapshot.errors_total = errors_total_;
+    snapshot.rejected_total = rejected_total_;
+    snapshot.steps_total = steps_total_;
+    snapshot.latency_samples = static_cast<int64_t>(latency_.count());
+    snapshot.p50_ms = latency_.Quantile(0.5);
+    snapshot.p90_ms = latency_.Quantile(0.9);
+    snapshot.p99_ms = latency_.Quantile(0.99);
+    snapshot.max_ms = latency_.Quantile(1.0);
+    return snapshot;
+  }
+  int64_t steps_total() const {
+    std::lock_guard lock(mutex_);
+    return steps_total_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<std::string, int64_t> errors_by_kind_;
+  int64_t errors_total_ = 0;
+  int64_t rejected_total_ = 0;
+  int64_t steps_total_ = 0;
+  LatencyWindow latency_{8192};
+};
+
+}  // namespace far::server
