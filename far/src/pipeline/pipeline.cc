@@ -317,6 +317,7 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
   // The reference and FCL answer at once, without culling stages.
   if (request.method == Method::kExact || request.method == Method::kFcl) {
     ExactResult exact;
+    std::optional<size_t> broadphase_pairs;  // FCL's candidate object pairs
     if (request.method == Method::kExact) {
       exact = BruteForceReference(world, request.distance, pool);
     } else {
@@ -324,7 +325,11 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
       for (const ObjectState* object : all) {
         fcl_objects.push_back({object->id, object->geometry_stamp, &object->mesh, object->X_WM});
       }
-      exact.contacts = fcl.Collide(fcl_objects, &exact.pairs_tested);
+      internal::FclCollider::CollideStats fcl_stats;
+      exact.contacts = fcl.Collide(fcl_objects, &fcl_stats);
+      exact.pairs_considered = fcl_stats.triangle_pairs_considered;
+      exact.pairs_tested = fcl_stats.triangle_tests;
+      broadphase_pairs = fcl_stats.object_pairs;
     }
     end_stage("exact");
     std::set<uint32_t> pcs;
@@ -346,7 +351,7 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
     result.object_pairs.assign(pairs.begin(), pairs.end());
     result.contacts = std::move(exact.contacts);
     result.distance_pairs = std::move(exact.distance_pairs);
-    stats.object_pairs = static_cast<int64_t>(pairs.size());
+    stats.object_pairs = static_cast<int64_t>(broadphase_pairs.value_or(pairs.size()));
     stats.pairs_tested = static_cast<int64_t>(exact.pairs_tested);
     stats.pairs_considered = static_cast<int64_t>(exact.pairs_considered);
     return finish();
