@@ -13,8 +13,9 @@
 namespace far::internal {
 
 /// FCL as a comparison method: a BVHModel<OBBRSS> per object (built once, refit when a
-/// deformable object's vertices change), a dynamic AABB tree broadphase, and FCL's
-/// mesh-mesh collide reporting every intersecting triangle pair. FCL types stay in the .cc.
+/// deformable object's vertices change), a dynamic AABB tree broadphase kept across calls, and
+/// FCL's mesh-mesh collide reporting every intersecting triangle pair: the answer FCL gives on
+/// fresh models of the same objects. FCL types stay in the .cc.
 class FclCollider {
  public:
   struct Object {
@@ -24,12 +25,19 @@ class FclCollider {
     Eigen::Isometry3d X_WM;
   };
 
+  /// What one Collide call did.
+  struct CollideStats {
+    size_t object_pairs = 0;               ///< object pairs FCL's broadphase passed to collide
+    size_t triangle_pairs_considered = 0;  ///< sum over those pairs of n_a * n_b triangles
+    size_t triangle_tests = 0;  ///< triangle pairs whose leaf boxes overlapped: FCL's tests
+  };
+
   FclCollider();
   ~FclCollider();
 
-  /// Returns FCL's contact pairs (sorted, object_a < object_b) among `objects`.
-  /// `narrow_pairs` gets the number of object pairs FCL's broadphase passed to collide.
-  std::vector<ContactPair> Collide(const std::vector<Object>& objects, size_t* narrow_pairs);
+  /// Returns FCL's contact pairs (sorted, object_a < object_b) among `objects`; `stats` (may be
+  /// null) gets what it took.
+  std::vector<ContactPair> Collide(const std::vector<Object>& objects, CollideStats* stats);
   /// Forgets an object's model.
   void Remove(uint32_t id);
 

@@ -153,6 +153,7 @@ Result<void> Pipeline::Impl::Apply(std::vector<SceneUpdate> updates,
 void Pipeline::Impl::RunWholeScene(StepState& state) {
   StepResult& result = state.result;
   ExactResult exact;
+  std::optional<size_t> broadphase_pairs;  // FCL's candidate object pairs
   if (state.request.method == Method::kExact) {
     exact = BruteForceReference(cache.WorldViews(), state.request.distance, pool);
   } else {
@@ -160,13 +161,18 @@ void Pipeline::Impl::RunWholeScene(StepState& state) {
     for (const CachedObject* object : state.objects) {
       fcl_objects.push_back({object->id, object->geometry_stamp, &object->mesh, object->X_WM});
     }
-    exact.contacts = fcl.Collide(fcl_objects, &exact.pairs_tested);
+    internal::FclCollider::CollideStats fcl_stats;
+    exact.contacts = fcl.Collide(fcl_objects, &fcl_stats);
+    exact.pairs_considered = fcl_stats.triangle_pairs_considered;
+    exact.pairs_tested = fcl_stats.triangle_tests;
+    broadphase_pairs = fcl_stats.object_pairs;
   }
   result.contacts = std::move(exact.contacts);
   result.distance_pairs = std::move(exact.distance_pairs);
   result.stats.pairs_tested = static_cast<int64_t>(exact.pairs_tested);
   result.stats.pairs_considered = static_cast<int64_t>(exact.pairs_considered);
   DeriveCullingOutputs(result);
+  if (broadphase_pairs) result.stats.object_pairs = static_cast<int64_t>(*broadphase_pairs);
 }
 
 // Object-level culling -> object PCS (AABB: every object goes on to sweep-and-prune).

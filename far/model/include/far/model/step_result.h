@@ -25,12 +25,19 @@ struct StepStats {
   int64_t primitives_rendered = 0;  ///< object and sub-object primitives drawn, all views
   int64_t draws = 0;
   int64_t queries = 0;
-  int64_t bytes_uploaded = 0;    ///< to the GPU this step
-  int64_t object_pairs = 0;      ///< candidate object pairs after sweep-and-prune
-  int64_t pairs_considered = 0;  ///< candidate triangle pairs (PCS x PCS over object pairs)
-  int64_t pairs_tested = 0;      ///< triangle pairs that reached an exact test
-  double object_radius = 0;      ///< offset radius r of the last object-level view
-  double primitive_radius = 0;   ///< offset radius r of the last sub-object view
+  int64_t bytes_uploaded = 0;  ///< to the GPU this step
+  /// Candidate object pairs after sweep-and-prune. fcl: the pairs its broadphase passed to
+  /// collide; exact: the pairs in its answer (it has no candidates).
+  int64_t object_pairs = 0;
+  /// Candidate triangle pairs (PCS x PCS over object pairs). fcl: n_a * n_b summed over its
+  /// broadphase pairs; exact: every cross-object pair.
+  int64_t pairs_considered = 0;
+  /// Triangle pairs that reached an exact test. fcl: the pairs that reached FCL's own triangle
+  /// test, those whose leaf boxes overlapped in its BVH traversal (its num_leaf_tests); exact:
+  /// the pairs that passed the triangle-box prefilter.
+  int64_t pairs_tested = 0;
+  double object_radius = 0;     ///< offset radius r of the last object-level view
+  double primitive_radius = 0;  ///< offset radius r of the last sub-object view
 };
 
 /// The answer of one step. Ids and triangle indices are as in the scene (docs/scene-format.md).
