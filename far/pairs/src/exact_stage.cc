@@ -193,13 +193,10 @@ ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered) {
   return result;
 }
 
-}  // namespace
-
-ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
+// The object pairs of a query as indices into its objects, smaller id first, each once
+// (unknown ids and self pairs break the precondition and are skipped).
+std::vector<std::pair<uint32_t, uint32_t>> IndexPairs(const ExactQuery& query) {
   const std::span<const WorldObjectView> objects = query.objects;
-  assert(query.triangle_subsets.empty() || query.triangle_subsets.size() == objects.size());
-
-  // Map ids to indices.
   std::vector<std::pair<uint32_t, uint32_t>> id_index(objects.size());
   for (uint32_t i = 0; i < objects.size(); ++i) id_index[i] = {objects[i].id, i};
   std::sort(id_index.begin(), id_index.end());
@@ -208,9 +205,6 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
         std::lower_bound(id_index.begin(), id_index.end(), std::pair<uint32_t, uint32_t>{id, 0});
     return it != id_index.end() && it->first == id ? it->second : -1;
   };
-
-  // The object pairs as indices, smaller id first, each once (unknown ids and self pairs break
-  // the precondition and are skipped).
   std::vector<std::pair<uint32_t, uint32_t>> pairs;
   pairs.reserve(query.object_pairs.size());
   for (const ObjectPair& pair : query.object_pairs) {
@@ -222,40 +216,70 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
   }
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  return pairs;
+}
+
+// The candidate triangle boxes of object `o` (its subset, each valid triangle once), sorted by
+// their low x.
+SortedBoxes CandidateBoxes(const ExactQuery& query, uint32_t o) {
+  const WorldObjectView& object = query.objects[o];
+  const auto num_triangles = static_cast<uint32_t>(object.triangles.size());
+  SortedBoxes list;
+  if (query.triangle_subsets.empty() || o >= query.triangle_subsets.size()) {
+    list.reserve(num_triangles);
+    for (uint32_t t = 0; t < num_triangles; ++t) list.push_back(BoxOf(object, t));
+  } else {
+    std::vector<uint32_t> subset = query.triangle_subsets[o];
+    std::sort(subset.begin(), subset.end());
+    subset.erase(std::unique(subset.begin(), subset.end()), subset.end());
+    assert(subset.empty() || subset.back() < num_triangles);
+    list.reserve(subset.size());
+    for (uint32_t t : subset) {
+      if (t < num_triangles) list.push_back(BoxOf(object, t));
+    }
+  }
+  std::sort(list.begin(), list.end(), [](const TriangleBox& x, const TriangleBox& y) {
+    return x.lo[0] < y.lo[0] || (x.lo[0] == y.lo[0] && x.triangle < y.triangle);
+  });
+  return list;
+}
+
+// Cuts every object pair into work items of about kItemTriangles triangles; counts the
+// candidate triangle pairs.
+std::vector<WorkItem> CutIntoItems(std::span<const std::pair<uint32_t, uint32_t>> pairs,
+                                   const std::vector<SortedBoxes>& boxes, const Wanted& wanted,
+                                   size_t* pairs_considered) {
+  std::vector<WorkItem> items;
+  for (const auto& [a, b] : pairs) {
+    const auto size_a = static_cast<uint32_t>(boxes[a].size());
+    const auto size_b = static_cast<uint32_t>(boxes[b].size());
+    *pairs_considered += static_cast<size_t>(size_a) * size_b;
+    if (size_a == 0 || size_b == 0 || !(wanted.contacts || wanted.distance)) continue;
+    for (bool from_b : {false, true}) {
+      const uint32_t size = from_b ? size_b : size_a;
+      for (uint32_t begin = 0; begin < size; begin += kItemTriangles) {
+        items.push_back({a, b, from_b, begin, std::min(size, begin + kItemTriangles)});
+      }
+    }
+  }
+  return items;
+}
+
+}  // namespace
+
+ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
+  const std::span<const WorldObjectView> objects = query.objects;
+  assert(query.triangle_subsets.empty() || query.triangle_subsets.size() == objects.size());
+  const std::vector<std::pair<uint32_t, uint32_t>> pairs = IndexPairs(query);
 
   // Build and sort the candidate triangle boxes of every object in some pair, once.
   std::vector<uint32_t> used;
-  for (const auto& [a, b] : pairs) {
-    used.push_back(a);
-    used.push_back(b);
-  }
+  for (const auto& [a, b] : pairs) used.insert(used.end(), {a, b});
   std::sort(used.begin(), used.end());
   used.erase(std::unique(used.begin(), used.end()), used.end());
   std::vector<SortedBoxes> boxes(objects.size());
   pool.ParallelFor(used.size(), 1, [&](size_t begin, size_t end) {
-    for (size_t u = begin; u < end; ++u) {
-      const uint32_t o = used[u];
-      const WorldObjectView& object = objects[o];
-      const auto num_triangles = static_cast<uint32_t>(object.triangles.size());
-      SortedBoxes& list = boxes[o];
-      if (query.triangle_subsets.empty() || o >= query.triangle_subsets.size()) {
-        list.reserve(num_triangles);
-        for (uint32_t t = 0; t < num_triangles; ++t) list.push_back(BoxOf(object, t));
-      } else {
-        // A subset counts each valid triangle once.
-        std::vector<uint32_t> subset = query.triangle_subsets[o];
-        std::sort(subset.begin(), subset.end());
-        subset.erase(std::unique(subset.begin(), subset.end()), subset.end());
-        assert(subset.empty() || subset.back() < num_triangles);
-        list.reserve(subset.size());
-        for (uint32_t t : subset) {
-          if (t < num_triangles) list.push_back(BoxOf(object, t));
-        }
-      }
-      std::sort(list.begin(), list.end(), [](const TriangleBox& x, const TriangleBox& y) {
-        return x.lo[0] < y.lo[0] || (x.lo[0] == y.lo[0] && x.triangle < y.triangle);
-      });
-    }
+    for (size_t u = begin; u < end; ++u) boxes[used[u]] = CandidateBoxes(query, used[u]);
   });
 
   // Decide what to compute and the prefilter slack. A negative or NaN max_distance finds nothing.
@@ -268,22 +292,8 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
     for (uint32_t o : used) magnitude = std::max(magnitude, Magnitude(boxes[o]));
     wanted.slack = DistanceSlack(wanted.max_distance, magnitude);
   }
-
-  // Cut every object pair into work items of about kItemTriangles triangles.
   size_t pairs_considered = 0;
-  std::vector<WorkItem> items;
-  for (const auto& [a, b] : pairs) {
-    const auto size_a = static_cast<uint32_t>(boxes[a].size());
-    const auto size_b = static_cast<uint32_t>(boxes[b].size());
-    pairs_considered += static_cast<size_t>(size_a) * size_b;
-    if (size_a == 0 || size_b == 0 || !(wanted.contacts || wanted.distance)) continue;
-    for (bool from_b : {false, true}) {
-      const uint32_t size = from_b ? size_b : size_a;
-      for (uint32_t begin = 0; begin < size; begin += kItemTriangles) {
-        items.push_back({a, b, from_b, begin, std::min(size, begin + kItemTriangles)});
-      }
-    }
-  }
+  const std::vector<WorkItem> items = CutIntoItems(pairs, boxes, wanted, &pairs_considered);
 
   // Run the items on the pool, each chunk of items into its own output.
   const size_t threads = static_cast<size_t>(pool.num_threads());

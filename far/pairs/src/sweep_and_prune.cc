@@ -46,36 +46,30 @@ bool EndpointLess(double a_value, bool a_is_max, double b_value, bool b_is_max) 
 
 }  // namespace
 
-std::vector<ObjectPair> SweepAndPrune::Update(std::span<const IdBox> boxes, double margin) {
-  assert(margin >= 0);
-  // A negative or NaN margin is treated as 0 (the contract asks for margin >= 0).
-  const double half = margin > 0 ? margin / 2 : 0.0;
-  const double inf = std::numeric_limits<double>::infinity();
-  const auto less = [](const Endpoint& a, const Endpoint& b) {
-    return EndpointLess(a.value, a.is_max, b.value, b.is_max);
-  };
-  // True iff the current grown boxes of two slots overlap on every axis.
-  const auto overlap = [this](uint32_t a, uint32_t b) {
-    const Slot& x = slots_[a];
-    const Slot& y = slots_[b];
-    if (x.empty || y.empty) return false;
-    for (int axis = 0; axis < 3; ++axis) {
-      if (x.lo[axis] > y.hi[axis] || y.lo[axis] > x.hi[axis]) return false;
-    }
-    return true;
-  };
-  const auto key = [](uint32_t a, uint32_t b) {
-    return static_cast<uint64_t>(std::min(a, b)) << 32 | std::max(a, b);
-  };
-  ++stamp_;
-  last_swaps_ = 0;
+bool SweepAndPrune::Overlap(uint32_t a, uint32_t b) const {
+  const Slot& x = slots_[a];
+  const Slot& y = slots_[b];
+  if (x.empty || y.empty) return false;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (x.lo[axis] > y.hi[axis] || y.lo[axis] > x.hi[axis]) return false;
+  }
+  return true;
+}
 
-  // Refresh every object's grown interval, giving new ids a slot. An object whose box was empty
-  // has no pairs and its endpoints sit at +inf in an order that says nothing about overlap, so
-  // one that turns non-empty is looked at afresh, like a new one.
-  std::vector<uint32_t> added;
-  std::vector<uint32_t> revived;
-  bool any_empty = false;
+uint64_t SweepAndPrune::PairKey(uint32_t a, uint32_t b) {
+  return static_cast<uint64_t>(std::min(a, b)) << 32 | std::max(a, b);
+}
+
+bool SweepAndPrune::EndpointOrder(const Endpoint& a, const Endpoint& b) {
+  return EndpointLess(a.value, a.is_max, b.value, b.is_max);
+}
+
+// Refreshes every object's grown interval, giving new ids a slot. An object whose box was empty
+// has no pairs and its endpoints sit at +inf in an order that says nothing about overlap, so
+// one that turns non-empty is looked at afresh, like a new one.
+SweepAndPrune::Refreshed SweepAndPrune::RefreshSlots(std::span<const IdBox> boxes, double half) {
+  const double inf = std::numeric_limits<double>::infinity();
+  Refreshed refreshed;
   for (const IdBox& id_box : boxes) {
     auto [it, inserted] = id_slots_.try_emplace(id_box.id, 0);
     if (inserted) {
@@ -86,7 +80,7 @@ std::vector<ObjectPair> SweepAndPrune::Update(std::span<const IdBox> boxes, doub
         it->second = free_slots_.back();
         free_slots_.pop_back();
       }
-      added.push_back(it->second);
+      refreshed.added.push_back(it->second);
     }
     Slot& slot = slots_[it->second];
     assert(slot.stamp != stamp_ && "ids must be unique");
@@ -99,15 +93,18 @@ std::vector<ObjectPair> SweepAndPrune::Update(std::span<const IdBox> boxes, doub
     // An empty or non-finite box pairs with nothing; its endpoints park at +inf so that they
     // keep the lists totally ordered (a NaN would break the sort for everyone).
     slot.empty = !(lo.allFinite() && hi.allFinite() && (lo.array() <= hi.array()).all());
-    any_empty = any_empty || slot.empty;
-    if (was_empty && !slot.empty) revived.push_back(it->second);
+    refreshed.any_empty = refreshed.any_empty || slot.empty;
+    if (was_empty && !slot.empty) refreshed.revived.push_back(it->second);
     for (int axis = 0; axis < 3; ++axis) {
       slot.lo[axis] = slot.empty ? inf : lo[axis] - half;
       slot.hi[axis] = slot.empty ? inf : hi[axis] + half;
     }
   }
+  return refreshed;
+}
 
-  // Forget the objects that were not in `boxes`, with their endpoints and pairs.
+// Forgets the objects that were not in this Update, with their endpoints and pairs.
+void SweepAndPrune::DropUnseen() {
   bool any_removed = false;
   for (uint32_t s = 0; s < slots_.size(); ++s) {
     Slot& slot = slots_[s];
@@ -117,101 +114,109 @@ std::vector<ObjectPair> SweepAndPrune::Update(std::span<const IdBox> boxes, doub
     free_slots_.push_back(s);
     any_removed = true;
   }
-  if (any_removed) {
-    const auto dead = [this](const Endpoint& e) { return !slots_[e.slot].live; };
-    for (auto& axis : axes_) std::erase_if(axis, dead);
-    std::erase_if(overlaps_, [this](uint64_t pair) {
-      return !slots_[pair >> 32].live || !slots_[static_cast<uint32_t>(pair)].live;
-    });
-  }
+  if (!any_removed) return;
+  const auto dead = [this](const Endpoint& e) { return !slots_[e.slot].live; };
+  for (auto& axis : axes_) std::erase_if(axis, dead);
+  std::erase_if(overlaps_, [this](uint64_t pair) {
+    return !slots_[pair >> 32].live || !slots_[static_cast<uint32_t>(pair)].live;
+  });
+}
 
+// Moves axis `a`'s endpoints to their new values and repairs the order by insertion sort, and
+// the pairs with it: each swap of a min and a max is two objects starting or ceasing to overlap
+// on this axis. Returns true when the axis was too far from sorted and was sorted afresh (its
+// pairs then say nothing). Then merges in the endpoints of the new objects.
+bool SweepAndPrune::RepairAxis(int a, bool rebuild, std::span<const uint32_t> added) {
+  std::vector<Endpoint>& axis = axes_[a];
+  for (Endpoint& e : axis) e.value = e.is_max ? slots_[e.slot].hi[a] : slots_[e.slot].lo[a];
+  const size_t budget = kSwapBudgetPerEndpoint * axis.size() + 64;
+  size_t swaps = 0;
+  for (size_t i = 1; i < axis.size() && swaps <= budget; ++i) {
+    const Endpoint moving = axis[i];
+    size_t j = i;
+    for (; j > 0 && EndpointOrder(moving, axis[j - 1]); --j) {
+      const Endpoint& passed = axis[j - 1];
+      if (!rebuild && moving.is_max != passed.is_max && moving.slot != passed.slot) {
+        if (moving.is_max) {
+          overlaps_.erase(PairKey(moving.slot, passed.slot));  // now apart on this axis
+        } else if (Overlap(moving.slot, passed.slot)) {
+          overlaps_.insert(PairKey(moving.slot, passed.slot));  // now together on this axis
+        }
+      }
+      axis[j] = passed;
+    }
+    axis[j] = moving;
+    swaps += i - j;
+  }
+  // Too far from sorted (objects jumped): a full sort is cheaper than finishing.
+  const bool resorted = swaps > budget;
+  if (resorted) std::sort(axis.begin(), axis.end(), EndpointOrder);
+  last_swaps_ += swaps;
+  if (!added.empty()) {
+    const auto old_size = static_cast<std::ptrdiff_t>(axis.size());
+    for (uint32_t s : added) {
+      axis.push_back({slots_[s].lo[a], s, false});
+      axis.push_back({slots_[s].hi[a], s, true});
+    }
+    std::sort(axis.begin() + old_size, axis.end(), EndpointOrder);
+    std::inplace_merge(axis.begin(), axis.begin() + old_size, axis.end(), EndpointOrder);
+  }
+  return resorted;
+}
+
+// Finds the pairs of the objects marked in `is_new` by sweeping x: an object is active from its
+// min to its max, and on entry meets the active objects it overlaps on x; an old object only
+// needs to meet the new ones.
+void SweepAndPrune::SweepNewPairs(const std::vector<uint8_t>& is_new) {
+  std::vector<uint32_t> active[2];  // [0] old, [1] new
+  std::vector<uint32_t> active_index(slots_.size(), kNotActive);
+  for (const Endpoint& e : axes_[0]) {
+    std::vector<uint32_t>& own = active[is_new[e.slot]];
+    if (e.is_max) {
+      // Swap-remove from the active set (an empty box was never added).
+      const uint32_t index = active_index[e.slot];
+      if (index == kNotActive) continue;
+      own[index] = own.back();
+      active_index[own[index]] = index;
+      own.pop_back();
+      active_index[e.slot] = kNotActive;
+      continue;
+    }
+    if (slots_[e.slot].empty) continue;
+    for (int list = is_new[e.slot] ? 0 : 1; list < 2; ++list) {
+      for (uint32_t other : active[list]) {
+        if (Overlap(e.slot, other)) overlaps_.insert(PairKey(e.slot, other));
+      }
+    }
+    active_index[e.slot] = static_cast<uint32_t>(own.size());
+    own.push_back(e.slot);
+  }
+}
+
+std::vector<ObjectPair> SweepAndPrune::Update(std::span<const IdBox> boxes, double margin) {
+  assert(margin >= 0);
+  // A negative or NaN margin is treated as 0 (the contract asks for margin >= 0).
+  const double half = margin > 0 ? margin / 2 : 0.0;
+  ++stamp_;
+  last_swaps_ = 0;
+  const Refreshed refreshed = RefreshSlots(boxes, half);
+  DropUnseen();
   bool rebuild = false;  // an axis was re-sorted: find all pairs afresh
-  for (int a = 0; a < 3; ++a) {
-    std::vector<Endpoint>& axis = axes_[a];
-    // Move the endpoints of the objects already tracked to their new values.
-    for (Endpoint& e : axis) e.value = e.is_max ? slots_[e.slot].hi[a] : slots_[e.slot].lo[a];
-
-    // Repair the order by insertion sort, and the pairs with it: each swap of a min and a max is
-    // two objects starting or ceasing to overlap on this axis.
-    const size_t budget = kSwapBudgetPerEndpoint * axis.size() + 64;
-    size_t swaps = 0;
-    for (size_t i = 1; i < axis.size() && swaps <= budget; ++i) {
-      const Endpoint moving = axis[i];
-      size_t j = i;
-      for (; j > 0 && less(moving, axis[j - 1]); --j) {
-        const Endpoint& passed = axis[j - 1];
-        if (!rebuild && moving.is_max != passed.is_max && moving.slot != passed.slot) {
-          if (moving.is_max) {
-            overlaps_.erase(key(moving.slot, passed.slot));  // now apart on this axis
-          } else if (overlap(moving.slot, passed.slot)) {
-            overlaps_.insert(key(moving.slot, passed.slot));  // now together on this axis
-          }
-        }
-        axis[j] = passed;
-      }
-      axis[j] = moving;
-      swaps += i - j;
-    }
-    // Too far from sorted (objects jumped): a full sort is cheaper than finishing.
-    if (swaps > budget) {
-      std::sort(axis.begin(), axis.end(), less);
-      rebuild = true;
-    }
-    last_swaps_ += swaps;
-
-    // Merge in the endpoints of the new objects.
-    if (!added.empty()) {
-      const auto old_size = static_cast<std::ptrdiff_t>(axis.size());
-      for (uint32_t s : added) {
-        axis.push_back({slots_[s].lo[a], s, false});
-        axis.push_back({slots_[s].hi[a], s, true});
-      }
-      std::sort(axis.begin() + old_size, axis.end(), less);
-      std::inplace_merge(axis.begin(), axis.begin() + old_size, axis.end(), less);
-    }
-  }
-
-  // Find the pairs of the new and revived objects (of all objects after a re-sort) by sweeping
-  // x: an object is active from its min to its max, and on entry meets the active objects it
-  // overlaps on x; an old object only needs to meet the new ones.
+  for (int a = 0; a < 3; ++a) rebuild = RepairAxis(a, rebuild, refreshed.added) || rebuild;
   if (rebuild) overlaps_.clear();
-  if (rebuild || !added.empty() || !revived.empty()) {
+  if (rebuild || !refreshed.added.empty() || !refreshed.revived.empty()) {
     std::vector<uint8_t> is_new(slots_.size(), rebuild ? 1 : 0);
-    for (uint32_t s : added) is_new[s] = 1;
-    for (uint32_t s : revived) is_new[s] = 1;
-    std::vector<uint32_t> active[2];  // [0] old, [1] new
-    std::vector<uint32_t> active_index(slots_.size(), kNotActive);
-    for (const Endpoint& e : axes_[0]) {
-      std::vector<uint32_t>& own = active[is_new[e.slot]];
-      if (e.is_max) {
-        // Swap-remove from the active set (an empty box was never added).
-        const uint32_t index = active_index[e.slot];
-        if (index == kNotActive) continue;
-        own[index] = own.back();
-        active_index[own[index]] = index;
-        own.pop_back();
-        active_index[e.slot] = kNotActive;
-        continue;
-      }
-      if (slots_[e.slot].empty) continue;
-      for (int list = is_new[e.slot] ? 0 : 1; list < 2; ++list) {
-        for (uint32_t other : active[list]) {
-          if (overlap(e.slot, other)) overlaps_.insert(key(e.slot, other));
-        }
-      }
-      active_index[e.slot] = static_cast<uint32_t>(own.size());
-      own.push_back(e.slot);
-    }
+    for (uint32_t s : refreshed.added) is_new[s] = 1;
+    for (uint32_t s : refreshed.revived) is_new[s] = 1;
+    SweepNewPairs(is_new);
   }
-
   // An object whose box turned empty loses its pairs (two that both turn empty keep their tied
   // order at +inf, so no swap would tell).
-  if (any_empty) {
+  if (refreshed.any_empty) {
     std::erase_if(overlaps_, [this](uint64_t pair) {
       return slots_[pair >> 32].empty || slots_[static_cast<uint32_t>(pair)].empty;
     });
   }
-
   // Report the pairs by id, sorted.
   std::vector<ObjectPair> pairs;
   pairs.reserve(overlaps_.size());

@@ -47,6 +47,20 @@ class SweepAndPrune {
     double lo[3] = {0, 0, 0};
     double hi[3] = {0, 0, 0};
   };
+  // What RefreshSlots found.
+  struct Refreshed {
+    std::vector<uint32_t> added;    // slots of ids seen for the first time
+    std::vector<uint32_t> revived;  // slots whose box turned non-empty
+    bool any_empty = false;
+  };
+  Refreshed RefreshSlots(std::span<const IdBox> boxes, double half);
+  void DropUnseen();
+  bool RepairAxis(int axis, bool rebuild, std::span<const uint32_t> added);
+  void SweepNewPairs(const std::vector<uint8_t>& is_new);
+  bool Overlap(uint32_t a, uint32_t b) const;  // grown boxes overlap on every axis
+  static uint64_t PairKey(uint32_t a, uint32_t b);
+  static bool EndpointOrder(const Endpoint& a, const Endpoint& b);
+
   std::vector<Endpoint> axes_[3];  // sorted by (value, min before max)
   std::vector<Slot> slots_;
   std::vector<uint32_t> free_slots_;
