@@ -11,8 +11,9 @@ packages=(
   # headless GL: EGL + GL headers and Mesa's software rasterizer (llvmpipe). Nothing pulls
   # libgl1-mesa-dri in otherwise, and without it EGL finds no driver at all.
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev
-  # protocol and IPC
-  liblcm-dev liblcm-bin libboost-dev libsodium-dev
+  # protocol and IPC. LCM's C library is built from source (protocol/third_party/lcm: patch,
+  # glib; CMake downloads the tarball, ca-certificates for https); lcm-gen is liblcm-bin's.
+  liblcm-bin libglib2.0-dev patch ca-certificates libboost-dev libsodium-dev
   # files, command lines, logs
   nlohmann-json3-dev libcli11-dev libspdlog-dev
   # tests, benchmarks, plots

@@ -17,6 +17,14 @@ struct LcmBus::Subscription {
 };
 
 Result<std::unique_ptr<LcmBus>> LcmBus::Create(const std::string& url) {
+  // Only the providers far builds and has hardened (docs/protocol.md). An empty URL would let
+  // LCM take $LCM_DEFAULT_URL instead.
+  if (!url.starts_with("udpm://") && !url.starts_with("memq://")) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "LCM URL '" + url +
+                         "': far accepts only the udpm:// and memq:// providers (file://, "
+                         "tcpq:// and mpudpm:// are not built in)");
+  }
   lcm_t* lcm = lcm_create(url.c_str());
   if (lcm == nullptr) {
     return MakeError(ErrorCode::kUnavailable,

@@ -10,5 +10,6 @@ far_add_test(far_protocol_test unit
   protocol/session_auth_test.cc
   protocol/convert_test.cc
   protocol/shm_segment_test.cc
-  protocol/shm_reply_test.cc)
+  protocol/shm_reply_test.cc
+  protocol/lcm_bus_test.cc)
 target_link_libraries(far_protocol_test PRIVATE far::protocol)

@@ -24,7 +24,8 @@ class LcmBus {
   using Handler = std::function<void(std::string_view channel, std::span<const uint8_t> bytes)>;
 
   /// Connects to `url` (e.g. "udpm://239.255.76.67:7667?ttl=0", "memq://").
-  /// Errors: kUnavailable naming the URL (bad URL, no multicast route on loopback, ...).
+  /// Errors: kInvalidArgument for any other provider (far's LCM has only these two);
+  /// kUnavailable naming the URL (bad URL, no multicast route on loopback, ...).
   static Result<std::unique_ptr<LcmBus>> Create(const std::string& url);
   ~LcmBus();
   LcmBus(const LcmBus&) = delete;
