@@ -264,7 +264,10 @@ StepResult StepWith(Pipeline& pipeline, Method method) {
 }
 
 std::unique_ptr<Pipeline> MakePipeline() {
-  auto pipeline = Pipeline::Create(PipelineOptions{.num_threads = 2, .use_gl = false});
+  PipelineOptions options;
+  options.num_threads = 2;
+  options.use_gl = false;
+  auto pipeline = Pipeline::Create(options);
   EXPECT_TRUE(pipeline.ok()) << ToString(pipeline.error());
   return pipeline.ok() ? std::move(*pipeline) : nullptr;
 }
