@@ -14,7 +14,8 @@ namespace {
 template <typename Enum, size_t N>
 using NameTable = std::array<std::pair<Enum, std::string_view>, N>;
 
-constexpr NameTable<Method, 6> kMethodNames{{{Method::kAabb, "aabb"},
+constexpr NameTable<Method, 7> kMethodNames{{{Method::kAabb, "aabb"},
+                                             {Method::kBvh, "bvh"},
                                              {Method::kCullide, "cullide"},
                                              {Method::kFar, "far"},
                                              {Method::kFarExactOffset, "far-exact-offset"},

@@ -6,19 +6,11 @@
 #include <cstdint>
 #include <utility>
 
-#include "far/geometry/triangle_tests.h"
+#include "triangle_pair_test.h"
 
 // The exact stage: for every candidate object pair, the candidate triangles of one object against
-// those of the other, an AABB prefilter, then the exact predicates.
-//
-// The prefilter never rejects a pair that an exact predicate would accept:
-// - contacts: two closed triangles that share a point have closed AABBs that share it too. The
-//   boxes hold the corner coordinates themselves (min/max are exact) and `b.lo - a.hi > 0` is
-//   exact in IEEE arithmetic (x - y == 0 only if x == y, thanks to gradual underflow).
-// - distance D: triangles within distance d have boxes whose gap is <= d on every axis, and
-//   TrianglesWithinDistance may accept up to D + its documented error bound, so the boxes are
-//   compared with slack D + bound. Rounding to nearest is monotone, so a computed gap is <= the
-//   (double) slack whenever the exact gap is.
+// those of the other, an AABB prefilter, then the exact predicates (triangle_pair_test.h says
+// why the prefilter never rejects a pair the predicates would accept).
 //
 // Pair finding between two triangle lists is a one-axis sort-and-sweep: each object's candidate
 // triangle boxes are built and sorted by their x minimum once per call, then every triangle looks
@@ -34,40 +26,17 @@
 namespace far {
 namespace {
 
-// A triangle's closed world-frame AABB.
-struct TriangleBox {
-  double lo[3];
-  double hi[3];
-  uint32_t triangle;
-};
+using internal::BoxesWithin;
+using internal::BoxOf;
+using internal::DistanceSlack;
+using internal::Merge;
+using internal::Partial;
+using internal::TestTrianglePair;
+using internal::TriangleBox;
+using internal::Wanted;
 
 // The candidate triangles of one object, sorted by lo[0].
 using SortedBoxes = std::vector<TriangleBox>;
-
-TrianglePoints Corners(const WorldObjectView& object, uint32_t triangle) {
-  const TriangleIndices& v = object.triangles[triangle];
-  return {object.p_WV[v[0]], object.p_WV[v[1]], object.p_WV[v[2]]};
-}
-
-TriangleBox BoxOf(const WorldObjectView& object, uint32_t triangle) {
-  const TrianglePoints p = Corners(object, triangle);
-  TriangleBox box;
-  box.triangle = triangle;
-  for (int axis = 0; axis < 3; ++axis) {
-    box.lo[axis] = std::min({p.a[axis], p.b[axis], p.c[axis]});
-    box.hi[axis] = std::max({p.a[axis], p.b[axis], p.c[axis]});
-  }
-  return box;
-}
-
-// True iff the closed boxes are within `slack` of each other on every axis (slack 0: they
-// share a point). Exact for slack 0; never stricter than the exact gap for slack > 0.
-bool BoxesWithin(const TriangleBox& a, const TriangleBox& b, double slack) {
-  for (int axis = 0; axis < 3; ++axis) {
-    if (b.lo[axis] - a.hi[axis] > slack || a.lo[axis] - b.hi[axis] > slack) return false;
-  }
-  return true;
-}
 
 // The largest absolute corner coordinate of the given triangles (0 if none).
 double Magnitude(const SortedBoxes& boxes) {
@@ -78,60 +47,6 @@ double Magnitude(const SortedBoxes& boxes) {
     }
   }
   return magnitude;
-}
-
-// The prefilter slack for a distance query whose triangles have coordinates of magnitude at most
-// `magnitude`: never smaller than the limit TrianglesWithinDistance compares with.
-// triangle_distance.cc: TrianglesWithinDistance(s, t, D) first returns false when the largest
-// axis gap of the two triangles' boxes, computed exactly as BoxesWithin computes it, exceeds
-// D + 256 eps L (eps = 2^-53, L the diagonal of the six vertices' box), and otherwise accepts only
-// pairs that pass that same box test. L <= 2 sqrt(3) magnitude, and 256 eps L is computed with a
-// few ulps of error, so 2048 eps magnitude (a factor 2.3 above) dominates it; D + that rounds to
-// a double >= D + 256 eps L rounded, because rounding to nearest is monotone. So the prefilter
-// rejects only pairs the predicate rejects.
-double DistanceSlack(double max_distance, double magnitude) {
-  constexpr double kEps = 0x1p-53;
-  return max_distance + 2048 * kEps * magnitude;
-}
-
-// What to compute for one candidate triangle pair.
-struct Wanted {
-  bool contacts = false;
-  bool distance = false;
-  double max_distance = 0;
-  double slack = 0;  // the prefilter slack: 0 for contacts only, else DistanceSlack
-};
-
-// One work item's output.
-struct Partial {
-  std::vector<ContactPair> contacts;
-  std::vector<DistancePair> distance_pairs;
-  size_t pairs_tested = 0;
-};
-
-// Runs the exact tests on triangles `a` of object `object_a` and `b` of `object_b` (ids
-// object_a.id < object_b.id) whose boxes passed the prefilter with wanted.slack.
-void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
-                      const WorldObjectView& object_b, const TriangleBox& b, const Wanted& wanted,
-                      Partial& out) {
-  ++out.pairs_tested;
-  const TrianglePoints s = Corners(object_a, a.triangle);
-  const TrianglePoints t = Corners(object_b, b.triangle);
-  const ContactPair pair{object_a.id, a.triangle, object_b.id, b.triangle};
-  // Intersection needs the boxes to touch; when they do not, only the distance test can pass.
-  bool intersects = false;
-  if (wanted.contacts && (wanted.slack == 0 || BoxesWithin(a, b, 0))) {
-    intersects = TrianglesIntersect(s, t);
-    if (intersects) out.contacts.push_back(pair);
-  }
-  if (wanted.distance) {
-    // Intersecting triangles are within any distance, at distance 0.
-    if (intersects) {
-      out.distance_pairs.push_back({pair, 0.0});
-    } else if (TrianglesWithinDistance(s, t, wanted.max_distance)) {
-      out.distance_pairs.push_back({pair, TriangleDistance(s, t)});
-    }
-  }
 }
 
 // A range of one side's triangles of one object pair: each looks forward in the other side.
@@ -177,21 +92,6 @@ void RunItem(const WorkItem& item, std::span<const WorldObjectView> objects,
 
 // Each side of an object pair is cut into ranges of this many triangles, a work item each.
 constexpr uint32_t kItemTriangles = 512;
-
-// Concatenates the partial outputs and sorts them.
-ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered) {
-  ExactResult result;
-  result.pairs_considered = pairs_considered;
-  for (Partial& partial : partials) {
-    result.contacts.insert(result.contacts.end(), partial.contacts.begin(), partial.contacts.end());
-    result.distance_pairs.insert(result.distance_pairs.end(), partial.distance_pairs.begin(),
-                                 partial.distance_pairs.end());
-    result.pairs_tested += partial.pairs_tested;
-  }
-  std::sort(result.contacts.begin(), result.contacts.end());
-  std::sort(result.distance_pairs.begin(), result.distance_pairs.end());
-  return result;
-}
 
 // The object pairs of a query as indices into its objects, smaller id first, each once
 // (unknown ids and self pairs break the precondition and are skipped).

@@ -12,6 +12,7 @@
 #include "scene_cache.h"
 
 #include "far/gpu/culling_renderer.h"
+#include "far/pairs/bvh_stage.h"
 #include "far/pairs/exact_stage.h"
 #include "far/pairs/sweep_and_prune.h"
 #include "far/pairs/thread_pool.h"
@@ -25,6 +26,10 @@ using Clock = std::chrono::steady_clock;
 bool IsGpuMethod(Method method) {
   return method == Method::kFar || method == Method::kFarExactOffset || method == Method::kCullide;
 }
+
+// The CPU culling methods: every object goes to sweep-and-prune, the object PCS is the objects
+// in some pair.
+bool IsCpuCulling(Method method) { return method == Method::kAabb || method == Method::kBvh; }
 
 bool WantsExact(Output output) {
   return output == Output::kContacts || output == Output::kDistancePairs;
@@ -132,6 +137,7 @@ struct Pipeline::Impl {
   void PairObjectsStage(StepState& state);
   Result<void> CullPrimitivesStage(StepState& state);
   void ExactStage(StepState& state);
+  void HierarchyStage(StepState& state, StageTimer& timer);
 };
 
 Result<void> Pipeline::Impl::Apply(std::vector<SceneUpdate> updates,
@@ -184,7 +190,7 @@ Result<void> Pipeline::Impl::CullObjectsStage(StepState& state) {
   } else {
     state.object_alive.assign(state.objects.size(), 1);
   }
-  if (state.request.method == Method::kAabb) return {};  // its PCS comes from the pairs
+  if (IsCpuCulling(state.request.method)) return {};  // its PCS comes from the pairs
   for (size_t i = 0; i < state.objects.size(); ++i) {
     if (state.object_alive[i]) state.result.pcs_objects.push_back(state.objects[i]->id);
   }
@@ -200,7 +206,7 @@ void Pipeline::Impl::PairObjectsStage(StepState& state) {
   StepResult& result = state.result;
   result.object_pairs = sap.Update(id_boxes, state.request.distance.value_or(0.0));
   result.stats.object_pairs = static_cast<int64_t>(result.object_pairs.size());
-  if (state.request.method == Method::kAabb) {
+  if (IsCpuCulling(state.request.method)) {
     // I-COLLIDE: the PCS is the set of objects in some overlapping pair.
     std::set<uint32_t> paired;
     for (const auto& pair : result.object_pairs) paired.insert({pair.object_a, pair.object_b});
@@ -250,6 +256,45 @@ void Pipeline::Impl::ExactStage(StepState& state) {
   result.stats.pairs_tested = static_cast<int64_t>(exact.pairs_tested);
 }
 
+// The bvh method after sweep-and-prune: each paired object's hierarchy brought up to date, then
+// the simultaneous descent of each pair's hierarchies, with the exact tests at the leaves when
+// the output needs them; the triangles met on the way are the primitive PCS.
+void Pipeline::Impl::HierarchyStage(StepState& state, StageTimer& timer) {
+  StepResult& result = state.result;
+  std::map<uint32_t, const CachedObject*> by_id;
+  for (const CachedObject* object : state.objects) by_id[object->id] = object;
+  std::vector<const CachedObject*> paired;
+  for (const ObjectPair& pair : result.object_pairs) {
+    paired.push_back(by_id.at(pair.object_a));
+    paired.push_back(by_id.at(pair.object_b));
+  }
+  std::sort(paired.begin(), paired.end());
+  paired.erase(std::unique(paired.begin(), paired.end()), paired.end());
+  cache.RefreshHierarchies(paired, pool);
+  timer.End("bvh_refit");
+  std::vector<BvhObject> objects;
+  for (const CachedObject* object : paired) {
+    objects.push_back(
+        {{object->id, object->p_WV, object->mesh.triangles}, &object->bvh, object->X_WM});
+  }
+  BvhQuery query;
+  query.objects = objects;
+  query.object_pairs = result.object_pairs;
+  query.run_exact = WantsExact(state.request.output);
+  query.max_distance =
+      state.request.output == Output::kDistancePairs ? state.request.distance : std::nullopt;
+  BvhResult found = RunBvhTests(query, pool);
+  for (size_t i = 0; i < paired.size(); ++i) {
+    if (!found.candidates[i].empty())
+      result.pcs_primitives[paired[i]->id] = std::move(found.candidates[i]);
+  }
+  result.contacts = std::move(found.exact.contacts);
+  result.distance_pairs = std::move(found.exact.distance_pairs);
+  result.stats.pairs_considered = static_cast<int64_t>(found.exact.pairs_considered);
+  result.stats.pairs_tested = static_cast<int64_t>(found.exact.pairs_tested);
+  timer.End(query.run_exact ? "exact" : "primitive_cull");
+}
+
 // One step: each stage runs only if the requested output needs it.
 Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
   if (auto ok = CheckStepRequest(request); !ok) return ok.error();
@@ -274,11 +319,15 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
   }
   if (auto ok = CullObjectsStage(state); !ok) return ok.error();
   timer.End("object_cull");
-  if (request.output == Output::kObjectPcs && request.method != Method::kAabb) return finish();
+  if (request.output == Output::kObjectPcs && !IsCpuCulling(request.method)) return finish();
   PairObjectsStage(state);
   timer.End("sweep_and_prune");
   if (request.output == Output::kObjectPcs || request.output == Output::kObjectPairs)
     return finish();
+  if (request.method == Method::kBvh) {
+    HierarchyStage(state, timer);
+    return finish();
+  }
   if (auto ok = CullPrimitivesStage(state); !ok) return ok.error();
   timer.End("primitive_cull");
   if (!WantsExact(request.output)) return finish();

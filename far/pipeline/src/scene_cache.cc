@@ -85,6 +85,25 @@ void SceneCache::RefreshWorld() {
   }
 }
 
+void SceneCache::RefreshHierarchies(std::span<const CachedObject* const> objects,
+                                    ThreadPool& pool) {
+  std::vector<CachedObject*> stale;
+  for (const CachedObject* object : objects) {
+    if (object->bvh_stamp != object->geometry_stamp) stale.push_back(&objects_.at(object->id));
+  }
+  pool.ParallelFor(stale.size(), 1, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      CachedObject& object = *stale[i];
+      if (object.bvh.empty()) {
+        object.bvh.Build(object.mesh.p_MV, object.mesh.triangles);
+      } else {
+        (void)object.bvh.Refit(object.mesh.p_MV, object.mesh.triangles);
+      }
+      object.bvh_stamp = object.geometry_stamp;
+    }
+  });
+}
+
 std::vector<const CachedObject*> SceneCache::Objects() const {
   std::vector<const CachedObject*> all;
   all.reserve(objects_.size());

@@ -9,6 +9,8 @@
 #include "far/model/mesh.h"
 #include "far/model/pose.h"
 #include "far/model/scene_update.h"
+#include "far/pairs/thread_pool.h"
+#include "far/pairs/triangle_bvh.h"
 #include "far/pairs/world_object.h"
 #include "far/pipeline/pipeline.h"
 
@@ -32,6 +34,9 @@ struct CachedObject {
   bool world_dirty = true;
   std::vector<Eigen::Vector3d> p_WV;
   Eigen::AlignedBox3d box_W;  ///< AABB of the world vertices
+  // The hierarchy of p_MV (the bvh method), built on first use, refit when p_MV changes:
+  TriangleBvh bvh;
+  uint64_t bvh_stamp = 0;  ///< geometry_stamp the hierarchy was made for (0: never)
 
   Eigen::Isometry3d X_WA() const { return X_WM * Eigen::Translation3d(anchor_M); }
 };
@@ -49,6 +54,9 @@ class SceneCache {
 
   /// Every object in id order, and their world views (valid until the next Apply).
   std::vector<const CachedObject*> Objects() const;
+  /// Brings the hierarchies of `objects` up to date with their vertices on `pool`: built once
+  /// for static and rigid objects, refit (rebuilt when loose) for deformed ones.
+  void RefreshHierarchies(std::span<const CachedObject* const> objects, ThreadPool& pool);
   std::vector<WorldObjectView> WorldViews() const;
 
   int size() const { return static_cast<int>(objects_.size()); }

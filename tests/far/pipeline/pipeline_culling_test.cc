@@ -89,7 +89,7 @@ TEST_F(PipelineCullingTest, ReliableMethodsNeverMissOnRandomScenes) {
     request.resolution = kResolutions[(seed * 7 + seed / 7) % 5 + (seed % 8 == 0 ? 2 : 0)];
     request.depth_format = kDepths[seed % 3];
     request.subobject_size = 1 + static_cast<int>(seed % 3);
-    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
       request.method = method;
       ExpectNoMiss(reference, Run(request),
                    "seed " + std::to_string(seed) + " " + std::string(ToString(method)) + " res " +
@@ -189,7 +189,7 @@ TEST_F(PipelineCullingTest, HardCasesFarFromOriginAndTinyFeatures) {
       const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
       StepRequest request;
       request.resolution = kResolutions[seed % 7];
-      for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+      for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
         request.method = method;
         ExpectNoMiss(reference, Run(request),
                      "origin " + std::to_string(origin) + " seed " + std::to_string(seed));
@@ -216,7 +216,7 @@ TEST_F(PipelineCullingTest, ReliableMethodsGetEveryHardCaseRight) {
     StepRequest request;
     request.resolution = kResolutions[i % 7];
     request.depth_format = kDepths[i % 3];
-    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
       request.method = method;
       const StepResult result = Run(request);
       const bool found = !result.contacts.empty();
@@ -250,7 +250,7 @@ TEST_F(PipelineCullingTest, OneHugeObjectWithManyTinyOnes) {
   Load(objects);
   const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
   for (int resolution : {64, 512, 2048}) {
-    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
       StepRequest request;
       request.method = method;
       request.resolution = resolution;
@@ -270,7 +270,7 @@ TEST_F(PipelineCullingTest, DistanceCullingNeverMissesAPairCloserThanD) {
     request.distance = D;
     request.output = Output::kDistancePairs;
     request.resolution = kResolutions[seed % 7];
-    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb}) {
+    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
       request.method = method;
       const StepResult result = Run(request);
       EXPECT_EQ(result.distance_pairs, reference.distance_pairs)

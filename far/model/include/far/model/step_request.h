@@ -12,6 +12,7 @@ enum class DepthFormat { kDepth16, kDepth24, kDepth32F };
 /// How a step finds its potentially colliding set.
 enum class Method {
   kAabb,            ///< CPU sweep-and-prune on object AABBs only (I-COLLIDE baseline)
+  kBvh,             ///< CPU: object sweep-and-prune, then per-object hierarchies (TriangleBvh)
   kCullide,         ///< CULLIDE: unfattened primitives on the GPU; can miss (not reliable)
   kFar,             ///< FAR with UOBB bounding offsets: reliable
   kFarExactOffset,  ///< FAR with bounded exact offsets: reliable, tighter, more vertices
@@ -45,8 +46,8 @@ struct StepRequest {
   Output output = Output::kContacts;
 };
 
-/// Names used on command lines and in messages: "aabb", "cullide", "far", "far-exact-offset",
-/// "fcl", "exact"; "occlusion-query", "id-buffer"; "object-pcs", "pairs", "pcs", "contacts",
+/// Names used on command lines and in messages: "aabb", "bvh", "cullide", "far",
+/// "far-exact-offset", "fcl", "exact"; "occlusion-query", "id-buffer"; "object-pcs", "pairs", "pcs", "contacts",
 /// "distance"; "depth16", "depth24", "depth32f". Parse* return nullopt for unknown names.
 std::string_view ToString(Method method);
 std::string_view ToString(QueryMechanism mechanism);

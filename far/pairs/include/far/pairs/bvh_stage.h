@@ -1,0 +1,52 @@
+#pragma once
+
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "far/model/contact_pair.h"
+#include "far/pairs/exact_stage.h"
+#include "far/pairs/thread_pool.h"
+#include "far/pairs/triangle_bvh.h"
+#include "far/pairs/world_object.h"
+
+namespace far {
+
+/// One object of a hierarchy query: its world view (id, world vertices, triangles), its
+/// hierarchy in its own frame M and the pose X_WM that places M in the world. The world
+/// vertices must be X_WM applied to the vertices the hierarchy was built or refit from.
+struct BvhObject {
+  WorldObjectView world;
+  const TriangleBvh* bvh = nullptr;  ///< aliased; not empty
+  Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
+};
+
+/// Which object pairs to test and what to compute.
+struct BvhQuery {
+  std::span<const BvhObject> objects;        ///< ids unique
+  std::span<const ObjectPair> object_pairs;  ///< ids of `objects`, object_a < object_b
+  bool want_contacts = true;                 ///< intersecting triangle pairs
+  std::optional<double> max_distance;        ///< also pairs with distance <= this
+  bool run_exact = true;        ///< false: no exact tests (only candidates, when asked)
+  bool want_candidates = true;  ///< fill BvhResult::candidates (the primitive PCS)
+};
+
+/// The answer, and the candidate triangles: per object (indexed like `objects`), sorted, the
+/// triangles whose world box is within the query's slack of a triangle box of a partner.
+struct BvhResult {
+  ExactResult exact;
+  std::vector<std::vector<uint32_t>> candidates;
+};
+
+/// The hierarchy stage: for every object pair, a simultaneous descent of the two hierarchies in
+/// the frame of each (the relative pose composed in double; boxes compared along the six face
+/// axes of both, with a margin that covers the query distance and every rounding of the world
+/// vertices and of the test itself), then, for the triangle pairs of overlapping leaves, the
+/// world-box prefilter and the exact predicates of the exact stage (RunExactTests). Never drops
+/// a pair the exact predicates would accept: the answer equals BruteForceReference's for the same
+/// pairs. Runs on `pool`; the output does not depend on the number of threads.
+BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool);
+
+}  // namespace far

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "far/model/mesh.h"
+
+namespace far {
+
+/// A bounding volume hierarchy of one mesh's triangles in the mesh's own frame M: axis-aligned
+/// boxes, built by binned surface-area heuristic, at most kLeafSize triangles per leaf. A rigid
+/// or static object builds it once; a deformable one refits it when its vertices move (and
+/// rebuilds it when refitting has made it much looser). Boxes hold the vertex coordinates
+/// themselves (min/max in double, exact), so every triangle lies in the closed box of each of
+/// its ancestors. Thread safety: none (one owner); const methods may run concurrently.
+class TriangleBvh {
+ public:
+  static constexpr int kLeafSize = 4;
+
+  /// One node: a box as center and half extents, and a leaf when count > 0 (triangles
+  /// order()[first, first + count)), else an inner node with children first and first + 1.
+  /// Every vertex p of the node's triangles satisfies |p - center| <= half_extent on each axis
+  /// in exact arithmetic (the half extents are rounded up).
+  struct Node {
+    Eigen::Vector3d center;
+    Eigen::Vector3d half_extent;
+    uint32_t first = 0;
+    uint32_t count = 0;
+    bool leaf() const { return count > 0; }
+  };
+
+  /// Builds the hierarchy of `triangles` over `p_MV` (@pre indices in range, finite).
+  void Build(std::span<const Eigen::Vector3d> p_MV, std::span<const TriangleIndices> triangles);
+
+  /// Recomputes every box for new vertex positions (same triangles) in O(n), keeping the tree;
+  /// rebuilds instead when the refit tree's boxes have grown to kRebuildGrowth times the surface
+  /// area they had when it was built. Returns true when it rebuilt.
+  bool Refit(std::span<const Eigen::Vector3d> p_MV, std::span<const TriangleIndices> triangles);
+
+  const std::vector<Node>& nodes() const { return nodes_; }
+  /// Triangle indices in leaf order.
+  const std::vector<uint32_t>& order() const { return order_; }
+  bool empty() const { return nodes_.empty(); }
+
+  /// Refit trees whose summed node surface area grows past this factor are rebuilt.
+  static constexpr double kRebuildGrowth = 2.0;
+
+ private:
+  struct Builder;
+
+  std::vector<Node> nodes_;  // nodes_[0] is the root
+  std::vector<uint32_t> order_;
+  double built_area_ = 0;  // summed node surface area right after Build
+};
+
+}  // namespace far

@@ -1,0 +1,197 @@
+#include "far/pairs/triangle_bvh.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace far {
+namespace {
+
+constexpr int kBins = 12;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A closed box as min/max per axis; empty when lo > hi.
+struct Box {
+  double lo[3] = {kInf, kInf, kInf};
+  double hi[3] = {-kInf, -kInf, -kInf};
+
+  void Extend(const Box& other) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], other.lo[a]);
+      hi[a] = std::max(hi[a], other.hi[a]);
+    }
+  }
+  void Extend(const Eigen::Vector3d& p) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], p[a]);
+      hi[a] = std::max(hi[a], p[a]);
+    }
+  }
+  double Area() const {
+    if (lo[0] > hi[0]) return 0;
+    const double x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
+    return 2 * (x * y + y * z + z * x);
+  }
+};
+
+Box TriangleBox(std::span<const Eigen::Vector3d> p, const TriangleIndices& t) {
+  Box box;
+  for (uint32_t v : t) box.Extend(p[v]);
+  return box;
+}
+
+// The node's center and half extents, rounded up so that [center - e, center + e] holds the box
+// in exact arithmetic (center is rounded, so hi - center can exceed its rounded value).
+void SetNodeBox(TriangleBvh::Node& node, const Box& box) {
+  for (int a = 0; a < 3; ++a) {
+    const double c = 0.5 * box.lo[a] + 0.5 * box.hi[a];
+    const double e = std::max(box.hi[a] - c, c - box.lo[a]);
+    node.center[a] = c;
+    node.half_extent[a] = std::nextafter(e, kInf);
+  }
+}
+
+}  // namespace
+
+// Top-down binned-SAH build over order_[begin, end).
+struct TriangleBvh::Builder {
+  std::vector<Node>& nodes;
+  std::vector<uint32_t>& order;
+  std::vector<Box> boxes;                  // per triangle
+  std::vector<Eigen::Vector3d> centroids;  // per triangle, of its box
+  double area_sum = 0;
+
+  // Splits [begin, end) at the best SAH bin boundary along the centroids' longest axis; returns
+  // the split index, or `end` when a leaf is cheaper (only allowed for small ranges).
+  uint32_t Split(uint32_t begin, uint32_t end, const Box& box) {
+    Box centroid_box;
+    for (uint32_t i = begin; i < end; ++i) centroid_box.Extend(centroids[order[i]]);
+    int axis = 0;
+    for (int a = 1; a < 3; ++a) {
+      if (centroid_box.hi[a] - centroid_box.lo[a] > centroid_box.hi[axis] - centroid_box.lo[axis])
+        axis = a;
+    }
+    const double lo = centroid_box.lo[axis], extent = centroid_box.hi[axis] - lo;
+    const uint32_t n = end - begin;
+    if (!(extent > 0)) return n <= kLeafSize ? end : begin + n / 2;  // all centroids equal
+    auto bin_of = [&](uint32_t t) {
+      return std::min(kBins - 1, static_cast<int>(kBins * (centroids[t][axis] - lo) / extent));
+    };
+    std::array<Box, kBins> bin_boxes;
+    std::array<uint32_t, kBins> bin_counts{};
+    for (uint32_t i = begin; i < end; ++i) {
+      const int b = bin_of(order[i]);
+      bin_boxes[b].Extend(boxes[order[i]]);
+      bin_counts[b]++;
+    }
+    // Cost of splitting after bin k: area(left) n_left + area(right) n_right.
+    std::array<double, kBins - 1> left_cost{};
+    Box left;
+    uint32_t left_count = 0;
+    for (int k = 0; k < kBins - 1; ++k) {
+      left.Extend(bin_boxes[k]);
+      left_count += bin_counts[k];
+      left_cost[k] = left.Area() * left_count;
+    }
+    Box right;
+    uint32_t right_count = 0;
+    double best_cost = kInf;
+    int best = -1;
+    for (int k = kBins - 1; k > 0; --k) {
+      right.Extend(bin_boxes[k]);
+      right_count += bin_counts[k];
+      const double cost = left_cost[k - 1] + right.Area() * right_count;
+      if (right_count > 0 && right_count < n && cost < best_cost) {
+        best_cost = cost;
+        best = k;
+      }
+    }
+    if (n <= kLeafSize && !(best_cost < box.Area() * n)) return end;
+    if (best < 0) return begin + n / 2;
+    const auto middle = std::partition(order.begin() + begin, order.begin() + end,
+                                       [&](uint32_t t) { return bin_of(t) < best; });
+    return static_cast<uint32_t>(middle - order.begin());
+  }
+
+  void Build(uint32_t node, uint32_t begin, uint32_t end) {
+    Box box;
+    for (uint32_t i = begin; i < end; ++i) box.Extend(boxes[order[i]]);
+    SetNodeBox(nodes[node], box);
+    area_sum += box.Area();
+    const uint32_t split = Split(begin, end, box);
+    if (split == end || split == begin) {
+      nodes[node].first = begin;
+      nodes[node].count = end - begin;
+      return;
+    }
+    const auto left = static_cast<uint32_t>(nodes.size());
+    nodes.emplace_back();
+    nodes.emplace_back();
+    nodes[node].first = left;
+    nodes[node].count = 0;
+    Build(left, begin, split);
+    Build(left + 1, split, end);
+  }
+};
+
+void TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
+                        std::span<const TriangleIndices> triangles) {
+  nodes_.clear();
+  order_.resize(triangles.size());
+  if (triangles.empty()) return;
+  for (uint32_t t = 0; t < order_.size(); ++t) order_[t] = t;
+  nodes_.reserve(2 * triangles.size() / kLeafSize + 2);
+  Builder builder{nodes_, order_, {}, {}, 0};
+  builder.boxes.reserve(triangles.size());
+  builder.centroids.reserve(triangles.size());
+  for (const TriangleIndices& t : triangles) {
+    builder.boxes.push_back(TriangleBox(p_MV, t));
+    const Box& box = builder.boxes.back();
+    builder.centroids.emplace_back(0.5 * (box.lo[0] + box.hi[0]), 0.5 * (box.lo[1] + box.hi[1]),
+                                   0.5 * (box.lo[2] + box.hi[2]));
+  }
+  nodes_.emplace_back();
+  builder.Build(0, 0, static_cast<uint32_t>(triangles.size()));
+  built_area_ = builder.area_sum;
+}
+
+namespace {
+
+// Refits the subtree at `index`; returns its exact (min/max) box and adds its nodes' surface
+// areas to `area`.
+Box RefitSubtree(std::vector<TriangleBvh::Node>& nodes, const std::vector<uint32_t>& order,
+                 uint32_t index, std::span<const Eigen::Vector3d> p_MV,
+                 std::span<const TriangleIndices> triangles, double& area) {
+  TriangleBvh::Node& node = nodes[index];
+  Box box;
+  if (node.leaf()) {
+    for (uint32_t i = node.first; i < node.first + node.count; ++i)
+      box.Extend(TriangleBox(p_MV, triangles[order[i]]));
+  } else {
+    box = RefitSubtree(nodes, order, node.first, p_MV, triangles, area);
+    box.Extend(RefitSubtree(nodes, order, node.first + 1, p_MV, triangles, area));
+  }
+  SetNodeBox(nodes[index], box);
+  area += box.Area();
+  return box;
+}
+
+}  // namespace
+
+bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,
+                        std::span<const TriangleIndices> triangles) {
+  if (nodes_.empty() || order_.size() != triangles.size()) {
+    Build(p_MV, triangles);
+    return true;
+  }
+  double area = 0;
+  RefitSubtree(nodes_, order_, 0, p_MV, triangles, area);
+  if (area > kRebuildGrowth * built_area_) {
+    Build(p_MV, triangles);
+    return true;
+  }
+  return false;
+}
+
+}  // namespace far

@@ -1,0 +1,96 @@
+#pragma once
+
+// The triangle-pair test both exact stages share (the sort-and-sweep one, exact_stage.cc, and
+// the hierarchy one, bvh_stage.cc): world-frame triangle boxes, the conservative box prefilter
+// and the exact predicates, with per-thread outputs merged in a deterministic order.
+//
+// The prefilter never rejects a pair that an exact predicate would accept:
+// - contacts: two closed triangles that share a point have closed AABBs that share it too. The
+//   boxes hold the corner coordinates themselves (min/max are exact) and `b.lo - a.hi > 0` is
+//   exact in IEEE arithmetic (x - y == 0 only if x == y, thanks to gradual underflow).
+// - distance D: triangles within distance d have boxes whose gap is <= d on every axis, and
+//   TrianglesWithinDistance may accept up to D + its documented error bound, so the boxes are
+//   compared with slack D + bound (DistanceSlack). Rounding to nearest is monotone, so a
+//   computed gap is <= the (double) slack whenever the exact gap is.
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "far/geometry/triangle_tests.h"
+#include "far/pairs/exact_stage.h"
+#include "far/pairs/world_object.h"
+
+namespace far::internal {
+
+/// A triangle's closed world-frame AABB.
+struct TriangleBox {
+  double lo[3];
+  double hi[3];
+  uint32_t triangle;
+};
+
+inline TrianglePoints Corners(const WorldObjectView& object, uint32_t triangle) {
+  const TriangleIndices& v = object.triangles[triangle];
+  return {object.p_WV[v[0]], object.p_WV[v[1]], object.p_WV[v[2]]};
+}
+
+inline TriangleBox BoxOf(const WorldObjectView& object, uint32_t triangle) {
+  const TrianglePoints p = Corners(object, triangle);
+  TriangleBox box;
+  box.triangle = triangle;
+  for (int axis = 0; axis < 3; ++axis) {
+    box.lo[axis] = std::min({p.a[axis], p.b[axis], p.c[axis]});
+    box.hi[axis] = std::max({p.a[axis], p.b[axis], p.c[axis]});
+  }
+  return box;
+}
+
+/// True iff the closed boxes are within `slack` of each other on every axis (slack 0: they
+/// share a point). Exact for slack 0; never stricter than the exact gap for slack > 0.
+inline bool BoxesWithin(const TriangleBox& a, const TriangleBox& b, double slack) {
+  for (int axis = 0; axis < 3; ++axis) {
+    if (b.lo[axis] - a.hi[axis] > slack || a.lo[axis] - b.hi[axis] > slack) return false;
+  }
+  return true;
+}
+
+/// The prefilter slack for a distance query whose triangles have coordinates of magnitude at
+/// most `magnitude`: never smaller than the limit TrianglesWithinDistance compares with.
+/// triangle_distance.cc: TrianglesWithinDistance(s, t, D) first returns false when the largest
+/// axis gap of the two triangles' boxes, computed exactly as BoxesWithin computes it, exceeds
+/// D + 256 eps L (eps = 2^-53, L the diagonal of the six vertices' box), and otherwise accepts
+/// only pairs that pass that same box test. L <= 2 sqrt(3) magnitude, and 256 eps L is computed
+/// with a few ulps of error, so 2048 eps magnitude (a factor 2.3 above) dominates it; D + that
+/// rounds to a double >= D + 256 eps L rounded, because rounding to nearest is monotone. So the
+/// prefilter rejects only pairs the predicate rejects.
+inline double DistanceSlack(double max_distance, double magnitude) {
+  constexpr double kEps = 0x1p-53;
+  return max_distance + 2048 * kEps * magnitude;
+}
+
+/// What to compute for one candidate triangle pair.
+struct Wanted {
+  bool contacts = false;
+  bool distance = false;
+  double max_distance = 0;
+  double slack = 0;  ///< the prefilter slack: 0 for contacts only, else DistanceSlack
+};
+
+/// One work item's output.
+struct Partial {
+  std::vector<ContactPair> contacts;
+  std::vector<DistancePair> distance_pairs;
+  size_t pairs_tested = 0;
+};
+
+/// Runs the exact tests on triangles `a` of object `object_a` and `b` of `object_b` (ids
+/// object_a.id < object_b.id) whose boxes passed the prefilter with wanted.slack.
+void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
+                      const WorldObjectView& object_b, const TriangleBox& b, const Wanted& wanted,
+                      Partial& out);
+
+/// Concatenates the partial outputs and sorts them (the order does not depend on threads).
+ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered);
+
+}  // namespace far::internal

@@ -1,0 +1,313 @@
+// TriangleBvh and the hierarchy stage (RunBvhTests) against the brute-force reference: random
+// meshes under random poses, shared corners and touching triangles, far from the origin, tiny
+// features, distance queries, deformation (refit) and thread counts.
+#include "far/pairs/bvh_stage.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <set>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "far/pairs/triangle_bvh.h"
+
+namespace far {
+namespace {
+
+// One object: mesh in its frame M, pose, world vertices and hierarchy.
+struct Object {
+  uint32_t id = 0;
+  std::vector<Eigen::Vector3d> p_MV;
+  std::vector<TriangleIndices> triangles;
+  Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
+  std::vector<Eigen::Vector3d> p_WV;
+  TriangleBvh bvh;
+
+  void Place() {
+    p_WV.clear();
+    for (const auto& p : p_MV) p_WV.push_back(X_WM * p);
+  }
+  WorldObjectView View() const { return {id, p_WV, triangles}; }
+};
+
+Eigen::Isometry3d RandomPose(std::mt19937& rng, double extent, double offset) {
+  std::uniform_real_distribution<double> unit(-1, 1);
+  Eigen::Quaterniond q(unit(rng), unit(rng), unit(rng), unit(rng));
+  q.normalize();
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = q.toRotationMatrix();
+  X.translation() =
+      Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * extent + Eigen::Vector3d::Constant(offset);
+  return X;
+}
+
+// A blob of `n` random triangles of size about `size` in a ball of radius `radius` in frame M,
+// a tenth of them degenerate.
+void RandomMesh(std::mt19937& rng, int n, double radius, double size, Object& object) {
+  std::uniform_real_distribution<double> unit(-1, 1);
+  for (int t = 0; t < n; ++t) {
+    const Eigen::Vector3d c = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * radius;
+    const auto base = static_cast<uint32_t>(object.p_MV.size());
+    for (int k = 0; k < 3; ++k)
+      object.p_MV.push_back(c + Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * size);
+    if (t % 10 == 0) object.p_MV.back() = object.p_MV[base];  // a segment
+    object.triangles.push_back({base, base + 1, base + 2});
+  }
+}
+
+std::vector<Object> RandomScene(uint32_t seed, int objects, int triangles, double offset,
+                                double scale = 1.0) {
+  std::mt19937 rng(seed);
+  std::vector<Object> scene(static_cast<size_t>(objects));
+  for (int o = 0; o < objects; ++o) {
+    Object& object = scene[static_cast<size_t>(o)];
+    object.id = static_cast<uint32_t>(3 * o + seed % 5);
+    RandomMesh(rng, triangles, 0.6 * scale, 0.15 * scale, object);
+    object.X_WM = RandomPose(rng, 0.4 * scale, offset);
+    object.Place();
+    object.bvh.Build(object.p_MV, object.triangles);
+  }
+  return scene;
+}
+
+std::vector<BvhObject> BvhObjects(const std::vector<Object>& scene) {
+  std::vector<BvhObject> objects;
+  for (const Object& o : scene) objects.push_back({o.View(), &o.bvh, o.X_WM});
+  return objects;
+}
+
+std::vector<ObjectPair> AllPairs(const std::vector<Object>& scene) {
+  std::vector<ObjectPair> pairs;
+  for (const Object& a : scene)
+    for (const Object& b : scene)
+      if (a.id < b.id) pairs.push_back({a.id, b.id});
+  return pairs;
+}
+
+ExactResult Reference(const std::vector<Object>& scene, std::optional<double> distance) {
+  std::vector<WorldObjectView> views;
+  for (const Object& o : scene) views.push_back(o.View());
+  ThreadPool pool(2);
+  return BruteForceReference(views, distance, pool);
+}
+
+BvhResult RunStage(const std::vector<Object>& scene, std::optional<double> distance,
+                   int threads = 2) {
+  const std::vector<BvhObject> objects = BvhObjects(scene);
+  const std::vector<ObjectPair> pairs = AllPairs(scene);
+  BvhQuery query;
+  query.objects = objects;
+  query.object_pairs = pairs;
+  query.max_distance = distance;
+  ThreadPool pool(threads);
+  return RunBvhTests(query, pool);
+}
+
+std::vector<ContactPair> PairsOf(const std::vector<DistancePair>& list) {
+  std::vector<ContactPair> pairs;
+  for (const DistancePair& d : list) pairs.push_back(d.pair);
+  return pairs;
+}
+
+// Every leaf box holds its triangles and every inner box its children; each triangle once.
+void ExpectValidTree(const Object& object) {
+  const auto& nodes = object.bvh.nodes();
+  ASSERT_FALSE(nodes.empty());
+  std::vector<int> seen(object.triangles.size(), 0);
+  // |p - center| <= half_extent holds exactly; evaluated in double it may be off by an ulp.
+  auto inside = [](const TriangleBvh::Node& n, const Eigen::Vector3d& p) {
+    const double ulps = 1e-15 * (n.center.cwiseAbs().maxCoeff() + n.half_extent.maxCoeff());
+    return ((p - n.center).cwiseAbs() - n.half_extent).maxCoeff() <= ulps;
+  };
+  for (const auto& node : nodes) {
+    if (node.leaf()) {
+      EXPECT_LE(node.count, static_cast<uint32_t>(TriangleBvh::kLeafSize));
+      for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+        const uint32_t t = object.bvh.order()[i];
+        seen[t]++;
+        for (uint32_t v : object.triangles[t]) EXPECT_TRUE(inside(node, object.p_MV[v]));
+      }
+    } else {
+      for (uint32_t child : {node.first, node.first + 1}) {
+        const auto& c = nodes[child];
+        EXPECT_TRUE(inside(node, c.center - c.half_extent));
+        EXPECT_TRUE(inside(node, c.center + c.half_extent));
+      }
+    }
+  }
+  for (int count : seen) EXPECT_EQ(count, 1);
+}
+
+TEST(TriangleBvhTest, EveryTriangleOnceInsideItsLeafAndAncestors) {
+  for (int n : {1, 3, 4, 5, 17, 1000}) {
+    std::vector<Object> scene = RandomScene(static_cast<uint32_t>(n), 1, n, 0);
+    ExpectValidTree(scene[0]);
+  }
+}
+
+TEST(TriangleBvhTest, IdenticalTrianglesStillSplit) {
+  Object object;
+  for (int t = 0; t < 100; ++t) {
+    const auto base = static_cast<uint32_t>(object.p_MV.size());
+    object.p_MV.insert(object.p_MV.end(), {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+    object.triangles.push_back({base, base + 1, base + 2});
+  }
+  object.bvh.Build(object.p_MV, object.triangles);
+  ExpectValidTree(object);
+}
+
+TEST(TriangleBvhTest, RefitFollowsMovedVerticesAndRebuildsWhenLoose) {
+  std::vector<Object> scene = RandomScene(5, 1, 500, 0);
+  Object& object = scene[0];
+  // A small wiggle keeps the tree; a scramble makes it loose and rebuilds it.
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  for (auto& p : object.p_MV) p += Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * 1e-3;
+  EXPECT_FALSE(object.bvh.Refit(object.p_MV, object.triangles));
+  ExpectValidTree(object);
+  for (auto& p : object.p_MV) p = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * 5;
+  EXPECT_TRUE(object.bvh.Refit(object.p_MV, object.triangles));
+  ExpectValidTree(object);
+}
+
+TEST(BvhStageTest, ContactsMatchTheReferenceUnderRandomPoses) {
+  for (uint32_t seed = 1; seed <= 12; ++seed) {
+    SCOPED_TRACE(seed);
+    const std::vector<Object> scene = RandomScene(seed, 6, 150, 0);
+    const ExactResult expected = Reference(scene, std::nullopt);
+    const BvhResult got = RunStage(scene, std::nullopt);
+    EXPECT_EQ(got.exact.contacts, expected.contacts);
+    // Every contact's triangles are candidates.
+    for (const ContactPair& c : expected.contacts) {
+      for (const auto& [id, t] :
+           {std::pair{c.object_a, c.triangle_a}, {c.object_b, c.triangle_b}}) {
+        const size_t o = static_cast<size_t>(
+            std::find_if(scene.begin(), scene.end(), [&](const Object& x) { return x.id == id; }) -
+            scene.begin());
+        EXPECT_TRUE(std::binary_search(got.candidates[o].begin(), got.candidates[o].end(), t));
+      }
+    }
+    EXPECT_GT(expected.contacts.size(), 0u) << "the scenes must have contacts";
+  }
+}
+
+TEST(BvhStageTest, FarFromTheOriginAndAtTinyScales) {
+  for (const auto& [offset, scale] : {std::pair{1e5, 1.0}, {1e6, 1e-3}, {-3e4, 1e-5}}) {
+    SCOPED_TRACE(offset);
+    const std::vector<Object> scene = RandomScene(31, 5, 120, offset, scale);
+    const ExactResult expected = Reference(scene, std::nullopt);
+    EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
+    EXPECT_GT(expected.contacts.size(), 0u);
+  }
+}
+
+TEST(BvhStageTest, TouchingAtACornerUnderARotatedPose) {
+  // Two triangles that share exactly one world corner; B's mesh is given in a rotated frame.
+  Object a, b;
+  a.id = 1;
+  a.p_MV = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  a.triangles = {{0, 1, 2}};
+  b.id = 2;
+  b.X_WM = Eigen::Isometry3d::Identity();
+  b.X_WM.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  b.X_WM.translation() = Eigen::Vector3d(1, 0, 0);
+  // Pick B's corner so that it lands exactly on A's corner (1, 0, 0): the origin of M.
+  b.p_MV = {{0, 0, 0}, {0, 0, 1}, {0, -1, 1}};
+  b.triangles = {{0, 1, 2}};
+  for (Object* o : {&a, &b}) {
+    o->Place();
+    o->bvh.Build(o->p_MV, o->triangles);
+  }
+  const std::vector<Object> scene = {a, b};
+  const ExactResult expected = Reference(scene, std::nullopt);
+  ASSERT_EQ(expected.contacts.size(), 1u);
+  EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
+}
+
+// Triangles of B that share a corner (or a point of an edge) with a triangle of A in the world:
+// B's mesh is that world geometry mapped into B's own rotated frame far from the origin, so its
+// world vertices, computed back through X_WB, land on A's only up to rounding. Whether each pair
+// still touches is for the exact predicates to say on the rounded coordinates; the hierarchy
+// must hand every such pair to them (its margin covers the rounding of the transforms).
+TEST(BvhStageTest, CornersSharedThroughRoundedPosesFarFromTheOrigin) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  for (double offset : {0.0, 1e5, 1e7}) {
+    SCOPED_TRACE(offset);
+    Object a, b;
+    a.id = 1;
+    b.id = 2;
+    RandomMesh(rng, 300, 1.0, 0.2, a);
+    a.X_WM = RandomPose(rng, 0.1, offset);
+    a.Place();
+    b.X_WM = RandomPose(rng, 0.1, offset);
+    const Eigen::Isometry3d X_BW = b.X_WM.inverse();
+    for (uint32_t t = 0; t < a.triangles.size(); ++t) {
+      const Eigen::Vector3d corner = a.p_WV[a.triangles[t][t % 3]];
+      const Eigen::Vector3d edge_point =
+          0.5 * (a.p_WV[a.triangles[t][0]] + a.p_WV[a.triangles[t][1]]);
+      const Eigen::Vector3d touch = t % 2 ? corner : edge_point;
+      const Eigen::Vector3d d1(unit(rng), unit(rng), unit(rng)),
+          d2(unit(rng), unit(rng), unit(rng));
+      const auto base = static_cast<uint32_t>(b.p_MV.size());
+      for (const Eigen::Vector3d& p_W :
+           {touch, Eigen::Vector3d(touch + 0.1 * d1), Eigen::Vector3d(touch + 0.1 * d2)})
+        b.p_MV.push_back(X_BW * p_W);
+      b.triangles.push_back({base, base + 1, base + 2});
+    }
+    for (Object* o : {&a, &b}) {
+      o->Place();
+      o->bvh.Build(o->p_MV, o->triangles);
+    }
+    const std::vector<Object> scene = {a, b};
+    const ExactResult expected = Reference(scene, std::nullopt);
+    EXPECT_GT(expected.contacts.size(), 100u);
+    EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
+  }
+}
+
+TEST(BvhStageTest, DistancePairsMatchTheReference) {
+  for (double d : {0.0, 0.01, 0.2}) {
+    SCOPED_TRACE(d);
+    const std::vector<Object> scene = RandomScene(44, 5, 100, 0);
+    const ExactResult expected = Reference(scene, d);
+    const BvhResult got = RunStage(scene, d);
+    EXPECT_EQ(PairsOf(got.exact.distance_pairs), PairsOf(expected.distance_pairs));
+    EXPECT_EQ(got.exact.contacts, expected.contacts);
+  }
+}
+
+TEST(BvhStageTest, RefitObjectsStayExact) {
+  std::vector<Object> scene = RandomScene(71, 4, 200, 0);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  for (int step = 0; step < 5; ++step) {
+    for (Object& o : scene) {
+      // Vertices move by more than the object's size over the steps.
+      const Eigen::Vector3d drift = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * 0.3;
+      for (auto& p : o.p_MV) p += drift + Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * 0.05;
+      o.Place();
+      (void)o.bvh.Refit(o.p_MV, o.triangles);
+    }
+    EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts,
+              Reference(scene, std::nullopt).contacts);
+  }
+}
+
+TEST(BvhStageTest, ThreadCountsGiveIdenticalOutput) {
+  const std::vector<Object> scene = RandomScene(8, 8, 300, 0);
+  const BvhResult one = RunStage(scene, 0.05, 1);
+  for (int threads : {2, 3, 8}) {
+    const BvhResult many = RunStage(scene, 0.05, threads);
+    EXPECT_EQ(many.exact.contacts, one.exact.contacts);
+    EXPECT_EQ(PairsOf(many.exact.distance_pairs), PairsOf(one.exact.distance_pairs));
+    EXPECT_EQ(many.candidates, one.candidates);
+    EXPECT_EQ(many.exact.pairs_tested, one.exact.pairs_tested);
+  }
+}
+
+}  // namespace
+}  // namespace far
