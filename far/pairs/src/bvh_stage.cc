@@ -37,6 +37,9 @@ struct PairFrame {
   Eigen::Matrix3d R_AB, abs_R_AB, R_BA, abs_R_BA;
   Eigen::Vector3d t_AB, t_BA;
   double margin = 0;
+  // Both frames have the same rotation (static, deformable and unrotated objects): B's boxes
+  // are A's boxes translated, and the test along A's axes is the whole test.
+  bool aligned = false;
 };
 
 // max |coordinate| of a node box.
@@ -56,6 +59,7 @@ PairFrame MakePairFrame(const BvhObject& a, const BvhObject& b, uint32_t ia, uin
   f.t_BA = -(f.R_BA * f.t_AB);
   f.abs_R_AB = f.R_AB.cwiseAbs();
   f.abs_R_BA = f.R_BA.cwiseAbs();
+  f.aligned = a.X_WM.linear() == b.X_WM.linear();
   const double scale = 2 * (BoxMagnitude(a.bvh->nodes()[0]) + BoxMagnitude(b.bvh->nodes()[0])) +
                        a.X_WM.translation().cwiseAbs().maxCoeff() +
                        b.X_WM.translation().cwiseAbs().maxCoeff();
@@ -73,10 +77,16 @@ struct Task {
 };
 
 void MoveIntoA(const PairFrame& f, const Node& y, Task& t) {
-  t.cy_A = f.R_AB * y.center + f.t_AB;
-  t.ey_A = f.abs_R_AB * y.half_extent;
+  if (f.aligned) {
+    t.cy_A = y.center + f.t_AB;
+    t.ey_A = y.half_extent;
+  } else {
+    t.cy_A = f.R_AB * y.center + f.t_AB;
+    t.ey_A = f.abs_R_AB * y.half_extent;
+  }
 }
 void MoveIntoB(const PairFrame& f, const Node& x, Task& t) {
+  if (f.aligned) return;  // not needed: OverlapInB passes
   t.cx_B = f.R_BA * x.center + f.t_BA;
   t.ex_B = f.abs_R_BA * x.half_extent;
 }
@@ -89,6 +99,7 @@ bool OverlapInA(const PairFrame& f, const Node& x, const Task& t) {
 }
 // ... nor along B's three (with x moved into B). Together: a conservative overlap test.
 bool OverlapInB(const PairFrame& f, const Node& y, const Task& t) {
+  if (f.aligned) return true;  // the same axes as A's
   const Eigen::Array3d gap = (y.center - t.cx_B).array().abs() - (y.half_extent + t.ex_B).array();
   return !(gap > f.margin).any();
 }
@@ -170,8 +181,41 @@ void Expand(const Descent& d, const Task& task, std::vector<Task>& next, Output&
   }
 }
 
+// The descent of an aligned pair (same rotation: boxes differ by a translation only), with
+// small tasks: the plain box test along the shared axes.
+void DescendAligned(const Descent& d, const PairFrame& f, uint32_t root_x, uint32_t root_y,
+                    Output& out) {
+  const auto& nodes_a = d.query.objects[f.a].bvh->nodes();
+  const auto& nodes_b = d.query.objects[f.b].bvh->nodes();
+  const auto overlap = [&](const Node& x, const Node& y) {
+    const Eigen::Array3d gap =
+        (x.center - y.center - f.t_AB).array().abs() - (x.half_extent + y.half_extent).array();
+    return !(gap > f.margin).any();
+  };
+  std::vector<std::pair<uint32_t, uint32_t>> stack = {{root_x, root_y}};
+  while (!stack.empty()) {
+    const auto [ix, iy] = stack.back();
+    stack.pop_back();
+    const Node& x = nodes_a[ix];
+    const Node& y = nodes_b[iy];
+    const bool split_x = y.leaf() || (!x.leaf() && NodeSize(x) >= NodeSize(y));
+    const uint32_t first = split_x ? x.first : y.first;
+    for (uint32_t child : {first, first + 1}) {
+      const uint32_t cx = split_x ? child : ix, cy = split_x ? iy : child;
+      if (!overlap(nodes_a[cx], nodes_b[cy])) continue;
+      if (nodes_a[cx].leaf() && nodes_b[cy].leaf()) {
+        TestLeaves(d, f, nodes_a[cx], nodes_b[cy], out);
+      } else {
+        stack.emplace_back(cx, cy);
+      }
+    }
+  }
+}
+
 // Depth-first descent of one overlapping task to its leaves.
 void Descend(const Descent& d, const Task& root, Output& out) {
+  const PairFrame& f = d.frames[root.frame];
+  if (f.aligned) return DescendAligned(d, f, root.x, root.y, out);
   std::vector<Task> stack = {root};
   while (!stack.empty()) {
     const Task task = stack.back();

@@ -48,7 +48,9 @@ void SetNodeBox(TriangleBvh::Node& node, const Box& box) {
     const double c = 0.5 * box.lo[a] + 0.5 * box.hi[a];
     const double e = std::max(box.hi[a] - c, c - box.lo[a]);
     node.center[a] = c;
-    node.half_extent[a] = std::nextafter(e, kInf);
+    // e is within half an ulp of the exact extent; this adds at least one ulp (a cheaper
+    // nextafter: e 2^-52 is between one and two ulps of e), and is > 0 even for e = 0.
+    node.half_extent[a] = e + (e * 0x1p-52 + std::numeric_limits<double>::denorm_min());
   }
 }
 
@@ -156,37 +158,28 @@ void TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
   built_area_ = builder.area_sum;
 }
 
-namespace {
-
-// Refits the subtree at `index`; returns its exact (min/max) box and adds its nodes' surface
-// areas to `area`.
-Box RefitSubtree(std::vector<TriangleBvh::Node>& nodes, const std::vector<uint32_t>& order,
-                 uint32_t index, std::span<const Eigen::Vector3d> p_MV,
-                 std::span<const TriangleIndices> triangles, double& area) {
-  TriangleBvh::Node& node = nodes[index];
-  Box box;
-  if (node.leaf()) {
-    for (uint32_t i = node.first; i < node.first + node.count; ++i)
-      box.Extend(TriangleBox(p_MV, triangles[order[i]]));
-  } else {
-    box = RefitSubtree(nodes, order, node.first, p_MV, triangles, area);
-    box.Extend(RefitSubtree(nodes, order, node.first + 1, p_MV, triangles, area));
-  }
-  SetNodeBox(nodes[index], box);
-  area += box.Area();
-  return box;
-}
-
-}  // namespace
-
 bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,
                         std::span<const TriangleIndices> triangles) {
   if (nodes_.empty() || order_.size() != triangles.size()) {
     Build(p_MV, triangles);
     return true;
   }
+  // Children come after their parent in nodes_: a backward sweep refits bottom-up.
+  std::vector<Box> boxes(nodes_.size());
   double area = 0;
-  RefitSubtree(nodes_, order_, 0, p_MV, triangles, area);
+  for (size_t i = nodes_.size(); i-- > 0;) {
+    const Node& node = nodes_[i];
+    Box& box = boxes[i];
+    if (node.leaf()) {
+      for (uint32_t k = node.first; k < node.first + node.count; ++k)
+        box.Extend(TriangleBox(p_MV, triangles[order_[k]]));
+    } else {
+      box = boxes[node.first];
+      box.Extend(boxes[node.first + 1]);
+    }
+    SetNodeBox(nodes_[i], box);
+    area += box.Area();
+  }
   if (area > kRebuildGrowth * built_area_) {
     Build(p_MV, triangles);
     return true;

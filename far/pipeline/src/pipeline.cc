@@ -184,6 +184,7 @@ void Pipeline::Impl::RunWholeScene(StepState& state) {
 // Object-level culling -> object PCS (AABB: every object goes on to sweep-and-prune).
 Result<void> Pipeline::Impl::CullObjectsStage(StepState& state) {
   if (IsGpuMethod(state.request.method)) {
+    cache.RefreshGpuGeometry(pool);
     auto alive = gpu->CullObjects(state.request, state.objects, state.result.stats);
     if (!alive) return alive.error();
     state.object_alive = std::move(*alive);

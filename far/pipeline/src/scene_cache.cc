@@ -51,6 +51,10 @@ int64_t SceneCache::Apply(SceneUpdate update) {
 
 void SceneCache::RefreshGeometry(CachedObject& object) {
   object.geometry_stamp = next_stamp_++;
+  object.world_dirty = true;
+}
+
+void SceneCache::ComputeGpuGeometry(CachedObject& object) {
   Eigen::AlignedBox3d box_M;
   for (const auto& p : object.mesh.p_MV) box_M.extend(p);
   object.anchor_M = box_M.center();
@@ -68,7 +72,17 @@ void SceneCache::RefreshGeometry(CachedObject& object) {
     object.rect_boxes_M[t] = ObbAabb(rect);
     object.rect_box_M.extend(object.rect_boxes_M[t]);
   }
-  object.world_dirty = true;
+  object.gpu_stamp = object.geometry_stamp;
+}
+
+void SceneCache::RefreshGpuGeometry(ThreadPool& pool) {
+  std::vector<CachedObject*> stale;
+  for (auto& [id, object] : objects_) {
+    if (object.gpu_stamp != object.geometry_stamp) stale.push_back(&object);
+  }
+  pool.ParallelFor(stale.size(), 1, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) ComputeGpuGeometry(*stale[i]);
+  });
 }
 
 void SceneCache::RefreshWorld() {

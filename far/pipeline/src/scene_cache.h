@@ -25,7 +25,8 @@ struct CachedObject {
   Mesh mesh;  ///< frame M
   Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
   uint64_t geometry_stamp = 0;  ///< changes whenever p_MV changes
-  // From p_MV:
+  // From p_MV, for the GPU methods only (RefreshGpuGeometry), when gpu_stamp != geometry_stamp:
+  uint64_t gpu_stamp = 0;
   Eigen::Vector3d anchor_M = Eigen::Vector3d::Zero();  ///< middle of the mesh: frame A's origin
   double local_extent = 0;                             ///< bound on |x| of pieces in frame A
   std::vector<Eigen::AlignedBox3d> rect_boxes_M;       ///< per triangle, its rectangle's AABB
@@ -54,6 +55,9 @@ class SceneCache {
 
   /// Every object in id order, and their world views (valid until the next Apply).
   std::vector<const CachedObject*> Objects() const;
+  /// Computes the GPU methods' data from the vertices (anchor, piece extent, rectangle boxes)
+  /// of the objects whose vertices changed since, on `pool`.
+  void RefreshGpuGeometry(ThreadPool& pool);
   /// Brings the hierarchies of `objects` up to date with their vertices on `pool`: built once
   /// for static and rigid objects, refit (rebuilt when loose) for deformed ones.
   void RefreshHierarchies(std::span<const CachedObject* const> objects, ThreadPool& pool);
@@ -65,6 +69,7 @@ class SceneCache {
 
  private:
   void RefreshGeometry(CachedObject& object);
+  static void ComputeGpuGeometry(CachedObject& object);
 
   std::map<uint32_t, CachedObject> objects_;
   std::vector<uint32_t> free_slots_;

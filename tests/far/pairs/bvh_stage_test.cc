@@ -235,8 +235,10 @@ TEST(BvhStageTest, TouchingAtACornerUnderARotatedPose) {
 TEST(BvhStageTest, CornersSharedThroughRoundedPosesFarFromTheOrigin) {
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> unit(-1, 1);
-  for (double offset : {0.0, 1e5, 1e7}) {
+  for (const auto& [offset, same_rotation] :
+       {std::pair{0.0, false}, {1e5, false}, {1e7, false}, {1e5, true}, {1e7, true}}) {
     SCOPED_TRACE(offset);
+    SCOPED_TRACE(same_rotation);
     Object a, b;
     a.id = 1;
     b.id = 2;
@@ -244,6 +246,8 @@ TEST(BvhStageTest, CornersSharedThroughRoundedPosesFarFromTheOrigin) {
     a.X_WM = RandomPose(rng, 0.1, offset);
     a.Place();
     b.X_WM = RandomPose(rng, 0.1, offset);
+    // The same rotation takes the hierarchy stage's translation-only path.
+    if (same_rotation) b.X_WM.linear() = a.X_WM.linear();
     const Eigen::Isometry3d X_BW = b.X_WM.inverse();
     for (uint32_t t = 0; t < a.triangles.size(); ++t) {
       const Eigen::Vector3d corner = a.p_WV[a.triangles[t][t % 3]];
