@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -33,14 +34,18 @@ int Fail(const far::Error& error) {
 
 // Options shared by the commands that run steps.
 struct StepFlags {
-  std::string method = "far", mechanism = "id-buffer", output, depth = "depth24";
+  std::string method = "auto", mechanism = "id-buffer", output, depth = "depth24";
   int resolution = 1024, subobject_size = 1;
-  double distance = -1;
+  double distance = 0;
+  CLI::Option* distance_option = nullptr;
 
   void Add(CLI::App* command) {
-    command->add_option("--method", method, "far, far-exact-offset, cullide, aabb, fcl or exact")
+    command
+        ->add_option("--method", method,
+                     "auto (the fastest reliable method for the daemon's renderer and the scene), "
+                     "bvh, aabb, far, far-exact-offset, cullide (not reliable), fcl or exact")
         ->capture_default_str();
-    command->add_option("--mechanism", mechanism, "id-buffer or occlusion-query")
+    command->add_option("--mechanism", mechanism, "GPU methods: id-buffer or occlusion-query")
         ->capture_default_str();
     command
         ->add_option("--resolution", resolution,
@@ -51,8 +56,8 @@ struct StepFlags {
         ->capture_default_str();
     command->add_option("--subobject-size", subobject_size, "triangles per sub-object")
         ->capture_default_str();
-    command->add_option("--distance", distance,
-                        "distance D: report every triangle pair closer than D");
+    distance_option = command->add_option(
+        "--distance", distance, "distance D >= 0: report every triangle pair closer than D");
     command->add_option(
         "--output", output,
         "deepest output: object-pcs (objects only), pairs (object pairs), pcs (object and "
@@ -78,8 +83,16 @@ struct StepFlags {
     request.depth_format = *d;
     request.resolution = resolution;
     request.subobject_size = subobject_size;
-    if (distance >= 0) request.distance = distance;
-    std::string out = output.empty() ? (distance >= 0 ? "distance" : "contacts") : output;
+    const bool has_distance = distance_option->count() > 0;
+    if (has_distance) {
+      if (!std::isfinite(distance) || distance < 0) {
+        return far::MakeError(far::ErrorCode::kInvalidArgument,
+                              "--distance: " + std::to_string(distance) +
+                                  " is not a finite number >= 0");
+      }
+      request.distance = distance;
+    }
+    std::string out = output.empty() ? (has_distance ? "distance" : "contacts") : output;
     auto o = far::ParseOutput(out);
     if (!o)
       return far::MakeError(far::ErrorCode::kInvalidArgument, "--output: unknown '" + out + "'");
@@ -91,7 +104,9 @@ struct StepFlags {
 json StatsJson(const far::StepStats& stats) {
   json stages = json::object();
   for (const auto& stage : stats.stages) stages[stage.name] = stage.ms;
-  return {{"total_ms", stats.total_ms},
+  return {{"method", stats.method},
+          {"method_reason", stats.method_reason},
+          {"total_ms", stats.total_ms},
           {"stages_ms", stages},
           {"primitives_rendered", stats.primitives_rendered},
           {"draws", stats.draws},

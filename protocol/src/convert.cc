@@ -176,6 +176,8 @@ void SetPairArrays(far_lcm::step_reply_t& reply, const StepResult& result, bool*
 }
 
 void SetStats(far_lcm::step_reply_t& reply, const StepStats& stats) {
+  reply.method_run = stats.method;
+  reply.method_reason = stats.method_reason;
   reply.num_stages = static_cast<int32_t>(stats.stages.size());
   for (const StageStats& stage : stats.stages) {
     reply.stage_name.push_back(stage.name);
@@ -344,6 +346,8 @@ void ReadPairArrays(const far_lcm::step_reply_t& reply, StepResult& result) {
 }
 
 void ReadStats(const far_lcm::step_reply_t& reply, StepResult& result) {
+  result.stats.method = reply.method_run;
+  result.stats.method_reason = reply.method_reason;
   StepStats& stats = result.stats;
   for (int32_t i = 0; i < reply.num_stages; ++i) {
     stats.stages.push_back({reply.stage_name[i], reply.stage_ms[i]});

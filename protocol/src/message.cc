@@ -101,45 +101,47 @@ constexpr std::array kStepReply{
     String("status_name"),                   // 7
     String("message"),                       // 8
     String("output"),                        // 9
-    Scalar("reply_in_shm", 1),               // 10
-    Scalar("shm_reply_sequence", 8),         // 11
-    Scalar("shm_reply_index", 8),            // 12
-    Scalar("shm_reply_bytes", 8),            // 13
-    Scalar("shm_reply_hash", 32),            // 14
-    Count("num_pcs_objects"),                // 15
-    Array("pcs_objects", 8, 15),             // 16
-    Count("num_object_pairs"),               // 17
-    Array("object_pair_a", 8, 17),           // 18
-    Array("object_pair_b", 8, 17),           // 19
-    Count("num_pcs_primitive_objects"),      // 20
-    Array("pcs_primitive_object", 8, 20),    // 21
-    Array("pcs_primitive_count", 4, 20),     // 22
-    Count("num_pcs_primitives"),             // 23
-    Array("pcs_primitive_triangle", 4, 23),  // 24
-    Count("num_contacts"),                   // 25
-    Array("contact_object_a", 8, 25),        // 26
-    Array("contact_triangle_a", 4, 25),      // 27
-    Array("contact_object_b", 8, 25),        // 28
-    Array("contact_triangle_b", 4, 25),      // 29
-    Count("num_distance_pairs"),             // 30
-    Array("distance_object_a", 8, 30),       // 31
-    Array("distance_triangle_a", 4, 30),     // 32
-    Array("distance_object_b", 8, 30),       // 33
-    Array("distance_triangle_b", 4, 30),     // 34
-    Array("distance", 8, 30),                // 35
-    Count("num_stages"),                     // 36
-    StringArray("stage_name", 36),           // 37
-    Array("stage_ms", 8, 36),                // 38
-    Scalar("total_ms", 8),                   // 39
-    Scalar("primitives_rendered", 8),        // 40
-    Scalar("draws", 8),                      // 41
-    Scalar("queries", 8),                    // 42
-    Scalar("bytes_uploaded", 8),             // 43
-    Scalar("object_pairs_considered", 8),    // 44
-    Scalar("pairs_considered", 8),           // 45
-    Scalar("pairs_tested", 8),               // 46
-    Scalar("object_radius", 8),              // 47
-    Scalar("primitive_radius", 8),           // 48
+    String("method_run"),                    // 10
+    String("method_reason"),                 // 11
+    Scalar("reply_in_shm", 1),               // 12
+    Scalar("shm_reply_sequence", 8),         // 13
+    Scalar("shm_reply_index", 8),            // 14
+    Scalar("shm_reply_bytes", 8),            // 15
+    Scalar("shm_reply_hash", 32),            // 16
+    Count("num_pcs_objects"),                // 17
+    Array("pcs_objects", 8, 17),             // 18
+    Count("num_object_pairs"),               // 19
+    Array("object_pair_a", 8, 19),           // 20
+    Array("object_pair_b", 8, 19),           // 21
+    Count("num_pcs_primitive_objects"),      // 22
+    Array("pcs_primitive_object", 8, 22),    // 23
+    Array("pcs_primitive_count", 4, 22),     // 24
+    Count("num_pcs_primitives"),             // 25
+    Array("pcs_primitive_triangle", 4, 25),  // 26
+    Count("num_contacts"),                   // 27
+    Array("contact_object_a", 8, 27),        // 28
+    Array("contact_triangle_a", 4, 27),      // 29
+    Array("contact_object_b", 8, 27),        // 30
+    Array("contact_triangle_b", 4, 27),      // 31
+    Count("num_distance_pairs"),             // 32
+    Array("distance_object_a", 8, 32),       // 33
+    Array("distance_triangle_a", 4, 32),     // 34
+    Array("distance_object_b", 8, 32),       // 35
+    Array("distance_triangle_b", 4, 32),     // 36
+    Array("distance", 8, 32),                // 37
+    Count("num_stages"),                     // 38
+    StringArray("stage_name", 38),           // 39
+    Array("stage_ms", 8, 38),                // 40
+    Scalar("total_ms", 8),                   // 41
+    Scalar("primitives_rendered", 8),        // 42
+    Scalar("draws", 8),                      // 43
+    Scalar("queries", 8),                    // 44
+    Scalar("bytes_uploaded", 8),             // 45
+    Scalar("object_pairs_considered", 8),    // 46
+    Scalar("pairs_considered", 8),           // 47
+    Scalar("pairs_tested", 8),               // 48
+    Scalar("object_radius", 8),              // 49
+    Scalar("primitive_radius", 8),           // 50
 };
 constexpr std::array kError{
     Scalar("protocol_version", 4),

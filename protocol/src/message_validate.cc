@@ -117,31 +117,34 @@ Result<StepCommand> ValidateStepRequest(const far_lcm::step_request_t& message) 
 
   // Names, as on far's command lines.
   StepRequest& request = command.request;
-  if (auto method = ParseMethod(message.method)) {
+  // No method named: the daemon's default, auto.
+  if (message.method.empty()) {
+    request.method = Method::kAuto;
+  } else if (auto method = ParseMethod(message.method)) {
     request.method = *method;
   } else {
     return Invalid(
         kType, "method",
-        Quote(message.method) + " is not one of aabb, cullide, far, far-exact-offset, fcl, exact");
+        Quote(message.method) + " is not one of " + MethodNames());
   }
   if (auto mechanism = ParseMechanism(message.mechanism)) {
     request.mechanism = *mechanism;
   } else {
     return Invalid(kType, "mechanism",
-                   Quote(message.mechanism) + " is not one of occlusion-query, id-buffer");
+                   Quote(message.mechanism) + " is not one of " + MechanismNames());
   }
   if (auto output = ParseOutput(message.output)) {
     request.output = *output;
   } else {
     return Invalid(
         kType, "output",
-        Quote(message.output) + " is not one of object-pcs, pairs, pcs, contacts, distance");
+        Quote(message.output) + " is not one of " + OutputNames());
   }
   if (auto format = ParseDepthFormat(message.depth_format)) {
     request.depth_format = *format;
   } else {
     return Invalid(kType, "depth_format",
-                   Quote(message.depth_format) + " is not one of depth16, depth24, depth32f");
+                   Quote(message.depth_format) + " is not one of " + DepthFormatNames());
   }
 
   // Ranges and combinations: the model's rule, shared with the pipeline.

@@ -84,7 +84,7 @@ TEST(MessageTest, FingerprintsArePinned) {
   EXPECT_EQ(far_lcm::close_session_t::getHash(), static_cast<int64_t>(0x774cca24acd09ab9ull));
   EXPECT_EQ(far_lcm::heartbeat_t::getHash(), static_cast<int64_t>(0xf641100dce8b2bbeull));
   EXPECT_EQ(far_lcm::step_request_t::getHash(), static_cast<int64_t>(0xa80851807485adfdull));
-  EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0x90462997ae93c19cull));
+  EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0x233c122f92ac3655ull));
   EXPECT_EQ(far_lcm::error_t::getHash(), static_cast<int64_t>(0xb22a7284ae722a4full));
   EXPECT_EQ(far_lcm::status_request_t::getHash(), static_cast<int64_t>(0x232a6c3597e1b397ull));
   EXPECT_EQ(far_lcm::status_reply_t::getHash(), static_cast<int64_t>(0x6cf89a8321868d65ull));

@@ -67,8 +67,14 @@ TEST(ValidateStepRequestTest, ChecksNames) {
   auto m = SampleStepRequest();
   m.method = "FAR";
   ExpectInvalid(m,
-                "step_request_t.method: 'FAR' is not one of aabb, cullide, far, "
+                "step_request_t.method: 'FAR' is not one of auto, aabb, bvh, cullide, far, "
                 "far-exact-offset, fcl, exact");
+  // No method named: the default, auto.
+  m = SampleStepRequest();
+  m.method = "";
+  auto command = ValidateStepRequest(m);
+  ASSERT_TRUE(command) << command.error().message;
+  EXPECT_EQ(command->request.method, Method::kAuto);
   m = SampleStepRequest();
   m.mechanism = "queries";
   ExpectInvalid(m, "step_request_t.mechanism: 'queries' is not one of occlusion-query, id-buffer");

@@ -14,7 +14,8 @@ namespace {
 template <typename Enum, size_t N>
 using NameTable = std::array<std::pair<Enum, std::string_view>, N>;
 
-constexpr NameTable<Method, 7> kMethodNames{{{Method::kAabb, "aabb"},
+constexpr NameTable<Method, 8> kMethodNames{{{Method::kAuto, "auto"},
+                                             {Method::kAabb, "aabb"},
                                              {Method::kBvh, "bvh"},
                                              {Method::kCullide, "cullide"},
                                              {Method::kFar, "far"},
@@ -64,7 +65,21 @@ std::string FormatDouble(double value) {
   return std::string(text, result.ptr);
 }
 
+template <typename Enum, size_t N>
+std::string NamesOf(const NameTable<Enum, N>& table) {
+  std::string names;
+  for (const auto& [e, name] : table) names += (names.empty() ? "" : ", ") + std::string(name);
+  return names;
+}
+
 }  // namespace
+
+std::string MethodNames() { return NamesOf(kMethodNames); }
+std::string MechanismNames() { return NamesOf(kMechanismNames); }
+std::string OutputNames() { return NamesOf(kOutputNames); }
+std::string DepthFormatNames() { return NamesOf(kDepthNames); }
+
+bool IsReliable(Method method) { return method != Method::kCullide && method != Method::kFcl; }
 
 Result<void> CheckStepRequest(const StepRequest& request) {
   if (request.resolution < kMinResolution || request.resolution > kMaxResolution) {

@@ -9,6 +9,7 @@
 
 #include "fcl_collider.h"
 #include "gpu_culler.h"
+#include "gpu_probe.h"
 #include "scene_cache.h"
 
 #include "far/gpu/culling_renderer.h"
@@ -16,6 +17,7 @@
 #include "far/pairs/exact_stage.h"
 #include "far/pairs/sweep_and_prune.h"
 #include "far/pairs/thread_pool.h"
+#include "far/pipeline/internal/auto_selector.h"
 
 namespace far {
 namespace {
@@ -63,6 +65,11 @@ struct StepState {
   std::vector<std::vector<uint32_t>> subsets;  // per object: its triangles in the primitive PCS
   StepResult result;
 };
+
+// The configuration a request runs: "bvh", "far/id-buffer/1024".
+std::string ConfigName(const StepRequest& request) {
+  return internal::Candidate{request.method, request.mechanism, request.resolution}.Name();
+}
 
 // Sorts and deduplicates every list.
 void SortUnique(std::vector<uint32_t>& values) {
@@ -125,6 +132,7 @@ struct Pipeline::Impl {
   std::unique_ptr<internal::GpuCuller> gpu;  // only with GL
   SweepAndPrune sap;
   internal::FclCollider fcl;
+  std::optional<internal::AutoSelector> selector;  // made on the first auto step
 
   explicit Impl(const PipelineOptions& o)
       : options(o), pool(o.num_threads), model(o.scene_limits) {}
@@ -132,6 +140,7 @@ struct Pipeline::Impl {
   Result<void> Apply(std::vector<SceneUpdate> updates,
                      const std::function<std::string(size_t)>& where);
   Result<StepResult> Step(const StepRequest& request);
+  Result<StepResult> StepAuto(const StepRequest& request);
   void RunWholeScene(StepState& state);
   Result<void> CullObjectsStage(StepState& state);
   void PairObjectsStage(StepState& state);
@@ -296,15 +305,41 @@ void Pipeline::Impl::HierarchyStage(StepState& state, StageTimer& timer) {
   timer.End(query.run_exact ? "exact" : "primitive_cull");
 }
 
+// An auto step: the selector chooses a configuration, the step runs it and its time is
+// recorded (auto_selector.h says how it chooses).
+Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request) {
+  if (!selector) {
+    selector.emplace(gpu != nullptr, [] { return internal::ProbeGpuCost(); });
+  }
+  internal::SceneSize size{cache.size(), 0};
+  for (const CachedObject* object : cache.Objects()) size.triangles += object->mesh.num_triangles();
+  std::string reason;
+  const internal::Candidate chosen = selector->Choose(size, &reason);
+  StepRequest concrete = request;
+  concrete.method = chosen.method;
+  if (chosen.gpu()) {
+    concrete.mechanism = chosen.mechanism;
+    concrete.resolution = chosen.resolution;
+  }
+  const auto start = Clock::now();
+  auto result = Step(concrete);
+  if (!result) return result;
+  selector->Record(chosen, std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+  result->stats.method_reason = std::move(reason);
+  return result;
+}
+
 // One step: each stage runs only if the requested output needs it.
 Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
   if (auto ok = CheckStepRequest(request); !ok) return ok.error();
+  if (request.method == Method::kAuto) return StepAuto(request);
   if (IsGpuMethod(request.method) && !gpu) {
     return MakeError(ErrorCode::kUnavailable, "method '" + std::string(ToString(request.method)) +
                                                   "' needs the GPU, and this pipeline has no GL "
                                                   "context");
   }
   StepState state{request, {}, {}, {}, {}};
+  state.result.stats.method = ConfigName(request);
   StageTimer timer(state.result.stats);
   auto finish = [&]() -> Result<StepResult> {
     timer.Finish();

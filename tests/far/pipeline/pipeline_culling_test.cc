@@ -89,7 +89,8 @@ TEST_F(PipelineCullingTest, ReliableMethodsNeverMissOnRandomScenes) {
     request.resolution = kResolutions[(seed * 7 + seed / 7) % 5 + (seed % 8 == 0 ? 2 : 0)];
     request.depth_format = kDepths[seed % 3];
     request.subobject_size = 1 + static_cast<int>(seed % 3);
-    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
+    for (Method method :
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
       request.method = method;
       ExpectNoMiss(reference, Run(request),
                    "seed " + std::to_string(seed) + " " + std::string(ToString(method)) + " res " +
@@ -189,7 +190,8 @@ TEST_F(PipelineCullingTest, HardCasesFarFromOriginAndTinyFeatures) {
       const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
       StepRequest request;
       request.resolution = kResolutions[seed % 7];
-      for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
+      for (Method method :
+           {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
         request.method = method;
         ExpectNoMiss(reference, Run(request),
                      "origin " + std::to_string(origin) + " seed " + std::to_string(seed));
@@ -216,7 +218,8 @@ TEST_F(PipelineCullingTest, ReliableMethodsGetEveryHardCaseRight) {
     StepRequest request;
     request.resolution = kResolutions[i % 7];
     request.depth_format = kDepths[i % 3];
-    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
+    for (Method method :
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
       request.method = method;
       const StepResult result = Run(request);
       const bool found = !result.contacts.empty();
@@ -250,7 +253,8 @@ TEST_F(PipelineCullingTest, OneHugeObjectWithManyTinyOnes) {
   Load(objects);
   const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
   for (int resolution : {64, 512, 2048}) {
-    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
+    for (Method method :
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
       StepRequest request;
       request.method = method;
       request.resolution = resolution;
@@ -270,7 +274,8 @@ TEST_F(PipelineCullingTest, DistanceCullingNeverMissesAPairCloserThanD) {
     request.distance = D;
     request.output = Output::kDistancePairs;
     request.resolution = kResolutions[seed % 7];
-    for (Method method : {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh}) {
+    for (Method method :
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
       request.method = method;
       const StepResult result = Run(request);
       EXPECT_EQ(result.distance_pairs, reference.distance_pairs)
@@ -287,6 +292,7 @@ TEST_F(PipelineCullingTest, OnlyWhatChangedIsRecomputed) {
   objects[2].motion = Motion::kDeformable;
   Load(objects);
   StepRequest request;
+  request.method = Method::kFar;
   (void)Run(request);
   const SceneCounters first = pipeline_->counters();
   // Nothing changed: nothing is recomputed or re-uploaded.
@@ -323,6 +329,7 @@ TEST_F(PipelineCullingTest, StagesPastTheDeepestOutputDoNotRun) {
       {Output::kContacts, {"update", "object_cull", "sweep_and_prune", "primitive_cull", "exact"}}};
   for (const auto& [output, stages] : cases) {
     StepRequest request;
+    request.method = Method::kFar;
     request.output = output;
     const StepResult result = Run(request);
     std::vector<std::string> ran;
@@ -332,6 +339,24 @@ TEST_F(PipelineCullingTest, StagesPastTheDeepestOutputDoNotRun) {
       EXPECT_TRUE(result.contacts.empty());
     }
   }
+}
+
+// On llvmpipe a FAR step costs milliseconds plus tens of microseconds per triangle: on a scene
+// of thousands of triangles auto runs bvh, and its reason says what it measured and predicted.
+TEST_F(PipelineCullingTest, AutoRunsTheFastestReliableConfigurationAndSaysWhy) {
+  Load(RandomSoup(77, 40, 200, 3.0, 0.3));  // 8000 triangles
+  StepRequest request;                      // auto: the default
+  StepResult result;
+  for (int step = 0; step < 4; ++step) result = Run(request);
+  EXPECT_EQ(result.stats.method, "bvh");
+  EXPECT_NE(result.stats.method_reason.find("auto: bvh is the fastest measured"), std::string::npos)
+      << result.stats.method_reason;
+  EXPECT_NE(result.stats.method_reason.find("far/id-buffer/256 predicted"), std::string::npos)
+      << result.stats.method_reason;
+  // The configuration of any other method is named too.
+  request.method = Method::kFar;
+  request.resolution = 128;
+  EXPECT_EQ(Run(request).stats.method, "far/id-buffer/128");
 }
 
 TEST_F(PipelineCullingTest, RejectsBadRequests) {

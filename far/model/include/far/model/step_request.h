@@ -1,6 +1,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <string_view>
 
 #include "far/model/result.h"
@@ -18,6 +19,9 @@ enum class Method {
   kFarExactOffset,  ///< FAR with bounded exact offsets: reliable, tighter, more vertices
   kFcl,             ///< FCL dynamic AABB tree broadphase + BVHModel<OBBRSS> collide
   kExact,           ///< brute-force exact reference (every cross-object triangle pair)
+  /// The fastest reliable method for this renderer and scene, chosen per step from measured
+  /// costs (never cullide, fcl or exact); the result's stats name what ran and why.
+  kAuto,
 };
 
 /// How the GPU answers "is this primitive fully visible against the other objects".
@@ -37,7 +41,8 @@ enum class Output {
 
 /// What one step computes and how.
 struct StepRequest {
-  Method method = Method::kFar;
+  Method method = Method::kAuto;
+  /// The GPU methods' mechanism and viewport; auto chooses its own.
   QueryMechanism mechanism = QueryMechanism::kIdBuffer;
   int resolution = 1024;  ///< viewport is resolution x resolution
   DepthFormat depth_format = DepthFormat::kDepth24;
@@ -46,7 +51,7 @@ struct StepRequest {
   Output output = Output::kContacts;
 };
 
-/// Names used on command lines and in messages: "aabb", "bvh", "cullide", "far",
+/// Names used on command lines and in messages: "auto", "aabb", "bvh", "cullide", "far",
 /// "far-exact-offset", "fcl", "exact"; "occlusion-query", "id-buffer"; "object-pcs", "pairs", "pcs", "contacts",
 /// "distance"; "depth16", "depth24", "depth32f". Parse* return nullopt for unknown names.
 std::string_view ToString(Method method);
@@ -57,6 +62,16 @@ std::optional<Method> ParseMethod(std::string_view name);
 std::optional<QueryMechanism> ParseMechanism(std::string_view name);
 std::optional<Output> ParseOutput(std::string_view name);
 std::optional<DepthFormat> ParseDepthFormat(std::string_view name);
+
+/// The known names, comma-separated ("auto, aabb, bvh, ..."), for help texts and errors.
+std::string MethodNames();
+std::string MechanismNames();
+std::string OutputNames();
+std::string DepthFormatNames();
+
+/// True for the methods whose answer never misses a contact (everything but cullide, whose
+/// unfattened primitives can be pruned, and fcl, whose triangle test is wrong on hard cases).
+bool IsReliable(Method method);
 
 /// Checks a request against the limits of far/model/limits.h: resolution in [kMinResolution,
 /// kMaxResolution], subobject_size in [1, kMaxSubobjectSize], a distance that is finite and in

@@ -20,6 +20,11 @@ struct StageStats {
 
 /// What a step did and cost.
 struct StepStats {
+  /// The configuration that ran: the method's name, and for the GPU methods the mechanism and
+  /// resolution ("bvh", "far/id-buffer/256"). Under auto, the one it chose.
+  std::string method;
+  /// Why auto chose it (measured and predicted costs); empty for other methods.
+  std::string method_reason;
   std::vector<StageStats> stages;
   double total_ms = 0;
   int64_t primitives_rendered = 0;  ///< object and sub-object primitives drawn, all views

@@ -1,0 +1,94 @@
+#pragma once
+
+// far::internal: visible to the tests, not part of the API.
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "far/model/step_request.h"
+
+namespace far::internal {
+
+/// A concrete configuration `auto` may run.
+struct Candidate {
+  Method method = Method::kBvh;
+  QueryMechanism mechanism = QueryMechanism::kIdBuffer;
+  int resolution = 256;
+
+  bool gpu() const { return method == Method::kFar || method == Method::kFarExactOffset; }
+  /// "bvh", "far/id-buffer/256".
+  std::string Name() const;
+  bool operator==(const Candidate&) const = default;
+};
+
+/// A GPU step's predicted cost: fixed + per_triangle * triangles (milliseconds).
+struct GpuCost {
+  double fixed_ms = 0;
+  double ms_per_triangle = 0;
+  double Predict(int64_t triangles) const {
+    return fixed_ms + ms_per_triangle * static_cast<double>(triangles);
+  }
+};
+
+/// What auto knows of the scene when it chooses: its size, to tell when it changed enough that
+/// the costs measured before no longer hold.
+struct SceneSize {
+  int64_t objects = 0;
+  int64_t triangles = 0;
+};
+
+/// Chooses, step by step, the fastest reliable configuration for one pipeline's renderer and
+/// scene, from costs it measures:
+///  - it calibrates on the first steps: each candidate that may be fastest runs once and its
+///    time is recorded (bvh always first: it is reliable on every host and rarely slow);
+///  - a GPU candidate runs only when its predicted time (the renderer's fixed cost per step
+///    plus its cost per triangle times the scene's triangles, both measured once per process
+///    on two fixed probe scenes) is within kTryFactor of the best measured time: on a software
+///    rasterizer the GPU methods cost milliseconds per step and tens of microseconds per
+///    triangle, so they are not tried where the CPU is clearly faster;
+///  - then it runs the fastest measured one, and re-calibrates when the scene's object or
+///    triangle count changed by more than kRecheckChange since, when the chosen one's time has
+///    drifted above kRecheckDrift times what it measured, or every kRecheckSteps steps.
+/// Every candidate is reliable: cullide, fcl and exact are never chosen.
+/// Thread safety: none (the pipeline's thread).
+class AutoSelector {
+ public:
+  static constexpr double kTryFactor = 3.0;
+  static constexpr double kRecheckChange = 0.25;
+  static constexpr double kRecheckDrift = 2.0;
+  static constexpr int64_t kRecheckSteps = 1000;
+
+  /// `gpu_cost` measures (once) the renderer's cost of a FAR step, or gives nullopt when it
+  /// cannot; it is only called when there is a GPU.
+  AutoSelector(bool has_gpu, std::function<std::optional<GpuCost>()> gpu_cost);
+
+  /// The configuration for the next step, and why (filled into the step's stats).
+  Candidate Choose(const SceneSize& scene, std::string* reason);
+  /// Records the time of a step that ran `candidate`.
+  void Record(const Candidate& candidate, double ms);
+
+ private:
+  struct Entry {
+    Candidate candidate;
+    std::optional<double> measured_ms;   // last measured since the calibration
+    std::optional<double> predicted_ms;  // GPU candidates: from the probe
+  };
+  void Calibrate(const SceneSize& scene);
+  bool NeedsRecheck(const SceneSize& scene) const;
+  const Entry* Fastest() const;
+
+  bool has_gpu_;
+  std::function<std::optional<GpuCost>()> probe_gpu_;
+  std::optional<GpuCost> gpu_cost_;  // once probed
+  bool probed_ = false;
+  std::vector<Entry> entries_;
+  SceneSize calibrated_for_;
+  bool calibrated_ = false;
+  int64_t steps_since_calibration_ = 0;
+  double chosen_calibration_ms_ = 0;
+};
+
+}  // namespace far::internal

@@ -1,0 +1,131 @@
+#include "far/pipeline/internal/auto_selector.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace far::internal {
+namespace {
+
+std::string Ms(double ms) {
+  char text[32];
+  std::snprintf(text, sizeof(text), ms < 10 ? "%.2f ms" : "%.0f ms", ms);
+  return text;
+}
+
+// The candidates, in the order they are tried: the CPU hierarchy first, then the GPU
+// configurations from the one expected fastest.
+std::vector<Candidate> AllCandidates(bool has_gpu) {
+  std::vector<Candidate> candidates = {{Method::kBvh, QueryMechanism::kIdBuffer, 0}};
+  if (!has_gpu) return candidates;
+  for (int resolution : {256, 1024}) {
+    for (QueryMechanism mechanism : {QueryMechanism::kIdBuffer, QueryMechanism::kOcclusionQuery})
+      candidates.push_back({Method::kFar, mechanism, resolution});
+  }
+  candidates.push_back({Method::kFarExactOffset, QueryMechanism::kIdBuffer, 256});
+  return candidates;
+}
+
+bool Changed(int64_t now, int64_t then, double fraction) {
+  return std::abs(static_cast<double>(now - then)) >
+         fraction * static_cast<double>(std::max<int64_t>(then, 1));
+}
+
+}  // namespace
+
+std::string Candidate::Name() const {
+  std::string name(ToString(method));
+  if (gpu()) name += "/" + std::string(ToString(mechanism)) + "/" + std::to_string(resolution);
+  return name;
+}
+
+AutoSelector::AutoSelector(bool has_gpu, std::function<std::optional<GpuCost>()> gpu_cost)
+    : has_gpu_(has_gpu), probe_gpu_(std::move(gpu_cost)) {}
+
+void AutoSelector::Calibrate(const SceneSize& scene) {
+  entries_.clear();
+  for (const Candidate& candidate : AllCandidates(has_gpu_))
+    entries_.push_back({candidate, {}, {}});
+  if (has_gpu_ && !probed_) {
+    gpu_cost_ = probe_gpu_();
+    probed_ = true;
+  }
+  for (Entry& entry : entries_) {
+    if (entry.candidate.gpu() && gpu_cost_)
+      entry.predicted_ms = gpu_cost_->Predict(scene.triangles);
+  }
+  calibrated_for_ = scene;
+  calibrated_ = true;
+  steps_since_calibration_ = 0;
+  chosen_calibration_ms_ = 0;
+}
+
+bool AutoSelector::NeedsRecheck(const SceneSize& scene) const {
+  if (Changed(scene.objects, calibrated_for_.objects, kRecheckChange) ||
+      Changed(scene.triangles, calibrated_for_.triangles, kRecheckChange) ||
+      steps_since_calibration_ >= kRecheckSteps) {
+    return true;
+  }
+  // The chosen one got much slower than when it was chosen (and not just by noise on a tiny
+  // time): its rivals may have become faster.
+  const Entry* chosen = Fastest();
+  return chosen != nullptr && chosen_calibration_ms_ > 0 && *chosen->measured_ms > 1.0 &&
+         *chosen->measured_ms > kRecheckDrift * chosen_calibration_ms_;
+}
+
+const AutoSelector::Entry* AutoSelector::Fastest() const {
+  const Entry* best = nullptr;
+  for (const Entry& entry : entries_) {
+    if (entry.measured_ms && (best == nullptr || *entry.measured_ms < *best->measured_ms))
+      best = &entry;
+  }
+  return best;
+}
+
+Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
+  if (!calibrated_ || NeedsRecheck(scene)) Calibrate(scene);
+  const Entry* best = Fastest();
+  std::string skipped;
+  // The next untried candidate that may be fastest.
+  for (Entry& entry : entries_) {
+    if (entry.measured_ms) continue;
+    const bool hopeless = best != nullptr && entry.predicted_ms &&
+                          *entry.predicted_ms > kTryFactor * *best->measured_ms;
+    if (hopeless) {
+      skipped += "; " + entry.candidate.Name() + " predicted " + Ms(*entry.predicted_ms);
+      continue;
+    }
+    *reason =
+        "auto: calibrating: trying " + entry.candidate.Name() +
+        (entry.predicted_ms ? " (predicted " + Ms(*entry.predicted_ms) + ")" : "") +
+        (best ? "; best so far " + best->candidate.Name() + " " + Ms(*best->measured_ms) : "");
+    return entry.candidate;
+  }
+  if (chosen_calibration_ms_ == 0) chosen_calibration_ms_ = *best->measured_ms;
+  *reason = "auto: " + best->candidate.Name() + " is the fastest measured (" +
+            Ms(*best->measured_ms) + ")";
+  for (const Entry& entry : entries_) {
+    if (&entry != best && entry.measured_ms)
+      *reason += "; " + entry.candidate.Name() + " measured " + Ms(*entry.measured_ms);
+  }
+  *reason += skipped;
+  return best->candidate;
+}
+
+void AutoSelector::Record(const Candidate& candidate, double ms) {
+  ++steps_since_calibration_;
+  for (Entry& entry : entries_) {
+    if (!(entry.candidate == candidate)) continue;
+    // A moving average for the one that keeps running; the first measurement as it is.
+    entry.measured_ms = entry.measured_ms ? 0.8 * *entry.measured_ms + 0.2 * ms : ms;
+  }
+  // A GPU candidate that ran tells more about the other GPU ones than the probe did: they are
+  // predicted at half its time (resolution and mechanism change it by a factor, not by 10).
+  if (candidate.gpu()) {
+    for (Entry& entry : entries_) {
+      if (entry.candidate.gpu() && !entry.measured_ms) entry.predicted_ms = 0.5 * ms;
+    }
+  }
+}
+
+}  // namespace far::internal

@@ -1,0 +1,101 @@
+#include "gpu_probe.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <mutex>
+
+#include "far/gpu/culling_renderer.h"
+#include "far/pipeline/pipeline.h"
+
+namespace far::internal {
+namespace {
+
+// A closed, bumpy ball of 2 * n * (n - 1) triangles.
+Mesh Ball(double radius, int n) {
+  Mesh mesh;
+  const double pi = std::acos(-1.0);
+  mesh.p_MV.emplace_back(0, 0, radius);
+  for (int i = 1; i < n; ++i) {
+    for (int j = 0; j < 2 * n; ++j) {
+      const double theta = pi * i / n, phi = pi * j / n;
+      const double r = radius * (1 + 0.1 * std::sin(5 * phi) * std::sin(3 * theta));
+      mesh.p_MV.emplace_back(r * std::sin(theta) * std::cos(phi),
+                             r * std::sin(theta) * std::sin(phi), r * std::cos(theta));
+    }
+  }
+  mesh.p_MV.emplace_back(0, 0, -radius);
+  const auto ring = [n](int i, int j) {
+    return static_cast<uint32_t>(1 + (i - 1) * 2 * n + (j % (2 * n)));
+  };
+  const auto bottom = static_cast<uint32_t>(mesh.p_MV.size() - 1);
+  for (int j = 0; j < 2 * n; ++j) {
+    mesh.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
+    for (int i = 1; i + 1 < n; ++i) {
+      mesh.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+      mesh.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+    }
+    mesh.triangles.push_back({ring(n - 1, j), bottom, ring(n - 1, j + 1)});
+  }
+  return mesh;
+}
+
+// The time of a FAR step (the second: the first builds shaders and pieces) over 27 overlapping
+// balls of ball_n bands; `triangles` gets their count.
+std::optional<double> Measure(int ball_n, int* triangles) {
+  PipelineOptions options;
+  options.use_current_context = true;
+  options.num_threads = 1;
+  auto pipeline = Pipeline::Create(options);
+  if (!pipeline) return std::nullopt;
+  // 27 balls on a grid, each overlapping its neighbours.
+  const Mesh ball = Ball(0.6, ball_n);
+  *triangles = 27 * ball.num_triangles();
+  uint32_t id = 0;
+  for (int x = 0; x < 3; ++x) {
+    for (int y = 0; y < 3; ++y) {
+      for (int z = 0; z < 3; ++z) {
+        Pose pose;
+        pose.translation = Eigen::Vector3d(x, y, z);
+        if (!(*pipeline)->AddObject(id++, ball, Motion::kRigid, pose)) return std::nullopt;
+      }
+    }
+  }
+  StepRequest request;
+  request.method = Method::kFar;
+  request.mechanism = QueryMechanism::kIdBuffer;
+  request.resolution = 256;
+  if (!(*pipeline)->Step(request)) return std::nullopt;  // shaders, buffers, pieces
+  const auto start = std::chrono::steady_clock::now();
+  if (!(*pipeline)->Step(request)) return std::nullopt;
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return ms;
+}
+
+}  // namespace
+
+std::optional<GpuCost> ProbeGpuCost() {
+  static std::mutex mutex;
+  static std::map<std::string, GpuCost> cost_by_renderer;
+  const std::string renderer = CurrentGlRenderer();
+  if (renderer.empty()) return std::nullopt;
+  {
+    std::lock_guard lock(mutex);
+    if (auto it = cost_by_renderer.find(renderer); it != cost_by_renderer.end()) return it->second;
+  }
+  // Two sizes give the fixed part (clears, reads back, draw calls) and the part per triangle.
+  int small_triangles = 0, large_triangles = 0;
+  const std::optional<double> small = Measure(5, &small_triangles);
+  const std::optional<double> large = Measure(9, &large_triangles);
+  if (!small || !large) return std::nullopt;
+  GpuCost cost;
+  cost.ms_per_triangle = std::max(0.0, (*large - *small) / (large_triangles - small_triangles));
+  cost.fixed_ms = std::max(0.0, *small - cost.ms_per_triangle * small_triangles);
+  std::lock_guard lock(mutex);
+  cost_by_renderer[renderer] = cost;
+  return cost;
+}
+
+}  // namespace far::internal

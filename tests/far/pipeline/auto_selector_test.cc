@@ -1,0 +1,93 @@
+// How auto chooses, with controlled costs: calibration order, GPU candidates gated by their
+// predicted cost, the fastest measured kept, re-calibration when the scene changes or the
+// chosen configuration drifts.
+#include "far/pipeline/internal/auto_selector.h"
+
+#include <map>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace far::internal {
+namespace {
+
+// Runs `steps` choices, each "measured" at the time `cost` gives for the chosen candidate.
+std::vector<std::string> Steps(AutoSelector& selector, const SceneSize& scene,
+                               const std::map<std::string, double>& cost, int steps,
+                               std::string* last_reason = nullptr) {
+  std::vector<std::string> chosen;
+  for (int i = 0; i < steps; ++i) {
+    std::string reason;
+    const Candidate c = selector.Choose(scene, &reason);
+    chosen.push_back(c.Name());
+    selector.Record(c, cost.count(c.Name()) ? cost.at(c.Name()) : 1e9);
+    if (last_reason != nullptr) *last_reason = reason;
+  }
+  return chosen;
+}
+
+TEST(AutoSelectorTest, WithoutAGpuItIsAlwaysBvh) {
+  int probes = 0;
+  AutoSelector selector(false, [&] {
+    ++probes;
+    return std::optional<GpuCost>();
+  });
+  std::string reason;
+  const auto chosen = Steps(selector, {10, 1000}, {{"bvh", 2.0}}, 5, &reason);
+  for (const std::string& name : chosen) EXPECT_EQ(name, "bvh");
+  EXPECT_EQ(probes, 0);
+  EXPECT_NE(reason.find("bvh is the fastest measured"), std::string::npos) << reason;
+}
+
+TEST(AutoSelectorTest, ASlowGpuIsNeverTriedOnALargeScene) {
+  // A software rasterizer: 5 ms per step plus 30 us per triangle; bvh takes 5 ms.
+  AutoSelector selector(true, [] { return std::optional<GpuCost>(GpuCost{5.0, 0.03}); });
+  std::string reason;
+  const auto chosen = Steps(selector, {150, 40000}, {{"bvh", 5.0}}, 6, &reason);
+  for (const std::string& name : chosen) EXPECT_EQ(name, "bvh");
+  EXPECT_NE(reason.find("far/id-buffer/256 predicted 1205 ms"), std::string::npos) << reason;
+}
+
+TEST(AutoSelectorTest, AFastGpuIsTriedAndTheFastestMeasuredKept) {
+  AutoSelector selector(true, [] { return std::optional<GpuCost>(GpuCost{1.0, 0.0001}); });
+  const std::map<std::string, double> cost = {{"bvh", 20.0},
+                                              {"far/id-buffer/256", 4.0},
+                                              {"far/occlusion-query/256", 6.0},
+                                              {"far/id-buffer/1024", 3.0},
+                                              {"far/occlusion-query/1024", 8.0},
+                                              {"far-exact-offset/id-buffer/256", 5.0}};
+  std::string reason;
+  const auto chosen = Steps(selector, {10, 100000}, cost, 10, &reason);
+  // bvh first, then every GPU candidate once, then the fastest.
+  EXPECT_EQ(chosen[0], "bvh");
+  EXPECT_EQ(chosen[1], "far/id-buffer/256");
+  for (size_t i = 6; i < chosen.size(); ++i) EXPECT_EQ(chosen[i], "far/id-buffer/1024");
+  EXPECT_NE(reason.find("far/id-buffer/1024 is the fastest measured (3.00 ms)"), std::string::npos)
+      << reason;
+}
+
+TEST(AutoSelectorTest, OneSlowGpuStepRulesOutTheOtherGpuConfigurations) {
+  // The probe was optimistic; the first GPU step shows 50 ms against bvh's 2 ms.
+  AutoSelector selector(true, [] { return std::optional<GpuCost>(GpuCost{0.1, 0.0}); });
+  const auto chosen = Steps(selector, {10, 1000}, {{"bvh", 2.0}, {"far/id-buffer/256", 50.0}}, 6);
+  EXPECT_EQ(chosen[1], "far/id-buffer/256");
+  for (size_t i = 2; i < chosen.size(); ++i) EXPECT_EQ(chosen[i], "bvh");
+}
+
+TEST(AutoSelectorTest, RecalibratesWhenTheSceneGrowsOrTheChoiceDrifts) {
+  AutoSelector selector(true, [] { return std::optional<GpuCost>(GpuCost{1.0, 0.001}); });
+  // Small scene: the GPU (1.1 ms predicted, 1 ms measured) wins over bvh (5 ms).
+  auto chosen = Steps(selector, {4, 100}, {{"bvh", 5.0}, {"far/id-buffer/256", 1.0}}, 8);
+  EXPECT_EQ(chosen.back(), "far/id-buffer/256");
+  // The scene grows 100x: calibration starts again from bvh, and the GPU is tried again only
+  // if its prediction allows it (1 + 0.001 * 10000 = 11 ms > 3 x 2 ms: no).
+  chosen = Steps(selector, {400, 10000}, {{"bvh", 2.0}, {"far/id-buffer/256", 1.0}}, 4);
+  EXPECT_EQ(chosen[0], "bvh");
+  EXPECT_EQ(chosen.back(), "bvh");
+  // bvh drifts to 10 ms (> 2x its 2 ms): re-calibrated, and the GPU gets its chance again.
+  chosen = Steps(selector, {400, 10000}, {{"bvh", 10.0}, {"far/id-buffer/256", 1.0}}, 12);
+  EXPECT_EQ(chosen.back(), "far/id-buffer/256");
+}
+
+}  // namespace
+}  // namespace far::internal
