@@ -911,6 +911,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--quick", options.quick,
                "small scenes, 2 steps, resolutions 256 and 1024 (smoke test)");
+  far::GlPlatform gl_platform = far::GlPlatform::kAuto;  // device: a GPU run must not fall back
+  app.add_option("--gl-platform", gl_platform, "EGL platform: auto, device or surfaceless")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, far::GlPlatform>{{"auto", far::GlPlatform::kAuto},
+                                                 {"device", far::GlPlatform::kDevice},
+                                                 {"surfaceless", far::GlPlatform::kSurfaceless}}));
   CLI11_PARSE(app, argc, argv);
 
   auto split = [](const std::string& text) {
@@ -959,7 +965,7 @@ int main(int argc, char** argv) {
   }
 
   // One GL context for every configuration's pipeline.
-  auto context = far::GlContext::Create();
+  auto context = far::GlContext::Create(gl_platform);
   if (!context.ok()) {
     std::fprintf(stderr, "far-study: no GL context: %s\n", context.error().message.c_str());
     return 1;

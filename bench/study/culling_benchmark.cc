@@ -11,9 +11,13 @@
 // CPU time of the whole process (llvmpipe's rasterizer threads included): on a machine shared
 // with other work it is the steadier measure of the work done; "Time" is wall clock.
 //   far_culling_benchmark --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
+// --gl-platform=auto|device|surfaceless (ours, not Google Benchmark's) picks the EGL platform;
+// device makes a GPU run fail instead of falling back to llvmpipe's surfaceless platform.
 
 #include <cstdio>
+#include <cstring>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "test_scenes.h"
@@ -25,6 +29,7 @@
 namespace {
 
 constexpr int kResolution = 1024;
+far::GlPlatform g_platform = far::GlPlatform::kAuto;  // --gl-platform
 
 enum Scene : int64_t { kSpheres = 0, kSoup = 1 };
 
@@ -32,7 +37,9 @@ enum Scene : int64_t { kSpheres = 0, kSoup = 1 };
 // (closed surfaces that fill most of the viewport). kSoup: 40 clusters of 500 random triangles
 // of about 8 pixels (a few pixels of fill each: per-primitive overhead dominates).
 std::unique_ptr<far::Pipeline> MakeScene(int64_t scene) {
-  auto pipeline = far::Pipeline::Create();
+  far::PipelineOptions options;
+  options.platform = g_platform;
+  auto pipeline = far::Pipeline::Create(options);
   if (!pipeline.ok()) {
     std::fprintf(stderr, "far_culling_benchmark: %s\n", pipeline.error().message.c_str());
     return nullptr;
@@ -115,4 +122,39 @@ BENCHMARK(BM_Cull_OcclusionQuery)
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  // Take --gl-platform=X / --gl-platform X out of argv before Google Benchmark, which rejects
+  // flags it does not know.
+  int kept = 1;
+  for (int i = 1; i < argc; ++i) {
+    std::string value;
+    if (std::strncmp(argv[i], "--gl-platform=", 14) == 0) {
+      value = argv[i] + 14;
+    } else if (std::strcmp(argv[i], "--gl-platform") == 0 && i + 1 < argc) {
+      value = argv[++i];
+    } else {
+      argv[kept++] = argv[i];
+      continue;
+    }
+    if (value == "auto") {
+      g_platform = far::GlPlatform::kAuto;
+    } else if (value == "device") {
+      g_platform = far::GlPlatform::kDevice;
+    } else if (value == "surfaceless") {
+      g_platform = far::GlPlatform::kSurfaceless;
+    } else {
+      std::fprintf(stderr,
+                   "far_culling_benchmark: --gl-platform: unknown '%s' (auto, device, "
+                   "surfaceless)\n",
+                   value.c_str());
+      return 2;
+    }
+  }
+  argc = kept;
+  argv[argc] = nullptr;
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

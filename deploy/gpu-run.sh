@@ -1,0 +1,300 @@
+#!/usr/bin/env bash
+# The GPU run, on a machine with an NVIDIA GPU and its driver (docs/gpu.md). Checks that an
+# OpenGL 4.5 context comes from the GPU through the EGL device platform, then runs the gpu tests,
+# far-study, the culling benchmark and a daemon + client smoke test on it, each under a time
+# limit so that the whole fits one 10-minute device call. Everything it prints also goes to
+# RESULTS_DIR/log.txt, next to the study's CSVs and RESULTS.md sections and the benchmark's JSON.
+#   bash deploy/gpu-run.sh [--smoke] [BUNDLE_DIR] [RESULTS_DIR]
+# BUNDLE_DIR: made by deploy/gpu-bundle.sh (default gpu-bundle). RESULTS_DIR: default $OUT when
+# set, else gpu-results. --smoke: every stage tiny, on the surfaceless platform, a software
+# renderer allowed: the check of a bundle on a machine without a GPU, never for numbers.
+# Environment: FAR_RUN_BUDGET_S (whole run, default 540), FAR_STUDY_ARGS (the flags of the
+# second, larger far-study run), FAR_BUNDLE_CXX=auto|bundle|system (which libstdc++),
+# FAR_GLVND=auto|bundle (bundle: the bundle's unpacked glvnd loader, never the system's).
+set -euo pipefail
+export PATH=$PATH:/usr/sbin:/sbin # ldconfig
+
+smoke=0
+if [ "${1:-}" = "--smoke" ]; then
+  smoke=1
+  shift
+fi
+if [ $# -gt 2 ] || [[ "${1:-}" == -* ]]; then
+  sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//' >&2
+  exit 2
+fi
+bundle_arg=${1:-gpu-bundle}
+[ -f "$bundle_arg/bundle.env" ] || {
+  echo "gpu-run: $bundle_arg is not a bundle (no bundle.env): make one with deploy/gpu-bundle.sh" >&2
+  exit 2
+}
+bundle=$(cd "$bundle_arg" && pwd)
+results=${2:-${OUT:-gpu-results}}
+mkdir -p "$results"
+results=$(cd "$results" && pwd)
+here=$(cd "$(dirname "$0")" && pwd)
+budget=${FAR_RUN_BUDGET_S:-540}
+start=$(date +%s)
+
+left() { echo $((budget - ($(date +%s) - start))); }
+version_ge() { [ "$(printf '%s\n%s\n' "$1" "$2" | sort -V | head -n 1)" = "$2" ]; }
+is_software() {
+  case "$1" in *llvmpipe* | *softpipe* | *swrast* | *[Ss]oftware* | *SwiftShader*) return 0 ;; esac
+  return 1
+}
+stop() {
+  echo
+  echo "STOPPED: $*"
+  echo "No numbers were taken. See docs/gpu.md, 'When the driver is missing'."
+  exit 1
+}
+
+failures=0
+summary=()
+# stage NAME CAP_S CMD...: CMD under a limit of CAP_S or the time left, whichever is less.
+stage() {
+  local name=$1 cap=$2 limit rc=0 t0 took what
+  shift 2
+  limit=$(left)
+  [ "$cap" -ge "$limit" ] || limit=$cap
+  if [ "$limit" -lt 15 ]; then
+    echo
+    echo "=== $name: skipped, ${limit}s left of the ${budget}s budget"
+    summary+=("$(printf '%-24s %s' "$name" "skipped (no time left)")")
+    return 0
+  fi
+  echo
+  echo "=== $name (limit ${limit}s)"
+  local shown=("$@")
+  [ "$1" != env ] || shown=("${shown[@]:2}") # env LD_LIBRARY_PATH=...: said once, above
+  echo "\$ ${shown[*]}"
+  t0=$(date +%s)
+  timeout --kill-after=10 "$limit" "$@" || rc=$?
+  took=$(($(date +%s) - t0))
+  case $rc in
+    0) what=ok ;;
+    124 | 137) what="TIMED OUT (limit ${limit}s)" ;;
+    3) what="exit status 3 (far-study: a reliability problem, see its tables)" ;;
+    *) what="exit status $rc" ;;
+  esac
+  [ "$rc" -eq 0 ] || failures=$((failures + 1))
+  echo "=== $name: $what, ${took}s"
+  summary+=("$(printf '%-24s %5ss  %s' "$name" "$took" "$what")")
+}
+
+# far-daemon and far-client over LCM: a scene played step by step through the daemon. Exported
+# and run by a fresh bash (under timeout, maybe in a network namespace).
+daemon_smoke() {
+  set -euo pipefail
+  local bin=$FAR_BUNDLE/bin work daemon rc=0 answered=0
+  far() { env LD_LIBRARY_PATH="$FAR_LIB_PATH" "$@"; }
+  work=$(mktemp -d)
+  # Not through far(): $! must be the daemon itself (env execs it), not a subshell.
+  env LD_LIBRARY_PATH="$FAR_LIB_PATH" "$bin/far-daemon" --gl-platform "$FAR_PLATFORM" \
+    --log-level info >"$work/daemon.log" 2>&1 &
+  daemon=$!
+  # Expanded now: the locals are gone when the EXIT trap runs. Also when a step fails.
+  # shellcheck disable=SC2064
+  trap "kill $daemon 2>/dev/null || true; rm -rf '$work'" EXIT
+  for _ in $(seq 50); do
+    if far "$bin/far-client" --timeout-ms 300 ping >/dev/null 2>&1; then
+      answered=1
+      break
+    fi
+    kill -0 "$daemon" 2>/dev/null || break
+    sleep 0.2
+  done
+  if [ "$answered" = 0 ]; then
+    echo "far-daemon did not answer over LCM (udpm); its log:"
+    cat "$work/daemon.log"
+    return 1
+  fi
+  far "$bin/far-client" ping
+  # shellcheck disable=SC2086 # FAR_SCENE_ARGS is a list of flags
+  far "$bin/far-client" make-scene "$work/scene/scene.json" $FAR_SCENE_ARGS
+  far "$bin/far-client" play "$work/scene/scene.json" --resolution "$FAR_RESOLUTION" || rc=$?
+  far "$bin/far-client" status || rc=$?
+  kill -TERM "$daemon"
+  wait "$daemon" || rc=$?
+  echo "far-daemon log (last lines):"
+  tail -n 4 "$work/daemon.log"
+  return "$rc"
+}
+
+main() {
+  local platform=device
+  [ "$smoke" = 0 ] || platform=surfaceless
+  # shellcheck disable=SC1091 # written by gpu-bundle.sh
+  . "$bundle/bundle.env"
+  echo "far GPU run$([ "$smoke" = 0 ] || echo ' (SMOKE: tiny sizes, software renderer allowed; not for numbers)')"
+  echo "date: $(date -u '+%Y-%m-%d %H:%M:%S UTC'); budget ${budget}s; results: $results"
+  echo "bundle: $bundle (commit $FAR_BUNDLE_COMMIT, made $FAR_BUNDLE_DATE on $FAR_BUNDLE_BUILT_ON)"
+  local os glibc
+  os=$(sed -n 's/^PRETTY_NAME="\(.*\)"$/\1/p' /etc/os-release 2>/dev/null || true)
+  glibc=$(getconf GNU_LIBC_VERSION | awk '{ print $2 }')
+  echo "host: ${os:-unknown distribution}, $(uname -srm), glibc $glibc, $(nproc) CPUs:$(grep -m 1 'model name' /proc/cpuinfo | cut -d: -f2)"
+
+  echo
+  echo "=== GPU and driver"
+  if command -v nvidia-smi >/dev/null; then
+    timeout 30 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv || true
+    timeout 30 nvidia-smi || true
+  else
+    echo "nvidia-smi: not installed"
+  fi
+
+  # The C and C++ runtimes: glibc is the target's own; libstdc++ the target's when it is new
+  # enough for the binaries, else the bundle's (which needs a newer glibc itself).
+  version_ge "$glibc" "$FAR_NEEDS_GLIBC" ||
+    stop "glibc $glibc is older than the $FAR_NEEDS_GLIBC the bundle was built for: build the bundle on an older distribution"
+  # The loader cache, read once (grep -q on a pipe would race with pipefail).
+  local ldcache cxx=${FAR_BUNDLE_CXX:-auto} system_cxx
+  ldcache=$(ldconfig -p)
+  system_cxx=$(awk '$1 == "libstdc++.so.6" && /x86-64/ { print $NF; exit }' <<<"$ldcache")
+  if [ "$cxx" = auto ]; then
+    cxx=bundle
+    if [ -n "$system_cxx" ] && grep -qaF "GLIBCXX_$FAR_NEEDS_GLIBCXX" "$system_cxx" &&
+      grep -qaF "CXXABI_$FAR_NEEDS_CXXABI" "$system_cxx"; then
+      cxx=system
+    fi
+  fi
+  local lib_path=$bundle/lib
+  if [ "$cxx" = bundle ]; then
+    version_ge "$glibc" "$FAR_NEEDS_GLIBC_FOR_LIB_CXX" ||
+      stop "this libstdc++ (${system_cxx:-none}) lacks GLIBCXX_$FAR_NEEDS_GLIBCXX and the bundle's needs glibc $FAR_NEEDS_GLIBC_FOR_LIB_CXX"
+    lib_path=$lib_path:$bundle/lib-cxx
+  fi
+  echo
+  echo "=== EGL loader and driver"
+  echo "libstdc++: $cxx ($([ "$cxx" = system ] && echo "$system_cxx" || echo "$bundle/lib-cxx"))"
+
+  # The glvnd loader (libEGL.so.1 and friends): the system's; when it has none, the bundle's
+  # packages unpacked into / (as the device docs do it), or the bundle's unpacked copy.
+  local glvnd=${FAR_GLVND:-auto}
+  if [ "$glvnd" = auto ] && ! grep -q 'libEGL\.so\.1 ' <<<"$ldcache"; then
+    if [ "$(id -u)" -eq 0 ] && command -v dpkg >/dev/null; then
+      echo "libEGL.so.1 is missing: unpacking the glvnd loader packages into /"
+      for f in "$bundle"/debs/*.deb; do dpkg -x "$f" /; done
+      ldconfig
+      ldcache=$(ldconfig -p)
+    fi
+    grep -q 'libEGL\.so\.1 ' <<<"$ldcache" || glvnd=bundle
+  fi
+  if [ "$glvnd" = bundle ]; then
+    lib_path=$bundle/glvnd:$lib_path
+    echo "glvnd loader: the bundle's ($bundle/glvnd)"
+  else
+    echo "glvnd loader: $(awk '$1 == "libEGL.so.1" { print $NF; exit }' <<<"$ldcache")"
+  fi
+  # libepoxy loads glvnd's libGL.so.1, which links the X11 client libraries (it opens no
+  # display): the bundle's when the target lacks one of them, or with the bundle's glvnd.
+  local x11=system
+  for f in "$bundle"/lib-x11/*; do
+    grep -qF "${f##*/} " <<<"$ldcache" || x11=bundle
+  done
+  [ "${FAR_GLVND:-auto}" != bundle ] || x11=bundle
+  [ "$x11" = system ] || lib_path=$lib_path:$bundle/lib-x11
+  echo "X11 client libraries (for libGL.so.1): $x11"
+
+  # The NVIDIA EGL driver: glvnd finds it through a vendor file. When none of the standard
+  # places names it, use the driver's own file (where the device machines keep it).
+  local nvidia_json=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+  if [ -z "${__EGL_VENDOR_LIBRARY_FILENAMES:-}" ] && [ "$smoke" = 0 ] &&
+    ! grep -qs libEGL_nvidia /usr/share/glvnd/egl_vendor.d/*.json /etc/glvnd/egl_vendor.d/*.json &&
+    [ -f "$nvidia_json" ]; then
+    export __EGL_VENDOR_LIBRARY_FILENAMES=$nvidia_json
+  fi
+  if ! grep -q 'libEGL_nvidia\.so\.0 ' <<<"$ldcache"; then
+    for d in /usr/local/nvidia/lib64 /usr/local/nvidia/lib; do
+      [ ! -e "$d/libEGL_nvidia.so.0" ] || lib_path=$lib_path:$d
+    done
+  fi
+  echo "__EGL_VENDOR_LIBRARY_FILENAMES=${__EGL_VENDOR_LIBRARY_FILENAMES:-(unset: the standard vendor folders)}"
+  echo "LD_LIBRARY_PATH (bundle binaries only)=$lib_path"
+
+  # Every library of every binary must resolve; the bundle's own from the bundle.
+  if command -v ldd >/dev/null; then
+    local missing
+    missing=$(for b in "$bundle"/bin/*; do
+      LD_LIBRARY_PATH=$lib_path ldd "$b" | awk -v b="${b##*/}" '/not found/ { print b ": " $1 }'
+    done)
+    [ -z "$missing" ] || stop "libraries not found: $missing"
+    echo "ldd: every library of the bundle's binaries resolves"
+  fi
+
+  # The renderer, from far-daemon's startup line (an in-process LCM URL: no network needed).
+  echo
+  echo "=== GL context through the EGL $platform platform (far-daemon startup)"
+  local probe pid renderer
+  probe=$(mktemp)
+  env LD_LIBRARY_PATH="$lib_path" "$bundle/bin/far-daemon" --lcm-url memq:// \
+    --gl-platform "$platform" --log-level info >"$probe" 2>&1 &
+  pid=$!
+  for _ in $(seq 300); do
+    grep -q daemon_ready "$probe" && break
+    kill -0 "$pid" 2>/dev/null || break
+    sleep 0.1
+  done
+  kill "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  cat "$probe"
+  renderer=$(sed -n 's/.*daemon_ready gl_renderer="\([^"]*\)".*/\1/p' "$probe")
+  rm -f "$probe"
+  [ -n "$renderer" ] ||
+    stop "no OpenGL context through the EGL $platform platform (the daemon's message is above): the NVIDIA EGL driver (libEGL_nvidia.so.0 and its vendor file) was not found or failed"
+  echo "GL_RENDERER: $renderer"
+  if is_software "$renderer" && [ "$smoke" = 0 ]; then
+    stop "the EGL device platform gave a software renderer ('$renderer'), not the GPU: no NVIDIA EGL driver was loaded"
+  fi
+
+  cd "$results"
+  local far_env=(env "LD_LIBRARY_PATH=$lib_path")
+  local bin=$bundle/bin
+  local study=("$bin/far-study" --gl-platform "$platform" --bunny "$bundle/data/bunny.obj"
+    --plot-script "$bundle/data/plot_study.gp")
+  local tests_args=(--gtest_brief=1)
+  local bench_args=(--benchmark_repetitions=3 --benchmark_enable_random_interleaving=true
+    --benchmark_report_aggregates_only=true --benchmark_min_time=0.5)
+  local study_small=() study_large
+  study_large=${FAR_STUDY_ARGS:---bunny-subdivisions 1 --soup-objects 128 --leaves 150 --leaf-cells 8 --resolutions 256,512,1024,1400,2048 --steps 8}
+  export FAR_SCENE_ARGS="--kind leaves --frames 20" FAR_RESOLUTION=1024
+  if [ "$smoke" = 1 ]; then
+    tests_args+=(--gtest_filter='GlContextTest.*:PipelineCullingTest.RejectsBadRequests')
+    bench_args=(--benchmark_filter=scene:1 --benchmark_repetitions=1 --benchmark_min_time=0.01)
+    study_small=(--scenes 'soup,leaves' --steps 1 --resolutions 64 --soup-objects 8 --leaves 10
+      --leaf-cells 2)
+    study_large=${FAR_STUDY_ARGS:---scenes bunnies,bunnies-fine --steps 1 --fine-steps 1 --fine-subdivisions 0 --resolutions 64}
+    FAR_SCENE_ARGS="--kind demo --frames 3 --leaves 6" FAR_RESOLUTION=128
+  fi
+
+  stage "gpu tests" 150 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}"
+  stage "far-study" 200 "${far_env[@]}" "${study[@]}" "${study_small[@]}" \
+    --csv study.csv --results study.md
+  stage "culling benchmark" 120 "${far_env[@]}" "$bin/far_culling_benchmark" \
+    --gl-platform="$platform" "${bench_args[@]}" \
+    --benchmark_out=culling_benchmark.json --benchmark_out_format=json
+
+  # LCM is UDP multicast: in a private network namespace when this machine allows one.
+  export FAR_BUNDLE=$bundle FAR_LIB_PATH=$lib_path FAR_PLATFORM=$platform
+  export -f daemon_smoke
+  local netns=()
+  if command -v unshare >/dev/null && command -v ip >/dev/null && unshare -n true 2>/dev/null; then
+    netns=(bash "$here/netns-run.sh")
+  fi
+  stage "daemon + client" 60 "${netns[@]}" bash -c daemon_smoke
+
+  # The larger study last, with whatever time is left: the first run's results stand anyway.
+  # shellcheck disable=SC2086 # study_large is a list of flags
+  stage "far-study (larger)" "$(($(left) - 5))" "${far_env[@]}" "${study[@]}" $study_large \
+    --csv study-large.csv --results study-large.md
+
+  echo
+  echo "=== summary ($(($(date +%s) - start))s in all; GL_RENDERER: $renderer)"
+  printf '%s\n' "${summary[@]}"
+  echo
+  echo "files in $results:"
+  ls -l
+  [ "$failures" -eq 0 ]
+}
+
+main 2>&1 | tee "$results/log.txt"
