@@ -73,6 +73,11 @@ std::string CurrentGlRenderer() {
 
 int InstancesPerTriangle(PieceSet set) { return set == PieceSet::kEdgeBoxes ? 3 : 1; }
 
+PieceInstance ProxyBoxPiece(uint32_t slot, const Eigen::Vector3d& center,
+                            const Eigen::Vector3d& half_extent) {
+  return {{ToFloat(center), {1, 0, 0}, {0, 1, 0}, ToFloat(half_extent)}, 0, slot};
+}
+
 void AppendPieces(PieceSet set, uint32_t slot, uint32_t triangle, const Eigen::Vector3d& a,
                   const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                   std::vector<PieceInstance>* out) {
@@ -101,6 +106,8 @@ void AppendPieces(PieceSet set, uint32_t slot, uint32_t triangle, const Eigen::V
     case PieceSet::kTriangles:
       out->push_back({{ToFloat(a), ToFloat(b), ToFloat(c), {0, 0, 0}}, triangle, slot});
       break;
+    case PieceSet::kProxyBoxes:
+      break;  // per object, not per triangle (ProxyBoxPiece)
   }
 }
 
@@ -130,9 +137,11 @@ void CullingRenderer::Impl::UploadViewData(const AxisView& view, RenderCounters*
   for (const ViewObject& object : view.objects) {
     ObjectData& o = objects[object.slot];
     ViewMatrix(view.axis, view.projection, object.X_WA, o.M);
-    o.radius = fattened ? static_cast<float>(view.projection.radius +
-                                             FloatRoundingBound(object, view.projection))
-                        : 0.f;
+    o.radius =
+        fattened
+            ? static_cast<float>(view.radius_scale * (view.projection.radius +
+                                                      FloatRoundingBound(object, view.projection)))
+            : 0.f;
     o.group = object.group;
     o.first_primitive = object.first_primitive;
     o.in_view = 1;
@@ -207,7 +216,8 @@ Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
   gl.UploadViewData(view, counters);
   gl.SetViewState(raster_);
   for (PieceSet set : view.sets)
-    gl.pieces->PrepareViewDraws(set, view.objects, &counters->bytes_uploaded);
+    gl.pieces->PrepareViewDraws(set, view.objects, view.alive, view.triangles_per_primitive,
+                                &counters->bytes_uploaded);
   ViewPass pass(view, *gl.pieces, *gl.programs, counters);
   std::vector<uint8_t> stays = mechanism == QueryMechanism::kIdBuffer
                                    ? CullWithIdBuffer(pass, *gl.targets)

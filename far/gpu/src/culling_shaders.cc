@@ -99,6 +99,7 @@ Shape ShapeOf(PieceSet set) {
   switch (set) {
     case PieceSet::kUobb:
     case PieceSet::kEdgeBoxes:
+    case PieceSet::kProxyBoxes:
       return Shape::kBox;
     case PieceSet::kPrisms:
       return Shape::kPrism;

@@ -115,16 +115,39 @@ void PieceBuffers::Sync(PieceSet set, RenderCounters* counters) {
 }
 
 void PieceBuffers::PrepareViewDraws(PieceSet set, std::span<const ViewObject> objects,
+                                    std::span<const uint8_t> alive, int triangles_per_primitive,
                                     int64_t* bytes) {
   Store& s = store(set);
   std::vector<DrawCommand> commands;
   s.view_instances = 0;
+  const auto add = [&](uint64_t first, uint64_t count) {
+    if (count == 0) return;
+    commands.push_back({static_cast<GLuint>(CornerCount(set)), static_cast<GLuint>(count), 0, 0,
+                        static_cast<GLuint>(first)});
+    s.view_instances += count;
+  };
   for (const ViewObject& object : objects) {
     if (object.slot >= s.slots.size() || s.slots[object.slot].empty()) continue;
-    const auto count = static_cast<GLuint>(s.slots[object.slot].size());
-    commands.push_back({static_cast<GLuint>(CornerCount(set)), count, 0, 0,
-                        static_cast<GLuint>(s.first[object.slot])});
-    s.view_instances += count;
+    if (triangles_per_primitive <= 0) {
+      if (alive[object.first_primitive]) add(s.first[object.slot], s.slots[object.slot].size());
+      continue;
+    }
+    // One command per run of live sub-objects: pruned ones are not drawn at all.
+    const auto k = static_cast<uint32_t>(triangles_per_primitive);
+    const uint32_t primitives = (object.num_triangles + k - 1) / k;
+    for (uint32_t j = 0; j < primitives;) {
+      if (!alive[object.first_primitive + j]) {
+        ++j;
+        continue;
+      }
+      uint32_t end = j + 1;
+      while (end < primitives && alive[object.first_primitive + end]) ++end;
+      const auto [first, count_begin] = PrimitiveRange(set, object, triangles_per_primitive, j);
+      const auto [last, count_last] = PrimitiveRange(set, object, triangles_per_primitive, end - 1);
+      add(first, last + count_last - first);
+      (void)count_begin;
+      j = end;
+    }
   }
   s.view_commands = commands.size();
   glNamedBufferData(

@@ -31,9 +31,12 @@ class PieceBuffers {
 
   /// Uploads a set's changed slots: only changed bytes when no slot changed size.
   void Sync(PieceSet set, RenderCounters* counters);
-  /// Prepares one indirect command per object of the view (its instances in `set`), so that a
-  /// pass draws only the view's objects with one call.
-  void PrepareViewDraws(PieceSet set, std::span<const ViewObject> objects, int64_t* bytes);
+  /// Prepares the indirect commands of a view: per object of the view, its instances in `set`,
+  /// only of the primitives still alive (one command per run of live sub-objects), so that a
+  /// pass draws only those with one call.
+  void PrepareViewDraws(PieceSet set, std::span<const ViewObject> objects,
+                        std::span<const uint8_t> alive, int triangles_per_primitive,
+                        int64_t* bytes);
   /// Draws every instance of the view's objects in `set` (after PrepareViewDraws).
   void DrawView(PieceSet set, RenderCounters* counters);
   /// Draws instances [first, first + count) of a set.

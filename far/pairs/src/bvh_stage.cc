@@ -299,11 +299,13 @@ double WorldMagnitude(const BvhQuery& query, const std::vector<PairFrame>& frame
 }  // namespace
 
 BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
+  // The distance widens the search (candidates within it) even when no distance pair is asked.
   Wanted wanted;
   wanted.contacts = query.want_contacts;
-  wanted.distance = query.max_distance.has_value() && *query.max_distance >= 0;
+  const bool within = query.max_distance.has_value() && *query.max_distance >= 0;
+  wanted.distance = within && query.want_distance_pairs;
   std::vector<PairFrame> frames = MakeFrames(query, 0);
-  if (wanted.distance) {
+  if (within) {
     wanted.max_distance = *query.max_distance;
     wanted.slack = internal::DistanceSlack(wanted.max_distance, WorldMagnitude(query, frames));
     frames = MakeFrames(query, wanted.slack);

@@ -22,6 +22,45 @@ std::vector<PieceSet> PieceSetsFor(Method method) {
   }
 }
 
+// What the object level draws: for the FAR methods a few boxes per object (a cut of its
+// hierarchy), which cost far less than every triangle's offset and only ever prune less; for
+// CULLIDE the triangles themselves.
+std::vector<PieceSet> ObjectLevelSetsFor(Method method) {
+  if (method == Method::kCullide) return {PieceSet::kTriangles};
+  return {PieceSet::kProxyBoxes};
+}
+
+// Up to `max_boxes` nodes of `bvh` that together hold every triangle: the biggest node is
+// split until there are enough or only leaves are left.
+std::vector<const TriangleBvh::Node*> HierarchyCut(const TriangleBvh& bvh, size_t max_boxes) {
+  const auto& nodes = bvh.nodes();
+  auto smaller = [](const TriangleBvh::Node* x, const TriangleBvh::Node* y) {
+    return x->half_extent.sum() < y->half_extent.sum();
+  };
+  std::vector<const TriangleBvh::Node*> cut = {&nodes[0]}, leaves;
+  while (!cut.empty() && cut.size() + leaves.size() < max_boxes) {
+    std::pop_heap(cut.begin(), cut.end(), smaller);
+    const TriangleBvh::Node* biggest = cut.back();
+    cut.pop_back();
+    if (biggest->leaf()) {
+      leaves.push_back(biggest);
+      continue;
+    }
+    for (uint32_t child : {biggest->first, biggest->first + 1}) {
+      cut.push_back(&nodes[child]);
+      std::push_heap(cut.begin(), cut.end(), smaller);
+    }
+  }
+  cut.insert(cut.end(), leaves.begin(), leaves.end());
+  return cut;
+}
+
+// Boxes per object at the object level: more for big objects (an occluder as coarse as one box
+// would keep everything around it), about one per 64 triangles, at most 256.
+size_t ProxyBoxesFor(const CachedObject& object) {
+  return std::clamp<size_t>(object.mesh.triangles.size() / 64, 1, 256);
+}
+
 // The world AABB of a box given in a frame moved by X.
 Eigen::AlignedBox3d TransformBox(const Eigen::Isometry3d& X, const Eigen::AlignedBox3d& box) {
   const Eigen::Vector3d center = X * box.center();
@@ -69,13 +108,20 @@ void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject*
       auto it = entry.built.find(key);
       if (it != entry.built.end() && it->second == object->geometry_stamp) continue;
       std::vector<PieceInstance> pieces;
-      pieces.reserve(object->mesh.triangles.size() * InstancesPerTriangle(set));
-      for (size_t t = 0; t < object->mesh.triangles.size(); ++t) {
-        const auto& tri = object->mesh.triangles[t];
-        AppendPieces(set, object->slot, static_cast<uint32_t>(t),
-                     object->mesh.p_MV[tri[0]] - object->anchor_M,
-                     object->mesh.p_MV[tri[1]] - object->anchor_M,
-                     object->mesh.p_MV[tri[2]] - object->anchor_M, &pieces);
+      if (set == PieceSet::kProxyBoxes) {
+        // @pre the hierarchy is up to date (SceneCache::RefreshHierarchies).
+        for (const TriangleBvh::Node* node : HierarchyCut(object->bvh, ProxyBoxesFor(*object)))
+          pieces.push_back(
+              ProxyBoxPiece(object->slot, node->center - object->anchor_M, node->half_extent));
+      } else {
+        pieces.reserve(object->mesh.triangles.size() * InstancesPerTriangle(set));
+        for (size_t t = 0; t < object->mesh.triangles.size(); ++t) {
+          const auto& tri = object->mesh.triangles[t];
+          AppendPieces(set, object->slot, static_cast<uint32_t>(t),
+                       object->mesh.p_MV[tri[0]] - object->anchor_M,
+                       object->mesh.p_MV[tri[1]] - object->anchor_M,
+                       object->mesh.p_MV[tri[2]] - object->anchor_M, &pieces);
+        }
       }
       counters_.piece_builds++;
       counters_.piece_bytes += static_cast<int64_t>(pieces.size() * sizeof(PieceInstance));
@@ -88,10 +134,11 @@ void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject*
 // Culls one level (objects, or sub-objects of k triangles) with three axis views, each with
 // projection bounds recomputed from the primitives still alive. `alive` is in/out.
 Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& request,
+                                  std::span<const PieceSet> sets,
                                   std::span<const ViewObject> view_objects, int k,
                                   std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
                                   std::vector<uint8_t>& alive, StepStats& stats, double* radius) {
-  const std::vector<PieceSet> sets = PieceSetsFor(request.method);
+  const bool proxies = !sets.empty() && sets[0] == PieceSet::kProxyBoxes;
   for (int axis = 0; axis < 3; ++axis) {
     // A primitive can only be kept by another group: stop when one group or none is left.
     std::set<uint32_t> groups;
@@ -118,6 +165,7 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
     view.num_primitives = static_cast<int>(alive.size());
     view.alive = alive;
     view.sets = sets;
+    view.radius_scale = proxies ? std::sqrt(3.0) : 1.0;
     RenderCounters counters;
     auto stays = entry.renderer->RenderView(view, request.mechanism, &counters);
     if (!stays.ok()) return stays.error();
@@ -136,7 +184,7 @@ Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
                                                     StepStats& stats) {
   auto entry = RendererFor(request);
   if (!entry.ok()) return entry.error();
-  const std::vector<PieceSet> sets = PieceSetsFor(request.method);
+  const std::vector<PieceSet> sets = ObjectLevelSetsFor(request.method);
   EnsurePieces(**entry, objects, sets);
   // One primitive per object; each object is its own group.
   std::vector<ViewObject> view_objects;
@@ -147,8 +195,8 @@ Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
     boxes.push_back(TransformBox(objects[i]->X_WM, objects[i]->rect_box_M));
   }
   std::vector<uint8_t> alive(objects.size(), 1);
-  if (auto ok =
-          CullLevel(**entry, request, view_objects, 0, boxes, alive, stats, &stats.object_radius);
+  if (auto ok = CullLevel(**entry, request, sets, view_objects, 0, boxes, alive, stats,
+                          &stats.object_radius);
       !ok.ok()) {
     return ok.error();
   }
@@ -157,10 +205,12 @@ Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
 
 Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
     const StepRequest& request, std::span<const CachedObject* const> objects,
-    std::span<const size_t> paired, StepStats& stats) {
+    std::span<const size_t> paired, std::span<const std::vector<uint32_t>> candidates,
+    StepStats& stats) {
   auto entry = RendererFor(request);
   if (!entry.ok()) return entry.error();
-  EnsurePieces(**entry, objects, PieceSetsFor(request.method));
+  const std::vector<PieceSet> sets = PieceSetsFor(request.method);
+  EnsurePieces(**entry, objects, sets);
   // Sub-objects of k triangles of the paired objects, each object its own group.
   const int k = request.subobject_size;
   std::vector<ViewObject> view_objects;
@@ -177,19 +227,31 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
       boxes.push_back(TransformBox(object.X_WM, box_M));
     }
   }
-  std::vector<uint8_t> alive(boxes.size(), 1);
-  if (auto ok = CullLevel(**entry, request, view_objects, k, boxes, alive, stats,
+  // Only the sub-objects holding a candidate triangle take part: the others are not drawn.
+  std::vector<uint8_t> alive(boxes.size(), candidates.empty() ? 1 : 0);
+  if (!candidates.empty()) {
+    for (const ViewObject& view : view_objects) {
+      for (uint32_t t : candidates[view.group]) alive[view.first_primitive + t / k] = 1;
+    }
+  }
+  if (auto ok = CullLevel(**entry, request, sets, view_objects, k, boxes, alive, stats,
                           &stats.primitive_radius);
       !ok.ok()) {
     return ok.error();
   }
-  // Surviving sub-objects back to triangle indices, per object.
+  // Surviving sub-objects back to triangle indices (the candidate ones), per object.
   std::vector<std::vector<uint32_t>> subsets(objects.size());
   for (const ViewObject& view : view_objects) {
-    for (uint32_t j = 0; j < PrimitivesOf(view, k); ++j) {
-      if (!alive[view.first_primitive + j]) continue;
-      for (uint32_t t = j * k; t < std::min(view.num_triangles, (j + 1) * k); ++t)
-        subsets[view.group].push_back(t);
+    if (candidates.empty()) {
+      for (uint32_t j = 0; j < PrimitivesOf(view, k); ++j) {
+        if (!alive[view.first_primitive + j]) continue;
+        for (uint32_t t = j * k; t < std::min(view.num_triangles, (j + 1) * k); ++t)
+          subsets[view.group].push_back(t);
+      }
+    } else {
+      for (uint32_t t : candidates[view.group]) {
+        if (alive[view.first_primitive + t / k]) subsets[view.group].push_back(t);
+      }
     }
   }
   return subsets;

@@ -28,16 +28,21 @@ class GpuCuller {
   explicit GpuCuller(SceneCounters& counters) : counters_(counters) {}
 
   /// Culls whole objects: returns, indexed like `objects`, 1 for objects in the object PCS.
+  /// @pre the objects' hierarchies are up to date (SceneCache::RefreshHierarchies): the FAR
+  /// methods draw a cut of each hierarchy at this level.
   Result<std::vector<uint8_t>> CullObjects(const StepRequest& request,
                                            std::span<const CachedObject* const> objects,
                                            StepStats& stats);
 
   /// Culls sub-objects of k = request.subobject_size triangles of the objects `paired`
   /// (indices into `objects`): returns, indexed like `objects`, the sorted triangles of each
-  /// object that stay in the primitive PCS.
+  /// object that stay in the primitive PCS. With `candidates` (indexed like `objects`, sorted;
+  /// empty span: every triangle), only the sub-objects holding a candidate are drawn and only
+  /// candidates are returned: the triangles the CPU hierarchy found near a partner.
   Result<std::vector<std::vector<uint32_t>>> CullPrimitives(
       const StepRequest& request, std::span<const CachedObject* const> objects,
-      std::span<const size_t> paired, StepStats& stats);
+      std::span<const size_t> paired, std::span<const std::vector<uint32_t>> candidates,
+      StepStats& stats);
 
   /// Frees a removed object's pieces in every renderer.
   void RemoveSlot(uint32_t slot);
@@ -52,8 +57,8 @@ class GpuCuller {
   void EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
                     std::span<const PieceSet> sets);
   Result<void> CullLevel(RendererEntry& entry, const StepRequest& request,
-                         std::span<const ViewObject> view_objects, int k,
-                         std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
+                         std::span<const PieceSet> sets, std::span<const ViewObject> view_objects,
+                         int k, std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
                          std::vector<uint8_t>& alive, StepStats& stats, double* radius);
 
   SceneCounters& counters_;

@@ -147,6 +147,8 @@ struct Pipeline::Impl {
   Result<void> CullPrimitivesStage(StepState& state);
   void ExactStage(StepState& state);
   void HierarchyStage(StepState& state, StageTimer& timer);
+  BvhResult DescendHierarchies(StepState& state, bool run_exact,
+                               std::vector<const CachedObject*>& paired);
 };
 
 Result<void> Pipeline::Impl::Apply(std::vector<SceneUpdate> updates,
@@ -194,6 +196,7 @@ void Pipeline::Impl::RunWholeScene(StepState& state) {
 Result<void> Pipeline::Impl::CullObjectsStage(StepState& state) {
   if (IsGpuMethod(state.request.method)) {
     cache.RefreshGpuGeometry(pool);
+    cache.RefreshHierarchies(state.objects, pool);
     auto alive = gpu->CullObjects(state.request, state.objects, state.result.stats);
     if (!alive) return alive.error();
     state.object_alive = std::move(*alive);
@@ -235,7 +238,15 @@ Result<void> Pipeline::Impl::CullPrimitivesStage(StepState& state) {
   }
   const std::vector<size_t> paired(paired_set.begin(), paired_set.end());
   if (IsGpuMethod(state.request.method)) {
-    auto subsets = gpu->CullPrimitives(state.request, state.objects, paired, result.stats);
+    // The GPU draws only the triangles the hierarchies found near a partner: elsewhere there is
+    // nothing for it to prune.
+    std::vector<const CachedObject*> descended;
+    BvhResult near = DescendHierarchies(state, /*run_exact=*/false, descended);
+    std::vector<std::vector<uint32_t>> candidates(state.objects.size());
+    for (size_t i = 0; i < descended.size(); ++i)
+      candidates[index_of.at(descended[i]->id)] = std::move(near.candidates[i]);
+    auto subsets =
+        gpu->CullPrimitives(state.request, state.objects, paired, candidates, result.stats);
     if (!subsets) return subsets.error();
     state.subsets = std::move(*subsets);
   } else {
@@ -266,22 +277,20 @@ void Pipeline::Impl::ExactStage(StepState& state) {
   result.stats.pairs_tested = static_cast<int64_t>(exact.pairs_tested);
 }
 
-// The bvh method after sweep-and-prune: each paired object's hierarchy brought up to date, then
-// the simultaneous descent of each pair's hierarchies, with the exact tests at the leaves when
-// the output needs them; the triangles met on the way are the primitive PCS.
-void Pipeline::Impl::HierarchyStage(StepState& state, StageTimer& timer) {
-  StepResult& result = state.result;
+// The objects in some candidate pair, with their hierarchies brought up to date, and the
+// simultaneous descent of each pair's hierarchies: candidate triangles (near a partner's
+// triangle, within D), and the exact answer when `run_exact`.
+BvhResult Pipeline::Impl::DescendHierarchies(StepState& state, bool run_exact,
+                                             std::vector<const CachedObject*>& paired) {
   std::map<uint32_t, const CachedObject*> by_id;
   for (const CachedObject* object : state.objects) by_id[object->id] = object;
-  std::vector<const CachedObject*> paired;
-  for (const ObjectPair& pair : result.object_pairs) {
+  for (const ObjectPair& pair : state.result.object_pairs) {
     paired.push_back(by_id.at(pair.object_a));
     paired.push_back(by_id.at(pair.object_b));
   }
   std::sort(paired.begin(), paired.end());
   paired.erase(std::unique(paired.begin(), paired.end()), paired.end());
   cache.RefreshHierarchies(paired, pool);
-  timer.End("bvh_refit");
   std::vector<BvhObject> objects;
   for (const CachedObject* object : paired) {
     objects.push_back(
@@ -289,11 +298,20 @@ void Pipeline::Impl::HierarchyStage(StepState& state, StageTimer& timer) {
   }
   BvhQuery query;
   query.objects = objects;
-  query.object_pairs = result.object_pairs;
-  query.run_exact = WantsExact(state.request.output);
-  query.max_distance =
-      state.request.output == Output::kDistancePairs ? state.request.distance : std::nullopt;
-  BvhResult found = RunBvhTests(query, pool);
+  query.object_pairs = state.result.object_pairs;
+  query.run_exact = run_exact;
+  query.max_distance = state.request.distance;
+  query.want_distance_pairs = state.request.output == Output::kDistancePairs;
+  return RunBvhTests(query, pool);
+}
+
+// The bvh method after sweep-and-prune: the descent, with the exact tests at the leaves when the
+// output needs them; the triangles met on the way are the primitive PCS.
+void Pipeline::Impl::HierarchyStage(StepState& state, StageTimer& timer) {
+  StepResult& result = state.result;
+  const bool run_exact = WantsExact(state.request.output);
+  std::vector<const CachedObject*> paired;
+  BvhResult found = DescendHierarchies(state, run_exact, paired);
   for (size_t i = 0; i < paired.size(); ++i) {
     if (!found.candidates[i].empty())
       result.pcs_primitives[paired[i]->id] = std::move(found.candidates[i]);
@@ -302,7 +320,7 @@ void Pipeline::Impl::HierarchyStage(StepState& state, StageTimer& timer) {
   result.distance_pairs = std::move(found.exact.distance_pairs);
   result.stats.pairs_considered = static_cast<int64_t>(found.exact.pairs_considered);
   result.stats.pairs_tested = static_cast<int64_t>(found.exact.pairs_tested);
-  timer.End(query.run_exact ? "exact" : "primitive_cull");
+  timer.End(run_exact ? "exact" : "primitive_cull");
 }
 
 // An auto step: the selector chooses a configuration, the step runs it and its time is

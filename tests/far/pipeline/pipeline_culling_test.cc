@@ -307,13 +307,14 @@ TEST_F(PipelineCullingTest, OnlyWhatChangedIsRecomputed) {
   (void)Run(request);
   EXPECT_EQ(pipeline_->counters().world_updates, first.world_updates + 1);
   EXPECT_EQ(pipeline_->counters().piece_builds, first.piece_builds);
-  // New vertices: the deformable object's pieces are rebuilt, no other object's.
+  // New vertices: the deformable object's pieces are rebuilt (its object-level proxy boxes and
+  // its triangles' offsets), no other object's.
   auto vertices = objects[2].mesh.p_MV;
   for (auto& p : vertices) p *= 1.01;
   ASSERT_TRUE(pipeline_->SetVertices(objects[2].id, vertices).ok());
   (void)Run(request);
   EXPECT_EQ(pipeline_->counters().world_updates, first.world_updates + 2);
-  EXPECT_EQ(pipeline_->counters().piece_builds, first.piece_builds + 1);
+  EXPECT_EQ(pipeline_->counters().piece_builds, first.piece_builds + 2);
   // Static objects refuse poses; rigid ones refuse vertices.
   EXPECT_EQ(pipeline_->SetPose(objects[0].id, moved).error().code, ErrorCode::kInvalidArgument);
   EXPECT_EQ(pipeline_->SetVertices(objects[1].id, vertices).error().code,

@@ -15,14 +15,19 @@
 
 namespace far::internal {
 
-/// The four ways a triangle can be drawn. Each has its own persistent GPU buffer of instances.
+/// The ways an object can be drawn. Each has its own persistent GPU buffer of instances.
 enum class PieceSet {
   kUobb,       ///< 1 box per triangle: its rectangle, grown by r in the vertex shader (FAR)
   kEdgeBoxes,  ///< 3 boxes per triangle, one per edge (FAR bounded exact offset)
   kPrisms,     ///< 1 prism per triangle: the triangle shifted by +-r n (FAR bounded exact offset)
   kTriangles,  ///< the triangle itself, unfattened (CULLIDE)
+  /// A few axis-aligned boxes (in frame A) that together hold every triangle of the object: a
+  /// coarse, conservative stand-in for the whole object at the object level. Drawn grown by
+  /// radius_scale r with radius_scale = sqrt(3), since a triangle's UOBB grown by r lies within
+  /// its box grown by sqrt(3) r on every axis.
+  kProxyBoxes,
 };
-constexpr int kNumPieceSets = 4;
+constexpr int kNumPieceSets = 5;
 
 /// One GPU instance, in the frame A of its object's anchor (object frame shifted to the
 /// middle of the object, so that float32 coordinates stay small). 56 bytes.
@@ -40,6 +45,10 @@ std::string CurrentGlRenderer();
 
 /// Instances per triangle of each set.
 int InstancesPerTriangle(PieceSet set);
+
+/// A kProxyBoxes instance: the axis-aligned box of `center` and `half_extent` (frame A).
+PieceInstance ProxyBoxPiece(uint32_t slot, const Eigen::Vector3d& center,
+                            const Eigen::Vector3d& half_extent);
 
 /// Builds the instances of one triangle (corners given in frame A) for `set`.
 void AppendPieces(PieceSet set, uint32_t slot, uint32_t triangle, const Eigen::Vector3d& a,
@@ -65,6 +74,9 @@ struct AxisView {
   int num_primitives = 0;
   std::span<const uint8_t> alive;  ///< per primitive: 1 if still in the PCS
   std::span<const PieceSet> sets;  ///< what to draw for each triangle
+  /// The offsets are drawn grown by radius_scale (r + rounding bound): 1 for the triangles'
+  /// own offsets, sqrt(3) for kProxyBoxes.
+  double radius_scale = 1.0;
 };
 
 /// Counters of the GPU work a view did.

@@ -28,7 +28,9 @@ struct BvhQuery {
   std::span<const BvhObject> objects;        ///< ids unique
   std::span<const ObjectPair> object_pairs;  ///< ids of `objects`, object_a < object_b
   bool want_contacts = true;                 ///< intersecting triangle pairs
-  std::optional<double> max_distance;        ///< also pairs with distance <= this
+  /// Pairs within this distance are candidates, and distance pairs when want_distance_pairs.
+  std::optional<double> max_distance;
+  bool want_distance_pairs = true;
   bool run_exact = true;        ///< false: no exact tests (only candidates, when asked)
   bool want_candidates = true;  ///< fill BvhResult::candidates (the primitive PCS)
 };
