@@ -1,0 +1,54 @@
+#pragma once
+// What every far-client command shares: the global flags, failing with a message, a clock.
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "far/client/client.h"
+#include "far/model/result.h"
+
+namespace far::cli {
+
+using Clock = std::chrono::steady_clock;
+
+/// Flags given before or after the command: how to reach the daemon and how long to wait.
+struct GlobalFlags {
+  client::ClientOptions options;
+  int timeout_ms = 5000;
+
+  /// The client options with the timeout the user asked for (valid once parsed).
+  client::ClientOptions Options() const {
+    client::ClientOptions o = options;
+    o.timeout = std::chrono::milliseconds(timeout_ms);
+    return o;
+  }
+};
+
+/// A registered subcommand and what running it does (its exit status).
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+
+/// Prints "far-client: <error>" to stderr; returns the exit status 1.
+inline int Fail(const Error& error) {
+  std::fprintf(stderr, "far-client: %s\n", ToString(error).c_str());
+  return 1;
+}
+
+inline double MsSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// One function per command file; each adds its subcommand to `app`. `global` outlives the run.
+Command AddPingCommand(CLI::App& app, const GlobalFlags& global);
+Command AddStatusCommand(CLI::App& app, const GlobalFlags& global);
+Command AddCollideCommand(CLI::App& app, const GlobalFlags& global);
+Command AddPlayCommand(CLI::App& app, const GlobalFlags& global);
+Command AddLoadCommand(CLI::App& app, const GlobalFlags& global);
+Command AddMakeSceneCommand(CLI::App& app);
+
+}  // namespace far::cli

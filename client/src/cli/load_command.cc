@@ -1,0 +1,189 @@
+// far-client load: N concurrent clients, each with its own session and scene; throughput,
+// latency percentiles and fairness per client and overall.
+#include <atomic>
+#include <cmath>
+#include <iostream>
+#include <thread>
+
+#include "cli_common.h"
+#include "step_flags.h"
+#include <nlohmann/json.hpp>
+
+#include "far/io/scene_io.h"
+#include "far/model/quantile.h"
+#include "far/scenes/scenes.h"
+
+namespace far::cli {
+namespace {
+
+using nlohmann::json;
+
+// Per-client results of a load run.
+struct LoadStats {
+  std::vector<double> latency_ms;
+  int errors = 0;
+  std::string first_error;
+};
+
+// The load command's own flags.
+struct LoadFlags {
+  int clients = 4, steps = 100;
+  double seconds = 0;
+  std::string scene;
+  bool as_json = false;
+  StepFlags step;
+};
+
+int RunLoad(const client::ClientOptions& base, const LoadFlags& flags, const StepRequest& request) {
+  const int clients = flags.clients, steps = flags.steps;
+  const double seconds = flags.seconds;
+  const std::string& scene_path = flags.scene;
+  const bool as_json = flags.as_json;
+  far::Scene scene;
+  if (!scene_path.empty()) {
+    auto loaded = far::ReadScene(scene_path);
+    if (!loaded) return Fail(loaded.error());
+    scene = std::move(*loaded);
+  }
+  std::vector<LoadStats> stats(static_cast<size_t>(clients));
+  std::atomic<int> ready{0};
+  std::atomic<bool> go{false};
+  const auto deadline_of = [&](Clock::time_point start) {
+    return seconds > 0 ? start + std::chrono::duration_cast<Clock::duration>(
+                                     std::chrono::duration<double>(seconds))
+                       : Clock::time_point::max();
+  };
+  Clock::time_point start;
+  std::vector<std::thread> threads;
+  for (int i = 0; i < clients; ++i) {
+    threads.emplace_back([&, i] {
+      LoadStats& mine = stats[static_cast<size_t>(i)];
+      client::ClientOptions options = base;
+      options.client_name = "load-" + std::to_string(i);
+      auto client = client::Client::Connect(options);
+      auto fail = [&](const far::Error& e) {
+        if (mine.errors++ == 0) mine.first_error = far::ToString(e);
+      };
+      if (!client) {
+        fail(client.error());
+        ready++;
+        return;
+      }
+      // Each client simulates its own scene: the given one, or a random soup of rigid objects.
+      std::vector<far::SceneObject> objects =
+          scene_path.empty() ? far::scenes::RandomSoup(static_cast<uint64_t>(i), 24, 40, 3.0, 0.4)
+                             : scene.objects;
+      for (const auto& o : objects) {
+        if (auto ok = (*client)->AddObject(o.id, o.mesh, o.motion, o.X_WO); !ok) fail(ok.error());
+      }
+      ready++;
+      // Everyone starts together, once the main thread has set `start` and said go.
+      while (!go) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      const auto deadline = deadline_of(start);
+      for (int s = 0; (steps <= 0 || s < steps) && Clock::now() < deadline; ++s) {
+        // Rigid objects drift a little every step, as a simulation would move them.
+        for (auto& o : objects) {
+          if (o.motion != far::Motion::kRigid) continue;
+          o.X_WO.translation.x() += 0.002 * std::sin(0.1 * s + o.id);
+          if (auto ok = (*client)->SetPose(o.id, o.X_WO); !ok) fail(ok.error());
+        }
+        const auto t0 = Clock::now();
+        auto result = (*client)->Step(request);
+        if (!result) {
+          fail(result.error());
+          continue;
+        }
+        mine.latency_ms.push_back(
+            std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+      }
+    });
+  }
+  while (ready < clients) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  start = Clock::now();
+  go = true;  // (release: the workers read `start` after seeing it)
+  for (auto& t : threads) t.join();
+  const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+
+  std::vector<double> all;
+  int errors = 0;
+  size_t min_steps = SIZE_MAX, max_steps = 0;
+  json per_client = json::array();
+  for (int i = 0; i < clients; ++i) {
+    const LoadStats& s = stats[static_cast<size_t>(i)];
+    all.insert(all.end(), s.latency_ms.begin(), s.latency_ms.end());
+    errors += s.errors;
+    min_steps = std::min(min_steps, s.latency_ms.size());
+    max_steps = std::max(max_steps, s.latency_ms.size());
+    per_client.push_back({{"client", i},
+                          {"steps", s.latency_ms.size()},
+                          {"steps_per_s", s.latency_ms.size() / elapsed},
+                          {"p50_ms", Quantile(s.latency_ms, 0.5)},
+                          {"p90_ms", Quantile(s.latency_ms, 0.9)},
+                          {"p99_ms", Quantile(s.latency_ms, 0.99)},
+                          {"errors", s.errors},
+                          {"first_error", s.first_error}});
+  }
+  const double fairness =
+      min_steps > 0 ? static_cast<double>(max_steps) / static_cast<double>(min_steps) : 0.0;
+  json overall = {{"clients", clients},
+                  {"seconds", elapsed},
+                  {"steps", all.size()},
+                  {"steps_per_s", all.size() / elapsed},
+                  {"p50_ms", Quantile(all, 0.5)},
+                  {"p90_ms", Quantile(all, 0.9)},
+                  {"p99_ms", Quantile(all, 0.99)},
+                  {"max_ms", Quantile(all, 1.0)},
+                  {"errors", errors},
+                  {"fairness_max_over_min_steps", fairness}};
+  if (as_json) {
+    std::cout << json{{"overall", overall}, {"per_client", per_client}}.dump(2) << "\n";
+  } else {
+    std::printf("%-8s %8s %10s %9s %9s %9s %7s\n", "client", "steps", "steps/s", "p50 ms", "p90 ms",
+                "p99 ms", "errors");
+    for (const auto& c : per_client) {
+      std::printf("%-8d %8zu %10.1f %9.3f %9.3f %9.3f %7d\n", c["client"].get<int>(),
+                  c["steps"].get<size_t>(), c["steps_per_s"].get<double>(),
+                  c["p50_ms"].get<double>(), c["p90_ms"].get<double>(), c["p99_ms"].get<double>(),
+                  c["errors"].get<int>());
+      if (!c["first_error"].get<std::string>().empty()) {
+        std::printf("         first error: %s\n", c["first_error"].get<std::string>().c_str());
+      }
+    }
+    std::printf(
+        "overall: %zu steps in %.2f s = %.1f steps/s; latency p50 %.3f p90 %.3f p99 %.3f max %.3f "
+        "ms; "
+        "errors %d; fairness (max/min steps per client) %.2f\n",
+        all.size(), elapsed, all.size() / elapsed, Quantile(all, 0.5), Quantile(all, 0.9),
+        Quantile(all, 0.99), Quantile(all, 1.0), errors, fairness);
+  }
+  return errors == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+Command AddLoadCommand(CLI::App& app, const GlobalFlags& global) {
+  auto flags = std::make_shared<LoadFlags>();
+  Command command;
+  command.app =
+      app.add_subcommand("load",
+                         "Run N concurrent clients, each with its own session and scene; "
+                         "prints throughput and latency percentiles per client and overall");
+  CLI::App* load = command.app;
+  load->add_option("--clients", flags->clients, "concurrent clients (threads)")
+      ->capture_default_str();
+  load->add_option("--steps", flags->steps, "steps per client (0: until --seconds)")
+      ->capture_default_str();
+  load->add_option("--seconds", flags->seconds, "stop after this many seconds");
+  load->add_option("--scene", flags->scene,
+                   "scene each client uploads (default: a random soup per client)");
+  load->add_flag("--json", flags->as_json, "print JSON");
+  flags->step.Add(load);
+  command.run = [&global, flags] {
+    auto request = flags->step.Request();
+    if (!request) return Fail(request.error());
+    return RunLoad(global.Options(), *flags, *request);
+  };
+  return command;
+}
+
+}  // namespace far::cli

@@ -1,0 +1,24 @@
+#pragma once
+// The step options shared by collide, play and load (--method, --resolution, --distance, ...).
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "far/model/result.h"
+#include "far/model/step_request.h"
+
+namespace far::cli {
+
+struct StepFlags {
+  std::string method = "auto", mechanism = "id-buffer", output, depth = "depth24";
+  int resolution = 1024, subobject_size = 1;
+  double distance = 0;
+  CLI::Option* distance_option = nullptr;
+
+  /// Adds the options to `command`.
+  void Add(CLI::App* command);
+  /// The request the options describe, or an error naming the bad option.
+  Result<StepRequest> Request() const;
+};
+
+}  // namespace far::cli
