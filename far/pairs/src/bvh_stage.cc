@@ -193,7 +193,8 @@ void DescendAligned(const Descent& d, const PairFrame& f, uint32_t root_x, uint3
     return !(gap > f.margin).any();
   };
   std::vector<std::pair<uint32_t, uint32_t>> stack = {{root_x, root_y}};
-  while (!stack.empty()) {
+  for (uint32_t visited = 0; !stack.empty(); ++visited) {
+    if (visited % 256 == 255 && d.wanted.stopper->Poll()) return;
     const auto [ix, iy] = stack.back();
     stack.pop_back();
     const Node& x = nodes_a[ix];
@@ -217,7 +218,8 @@ void Descend(const Descent& d, const Task& root, Output& out) {
   const PairFrame& f = d.frames[root.frame];
   if (f.aligned) return DescendAligned(d, f, root.x, root.y, out);
   std::vector<Task> stack = {root};
-  while (!stack.empty()) {
+  for (uint32_t visited = 0; !stack.empty(); ++visited) {
+    if (visited % 256 == 255 && d.wanted.stopper->Poll()) return;
     const Task task = stack.back();
     stack.pop_back();
     Expand(d, task, stack, out);
@@ -300,8 +302,10 @@ double WorldMagnitude(const BvhQuery& query, const std::vector<PairFrame>& frame
 
 BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
   // The distance widens the search (candidates within it) even when no distance pair is asked.
+  internal::Stopper stopper(query.control);
   Wanted wanted;
   wanted.contacts = query.want_contacts;
+  wanted.stopper = &stopper;
   const bool within = query.max_distance.has_value() && *query.max_distance >= 0;
   wanted.distance = within && query.want_distance_pairs;
   std::vector<PairFrame> frames = MakeFrames(query, 0);
@@ -328,7 +332,7 @@ BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
   outputs.resize(1 + (tasks.size() + grain - 1) / grain);
   pool.ParallelFor(tasks.size(), grain, [&](size_t begin, size_t end) {
     Output& out = outputs[1 + begin / grain];
-    for (size_t i = begin; i < end; ++i) Descend(descent, tasks[i], out);
+    for (size_t i = begin; i < end && !stopper.Poll(); ++i) Descend(descent, tasks[i], out);
   });
 
   // Merge: sorted answers and candidates, whatever the number of threads.
@@ -345,7 +349,8 @@ BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
       if (marks[o][t]) result.candidates[o].push_back(t);
     }
   }
-  result.exact = internal::Merge(partials, considered);
+  result.exact = internal::Merge(partials, considered, &stopper);
+  if (result.exact.stopped != StopReason::kNone) result.candidates.clear();
   return result;
 }
 

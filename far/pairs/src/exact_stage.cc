@@ -31,6 +31,7 @@ using internal::BoxOf;
 using internal::DistanceSlack;
 using internal::Merge;
 using internal::Partial;
+using internal::Stopper;
 using internal::TestTrianglePair;
 using internal::TriangleBox;
 using internal::Wanted;
@@ -61,7 +62,8 @@ struct WorkItem {
 // or after it in x (strictly after when it is object_b's, so that ties are met once, from a) and
 // within the slack of its x maximum.
 void RunItem(const WorkItem& item, std::span<const WorldObjectView> objects,
-             const std::vector<SortedBoxes>& boxes, const Wanted& wanted, Partial& out) {
+             const std::vector<SortedBoxes>& boxes, const Wanted& wanted, Partial& out,
+             Stopper& stopper) {
   const WorldObjectView& object_a = objects[item.object_a];
   const WorldObjectView& object_b = objects[item.object_b];
   const SortedBoxes& own = boxes[item.from_b ? item.object_b : item.object_a];
@@ -77,9 +79,13 @@ void RunItem(const WorkItem& item, std::span<const WorldObjectView> objects,
                                                }) -
                           other.begin());
   for (uint32_t i = item.begin; i < item.end; ++i) {
+    // Cancellation: the clock every 16 triangles, the shared flag at every one.
+    if ((i - item.begin) % 16 == 0 ? stopper.Poll() : stopper.stopped()) return;
     const TriangleBox& mine = own[i];
     while (first < other.size() && starts_before(other[first], mine.lo[0])) ++first;
     for (size_t k = first; k < other.size() && other[k].lo[0] - mine.hi[0] <= wanted.slack; ++k) {
+      // (a huge distance D makes one triangle meet a whole list)
+      if ((k - first) % 4096 == 4095 && stopper.Poll()) return;
       if (!BoxesWithin(mine, other[k], wanted.slack)) continue;
       if (item.from_b) {
         TestTrianglePair(object_a, other[k], object_b, mine, wanted, out);
@@ -183,9 +189,11 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
   });
 
   // Decide what to compute and the prefilter slack. A negative or NaN max_distance finds nothing.
+  Stopper stopper(query.control);
   Wanted wanted;
   wanted.contacts = query.want_contacts;
   wanted.distance = query.max_distance.has_value() && *query.max_distance >= 0;
+  wanted.stopper = &stopper;
   if (wanted.distance) {
     wanted.max_distance = *query.max_distance;
     double magnitude = 0;
@@ -201,13 +209,30 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
   std::vector<Partial> partials((items.size() + grain - 1) / grain);
   pool.ParallelFor(items.size(), grain, [&](size_t begin, size_t end) {
     Partial& out = partials[begin / grain];
-    for (size_t i = begin; i < end; ++i) RunItem(items[i], objects, boxes, wanted, out);
+    for (size_t i = begin; i < end && !stopper.stopped(); ++i)
+      RunItem(items[i], objects, boxes, wanted, out, stopper);
   });
-  return Merge(partials, pairs_considered);
+  return Merge(partials, pairs_considered, &stopper);
+}
+
+uint64_t BruteForcePairs(std::span<const WorldObjectView> objects) {
+  // sum over i of n_i times the triangles before it, saturating at UINT64_MAX.
+  uint64_t pairs = 0, before = 0;
+  for (const WorldObjectView& object : objects) {
+    const uint64_t n = object.triangles.size();
+    uint64_t product = 0;
+    if (__builtin_mul_overflow(n, before, &product) ||
+        __builtin_add_overflow(pairs, product, &pairs)) {
+      return UINT64_MAX;
+    }
+    before += n;
+  }
+  return pairs;
 }
 
 ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
-                                std::optional<double> max_distance, ThreadPool& pool) {
+                                std::optional<double> max_distance, ThreadPool& pool,
+                                const StepControl* control) {
   // Objects in id order; every triangle's box.
   std::vector<const WorldObjectView*> sorted;
   for (const WorldObjectView& object : objects) sorted.push_back(&object);
@@ -221,9 +246,11 @@ ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
     }
     magnitude = std::max(magnitude, Magnitude(boxes[o]));
   }
+  Stopper stopper(control);
   Wanted wanted;
   wanted.contacts = true;
   wanted.distance = max_distance.has_value() && *max_distance >= 0;
+  wanted.stopper = &stopper;
   if (wanted.distance) {
     wanted.max_distance = *max_distance;
     wanted.slack = DistanceSlack(wanted.max_distance, magnitude);
@@ -233,14 +260,15 @@ ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
   std::vector<Partial> partials;
   size_t pairs_considered = 0;
   constexpr size_t kGrain = 64;
-  for (size_t i = 0; i < sorted.size(); ++i) {
-    for (size_t j = i + 1; j < sorted.size(); ++j) {
+  for (size_t i = 0; i < sorted.size() && !stopper.stopped(); ++i) {
+    for (size_t j = i + 1; j < sorted.size() && !stopper.stopped(); ++j) {
       pairs_considered += boxes[i].size() * boxes[j].size();
       const size_t first = partials.size();
       partials.resize(first + (boxes[i].size() + kGrain - 1) / kGrain);
       pool.ParallelFor(boxes[i].size(), kGrain, [&](size_t begin, size_t end) {
         Partial& out = partials[first + begin / kGrain];
         for (size_t ta = begin; ta < end; ++ta) {
+          if (stopper.Poll()) return;
           for (size_t tb = 0; tb < boxes[j].size(); ++tb) {
             if (!BoxesWithin(boxes[i][ta], boxes[j][tb], wanted.slack)) continue;
             TestTrianglePair(*sorted[i], boxes[i][ta], *sorted[j], boxes[j][tb], wanted, out);
@@ -249,7 +277,7 @@ ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
       });
     }
   }
-  return Merge(partials, pairs_considered);
+  return Merge(partials, pairs_considered, &stopper);
 }
 
 }  // namespace far

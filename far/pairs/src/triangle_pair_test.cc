@@ -11,6 +11,7 @@ void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
   const ContactPair pair{object_a.id, a.triangle, object_b.id, b.triangle};
   // Intersection needs the boxes to touch; when they do not, only the distance test can pass.
   bool intersects = false;
+  const size_t before = out.contacts.size() + out.distance_pairs.size();
   if (wanted.contacts && (wanted.slack == 0 || BoxesWithin(a, b, 0))) {
     intersects = TrianglesIntersect(s, t);
     if (intersects) out.contacts.push_back(pair);
@@ -23,11 +24,20 @@ void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
       out.distance_pairs.push_back({pair, TriangleDistance(s, t)});
     }
   }
+  // The pair cap is checked in batches: at most this many pairs per thread go uncounted.
+  constexpr size_t kReportEvery = 256;
+  out.unreported += out.contacts.size() + out.distance_pairs.size() - before;
+  if (out.unreported >= kReportEvery) Report(out, wanted.stopper);
 }
 
-ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered) {
+ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered, Stopper* stopper) {
   ExactResult result;
   result.pairs_considered = pairs_considered;
+  for (Partial& partial : partials) Report(partial, stopper);
+  if (stopper != nullptr) {
+    result.stopped = stopper->reason();
+    if (result.stopped != StopReason::kNone) return result;  // a partial answer is no answer
+  }
   for (Partial& partial : partials) {
     result.contacts.insert(result.contacts.end(), partial.contacts.begin(), partial.contacts.end());
     result.distance_pairs.insert(result.distance_pairs.end(), partial.distance_pairs.begin(),

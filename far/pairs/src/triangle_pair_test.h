@@ -14,10 +14,12 @@
 //   computed gap is <= the (double) slack whenever the exact gap is.
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
 #include "far/geometry/triangle_tests.h"
+#include "far/model/step_control.h"
 #include "far/pairs/exact_stage.h"
 #include "far/pairs/world_object.h"
 
@@ -69,12 +71,47 @@ inline double DistanceSlack(double max_distance, double magnitude) {
   return max_distance + 2048 * kEps * magnitude;
 }
 
+/// The stop state one stage run shares among its threads: the caller's StepControl (cancel,
+/// deadline) and its cap on reported pairs. Threads poll it between parts of their work and
+/// add the pairs they found in batches; once stopped, every thread returns at its next check.
+class Stopper {
+ public:
+  explicit Stopper(const StepControl* control) : control_(control) {}
+  /// True once the stage must stop (an atomic load).
+  bool stopped() const { return reason_.load(std::memory_order_relaxed) != 0; }
+  /// Re-reads the cancel flag and the clock; true when the stage must stop.
+  bool Poll() {
+    if (stopped()) return true;
+    if (control_ == nullptr) return false;
+    const StopReason reason = control_->Check();
+    if (reason != StopReason::kNone) Stop(reason);
+    return reason != StopReason::kNone;
+  }
+  /// Adds `n` pairs one thread found; stops the stage once the total is over the cap.
+  void AddFound(size_t n) {
+    if (control_ == nullptr || n == 0) return;
+    const size_t total = found_.fetch_add(n, std::memory_order_relaxed) + n;
+    if (total > control_->max_pairs) Stop(StopReason::kPairLimit);
+  }
+  StopReason reason() const { return static_cast<StopReason>(reason_.load()); }
+
+ private:
+  void Stop(StopReason reason) {
+    int none = 0;
+    reason_.compare_exchange_strong(none, static_cast<int>(reason));
+  }
+  const StepControl* control_;
+  std::atomic<size_t> found_{0};
+  std::atomic<int> reason_{0};
+};
+
 /// What to compute for one candidate triangle pair.
 struct Wanted {
   bool contacts = false;
   bool distance = false;
   double max_distance = 0;
-  double slack = 0;  ///< the prefilter slack: 0 for contacts only, else DistanceSlack
+  double slack = 0;            ///< the prefilter slack: 0 for contacts only, else DistanceSlack
+  Stopper* stopper = nullptr;  ///< counts the pairs found (the pair cap); may be null
 };
 
 /// One work item's output.
@@ -82,7 +119,14 @@ struct Partial {
   std::vector<ContactPair> contacts;
   std::vector<DistancePair> distance_pairs;
   size_t pairs_tested = 0;
+  size_t unreported = 0;  ///< pairs found and not yet added to the stopper
 };
+
+/// Adds a partial's unreported pairs to the stopper (at the end of a piece of work).
+inline void Report(Partial& out, Stopper* stopper) {
+  if (stopper != nullptr) stopper->AddFound(out.unreported);
+  out.unreported = 0;
+}
 
 /// Runs the exact tests on triangles `a` of object `object_a` and `b` of `object_b` (ids
 /// object_a.id < object_b.id) whose boxes passed the prefilter with wanted.slack.
@@ -91,6 +135,9 @@ void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
                       Partial& out);
 
 /// Concatenates the partial outputs and sorts them (the order does not depend on threads).
-ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered);
+/// With a stopper, the result says why the stage stopped (an answer over the pair cap counts
+/// as kPairLimit even when no thread stopped early).
+ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered,
+                  Stopper* stopper = nullptr);
 
 }  // namespace far::internal

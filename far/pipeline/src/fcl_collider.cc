@@ -44,7 +44,7 @@ void FclCollider::Remove(uint32_t id) {
 }
 
 std::vector<ContactPair> FclCollider::Collide(const std::vector<Object>& objects,
-                                              CollideStats* stats) {
+                                              CollideStats* stats, const StepControl* control) {
   // Build new models once; refit deformed ones; move every object to its pose.
   std::vector<fcl::CollisionObjectd*> present;
   for (const Object& object : objects) {
@@ -100,42 +100,50 @@ std::vector<ContactPair> FclCollider::Collide(const std::vector<Object>& objects
   struct Data {
     std::vector<ContactPair> pairs;
     CollideStats stats;
-  } data;
-  impl_->manager.collide(
-      &data, [](fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* raw) {
-        auto* data = static_cast<Data*>(raw);
-        uint32_t id1 = *static_cast<uint32_t*>(o1->getUserData());
-        uint32_t id2 = *static_cast<uint32_t*>(o2->getUserData());
-        // FCL tests triangles in o1's frame, so touching pairs can flip with the order, and the
-        // order the tree hands out depends on its history: the smaller id goes first, always.
-        if (id1 > id2) {
-          std::swap(o1, o2);
-          std::swap(id1, id2);
-        }
-        const auto& model1 = static_cast<const Model&>(*o1->collisionGeometry());
-        const auto& model2 = static_cast<const Model&>(*o2->collisionGeometry());
-        // What fcl::collide runs for two BVHModel<OBBRSS> (orientedMeshCollide in
-        // collision_func_matrix-inl.h), by hand so that its count of leaf (triangle) tests can be
-        // read; statistics only count.
-        fcl::CollisionRequestd request(/*num_max_contacts=*/std::numeric_limits<size_t>::max(),
-                                       /*enable_contact=*/false);
-        fcl::CollisionResultd result;
-        fcl::detail::MeshCollisionTraversalNodeOBBRSS<double> node;
-        fcl::detail::initialize(node, model1, o1->getTransform(), model2, o2->getTransform(),
-                                request, result);
-        node.enableStatistics(true);
-        fcl::detail::collide(&node);
-        data->stats.object_pairs++;
-        data->stats.triangle_pairs_considered +=
-            static_cast<size_t>(model1.num_tris) * static_cast<size_t>(model2.num_tris);
-        data->stats.triangle_tests += static_cast<size_t>(node.num_leaf_tests);
-        for (size_t i = 0; i < result.numContacts(); ++i) {
-          const auto& contact = result.getContact(i);
-          data->pairs.push_back(
-              {id1, static_cast<uint32_t>(contact.b1), id2, static_cast<uint32_t>(contact.b2)});
-        }
-        return false;  // keep going
-      });
+    const StepControl* control;
+  } data{{}, {}, control};
+  impl_->manager.collide(&data, [](fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2,
+                                   void* raw) {
+    auto* data = static_cast<Data*>(raw);
+    uint32_t id1 = *static_cast<uint32_t*>(o1->getUserData());
+    uint32_t id2 = *static_cast<uint32_t*>(o2->getUserData());
+    // FCL tests triangles in o1's frame, so touching pairs can flip with the order, and the
+    // order the tree hands out depends on its history: the smaller id goes first, always.
+    if (id1 > id2) {
+      std::swap(o1, o2);
+      std::swap(id1, id2);
+    }
+    const auto& model1 = static_cast<const Model&>(*o1->collisionGeometry());
+    const auto& model2 = static_cast<const Model&>(*o2->collisionGeometry());
+    // What fcl::collide runs for two BVHModel<OBBRSS> (orientedMeshCollide in
+    // collision_func_matrix-inl.h), by hand so that its count of leaf (triangle) tests can be
+    // read; statistics only count.
+    // At most one contact over the cap is kept: that is enough to refuse the step.
+    const size_t max_contacts =
+        data->control ? std::min(data->control->max_pairs, SIZE_MAX - 1) + 1 : SIZE_MAX;
+    fcl::CollisionRequestd request(max_contacts, /*enable_contact=*/false);
+    fcl::CollisionResultd result;
+    fcl::detail::MeshCollisionTraversalNodeOBBRSS<double> node;
+    fcl::detail::initialize(node, model1, o1->getTransform(), model2, o2->getTransform(), request,
+                            result);
+    node.enableStatistics(true);
+    fcl::detail::collide(&node);
+    data->stats.object_pairs++;
+    data->stats.triangle_pairs_considered +=
+        static_cast<size_t>(model1.num_tris) * static_cast<size_t>(model2.num_tris);
+    data->stats.triangle_tests += static_cast<size_t>(node.num_leaf_tests);
+    for (size_t i = 0; i < result.numContacts(); ++i) {
+      const auto& contact = result.getContact(i);
+      data->pairs.push_back(
+          {id1, static_cast<uint32_t>(contact.b1), id2, static_cast<uint32_t>(contact.b2)});
+    }
+    if (data->control != nullptr) {
+      data->stats.stopped = data->control->Check();
+      if (data->stats.stopped == StopReason::kNone && data->pairs.size() > data->control->max_pairs)
+        data->stats.stopped = StopReason::kPairLimit;
+    }
+    return data->stats.stopped != StopReason::kNone;  // true: stop the broadphase
+  });
   std::sort(data.pairs.begin(), data.pairs.end());
   data.pairs.erase(std::unique(data.pairs.begin(), data.pairs.end()), data.pairs.end());
   if (stats != nullptr) *stats = data.stats;

@@ -9,6 +9,7 @@
 
 #include "far/model/contact_pair.h"
 #include "far/model/mesh.h"
+#include "far/model/step_control.h"
 
 namespace far::internal {
 
@@ -30,6 +31,9 @@ class FclCollider {
     size_t object_pairs = 0;               ///< object pairs FCL's broadphase passed to collide
     size_t triangle_pairs_considered = 0;  ///< sum over those pairs of n_a * n_b triangles
     size_t triangle_tests = 0;  ///< triangle pairs whose leaf boxes overlapped: FCL's tests
+    /// Why it stopped early (checked between object pairs: FCL's collide of one pair runs to
+    /// its end); the contacts are then incomplete and must not be reported.
+    StopReason stopped = StopReason::kNone;
   };
 
   FclCollider();
@@ -37,7 +41,8 @@ class FclCollider {
 
   /// Returns FCL's contact pairs (sorted, object_a < object_b) among `objects`; `stats` (may be
   /// null) gets what it took.
-  std::vector<ContactPair> Collide(const std::vector<Object>& objects, CollideStats* stats);
+  std::vector<ContactPair> Collide(const std::vector<Object>& objects, CollideStats* stats,
+                                   const StepControl* control = nullptr);
   /// Forgets an object's model.
   void Remove(uint32_t id);
 

@@ -13,6 +13,7 @@
 #include "scene_cache.h"
 
 #include "far/gpu/culling_renderer.h"
+#include "far/model/limits.h"
 #include "far/pairs/bvh_stage.h"
 #include "far/pairs/exact_stage.h"
 #include "far/pairs/sweep_and_prune.h"
@@ -60,11 +61,39 @@ class StageTimer {
 // What the stages of one step hand each other.
 struct StepState {
   const StepRequest& request;
+  const StepControl& control;
   std::vector<const CachedObject*> objects;    // id order; index i is the object's group
   std::vector<uint8_t> object_alive;           // per object: in the object PCS
   std::vector<std::vector<uint32_t>> subsets;  // per object: its triangles in the primitive PCS
   StepResult result;
 };
+
+// Why a step stopped, as its error: the caller's cancellation, its deadline, the reply cap.
+Error StopError(StopReason reason, std::string_view stage, const StepControl& control) {
+  const std::string where = " (during " + std::string(stage) + ")";
+  switch (reason) {
+    case StopReason::kCancelled:
+      return MakeError(ErrorCode::kUnavailable, "step cancelled by its caller" + where);
+    case StopReason::kDeadline:
+      return MakeError(ErrorCode::kTimeout, "step stopped at its deadline" + where);
+    case StopReason::kPairLimit:
+      return MakeError(ErrorCode::kLimitExceeded,
+                       "the answer has more than " + std::to_string(control.max_pairs) +
+                           " contact and distance pairs, the most a reply may carry" + where +
+                           ": ask for a smaller distance D, or a shallower output (pcs)");
+    case StopReason::kNone:
+      break;
+  }
+  return MakeError(ErrorCode::kInternal, "step stopped for no reason" + where);
+}
+
+// The start of a stage: progress for the caller, and the check that the step may go on.
+Result<void> EnterStage(const StepState& state, std::string_view stage) {
+  if (state.control.on_stage) state.control.on_stage(stage);
+  const StopReason reason = state.control.Check();
+  if (reason != StopReason::kNone) return StopError(reason, stage, state.control);
+  return {};
+}
 
 // The configuration a request runs: "bvh", "far/id-buffer/1024".
 std::string ConfigName(const StepRequest& request) {
@@ -139,14 +168,15 @@ struct Pipeline::Impl {
 
   Result<void> Apply(std::vector<SceneUpdate> updates,
                      const std::function<std::string(size_t)>& where);
-  Result<StepResult> Step(const StepRequest& request);
-  Result<StepResult> StepAuto(const StepRequest& request);
-  void RunWholeScene(StepState& state);
+  Result<StepResult> Step(const StepRequest& request, const StepControl& control);
+  Result<StepResult> StepAuto(const StepRequest& request, const StepControl& control);
+  Result<void> RunStages(StepState& state, StageTimer& timer);
+  Result<void> RunWholeScene(StepState& state);
   Result<void> CullObjectsStage(StepState& state);
   void PairObjectsStage(StepState& state);
   Result<void> CullPrimitivesStage(StepState& state);
-  void ExactStage(StepState& state);
-  void HierarchyStage(StepState& state, StageTimer& timer);
+  Result<void> ExactStage(StepState& state);
+  Result<void> HierarchyStage(StepState& state);
   BvhResult DescendHierarchies(StepState& state, bool run_exact,
                                std::vector<const CachedObject*>& paired);
 };
@@ -167,29 +197,40 @@ Result<void> Pipeline::Impl::Apply(std::vector<SceneUpdate> updates,
 }
 
 // The reference (every triangle pair) and FCL answer in one stage, without culling.
-void Pipeline::Impl::RunWholeScene(StepState& state) {
+Result<void> Pipeline::Impl::RunWholeScene(StepState& state) {
   StepResult& result = state.result;
   ExactResult exact;
   std::optional<size_t> broadphase_pairs;  // FCL's candidate object pairs
   if (state.request.method == Method::kExact) {
-    exact = BruteForceReference(cache.WorldViews(), state.request.distance, pool);
+    const std::vector<WorldObjectView> world = cache.WorldViews();
+    if (const uint64_t pairs = BruteForcePairs(world); pairs > kMaxBruteForcePairs) {
+      return MakeError(ErrorCode::kLimitExceeded,
+                       "method 'exact' is the brute-force reference: this scene has " +
+                           std::to_string(pairs) + " cross-object triangle pairs, over its limit " +
+                           std::to_string(kMaxBruteForcePairs) +
+                           "; 'bvh' gives the same exact answer");
+    }
+    exact = BruteForceReference(world, state.request.distance, pool, &state.control);
   } else {
     std::vector<internal::FclCollider::Object> fcl_objects;
     for (const CachedObject* object : state.objects) {
       fcl_objects.push_back({object->id, object->geometry_stamp, &object->mesh, object->X_WM});
     }
     internal::FclCollider::CollideStats fcl_stats;
-    exact.contacts = fcl.Collide(fcl_objects, &fcl_stats);
+    exact.contacts = fcl.Collide(fcl_objects, &fcl_stats, &state.control);
     exact.pairs_considered = fcl_stats.triangle_pairs_considered;
     exact.pairs_tested = fcl_stats.triangle_tests;
+    exact.stopped = fcl_stats.stopped;
     broadphase_pairs = fcl_stats.object_pairs;
   }
+  if (exact.stopped != StopReason::kNone) return StopError(exact.stopped, "exact", state.control);
   result.contacts = std::move(exact.contacts);
   result.distance_pairs = std::move(exact.distance_pairs);
   result.stats.pairs_tested = static_cast<int64_t>(exact.pairs_tested);
   result.stats.pairs_considered = static_cast<int64_t>(exact.pairs_considered);
   DeriveCullingOutputs(result);
   if (broadphase_pairs) result.stats.object_pairs = static_cast<int64_t>(*broadphase_pairs);
+  return {};
 }
 
 // Object-level culling -> object PCS (AABB: every object goes on to sweep-and-prune).
@@ -242,6 +283,8 @@ Result<void> Pipeline::Impl::CullPrimitivesStage(StepState& state) {
     // nothing for it to prune.
     std::vector<const CachedObject*> descended;
     BvhResult near = DescendHierarchies(state, /*run_exact=*/false, descended);
+    if (near.exact.stopped != StopReason::kNone)
+      return StopError(near.exact.stopped, "primitive_cull", state.control);
     std::vector<std::vector<uint32_t>> candidates(state.objects.size());
     for (size_t i = 0; i < descended.size(); ++i)
       candidates[index_of.at(descended[i]->id)] = std::move(near.candidates[i]);
@@ -260,7 +303,7 @@ Result<void> Pipeline::Impl::CullPrimitivesStage(StepState& state) {
 }
 
 // Exact tests on the CPU pool: PCS triangles of candidate object pairs.
-void Pipeline::Impl::ExactStage(StepState& state) {
+Result<void> Pipeline::Impl::ExactStage(StepState& state) {
   const std::vector<WorldObjectView> world = cache.WorldViews();
   StepResult& result = state.result;
   ExactQuery query;
@@ -270,11 +313,14 @@ void Pipeline::Impl::ExactStage(StepState& state) {
   query.want_contacts = true;
   query.max_distance =
       state.request.output == Output::kDistancePairs ? state.request.distance : std::nullopt;
+  query.control = &state.control;
   ExactResult exact = RunExactTests(query, pool);
+  if (exact.stopped != StopReason::kNone) return StopError(exact.stopped, "exact", state.control);
   result.contacts = std::move(exact.contacts);
   result.distance_pairs = std::move(exact.distance_pairs);
   result.stats.pairs_considered = static_cast<int64_t>(exact.pairs_considered);
   result.stats.pairs_tested = static_cast<int64_t>(exact.pairs_tested);
+  return {};
 }
 
 // The objects in some candidate pair, with their hierarchies brought up to date, and the
@@ -302,16 +348,19 @@ BvhResult Pipeline::Impl::DescendHierarchies(StepState& state, bool run_exact,
   query.run_exact = run_exact;
   query.max_distance = state.request.distance;
   query.want_distance_pairs = state.request.output == Output::kDistancePairs;
+  query.control = &state.control;
   return RunBvhTests(query, pool);
 }
 
 // The bvh method after sweep-and-prune: the descent, with the exact tests at the leaves when the
 // output needs them; the triangles met on the way are the primitive PCS.
-void Pipeline::Impl::HierarchyStage(StepState& state, StageTimer& timer) {
+Result<void> Pipeline::Impl::HierarchyStage(StepState& state) {
   StepResult& result = state.result;
   const bool run_exact = WantsExact(state.request.output);
   std::vector<const CachedObject*> paired;
   BvhResult found = DescendHierarchies(state, run_exact, paired);
+  if (found.exact.stopped != StopReason::kNone)
+    return StopError(found.exact.stopped, run_exact ? "exact" : "primitive_cull", state.control);
   for (size_t i = 0; i < paired.size(); ++i) {
     if (!found.candidates[i].empty())
       result.pcs_primitives[paired[i]->id] = std::move(found.candidates[i]);
@@ -320,12 +369,13 @@ void Pipeline::Impl::HierarchyStage(StepState& state, StageTimer& timer) {
   result.distance_pairs = std::move(found.exact.distance_pairs);
   result.stats.pairs_considered = static_cast<int64_t>(found.exact.pairs_considered);
   result.stats.pairs_tested = static_cast<int64_t>(found.exact.pairs_tested);
-  timer.End(run_exact ? "exact" : "primitive_cull");
+  return {};
 }
 
 // An auto step: the selector chooses a configuration, the step runs it and its time is
 // recorded (auto_selector.h says how it chooses).
-Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request) {
+Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request,
+                                            const StepControl& control) {
   if (!selector) {
     selector.emplace(gpu != nullptr, [] { return internal::ProbeGpuCost(); });
   }
@@ -340,7 +390,7 @@ Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request) {
     concrete.resolution = chosen.resolution;
   }
   const auto start = Clock::now();
-  auto result = Step(concrete);
+  auto result = Step(concrete, control);
   if (!result) return result;
   selector->Record(chosen, std::chrono::duration<double, std::milli>(Clock::now() - start).count());
   result->stats.method_reason = std::move(reason);
@@ -348,46 +398,59 @@ Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request) {
 }
 
 // One step: each stage runs only if the requested output needs it.
-Result<StepResult> Pipeline::Impl::Step(const StepRequest& request) {
+Result<StepResult> Pipeline::Impl::Step(const StepRequest& request, const StepControl& control) {
   if (auto ok = CheckStepRequest(request); !ok) return ok.error();
-  if (request.method == Method::kAuto) return StepAuto(request);
+  if (request.method == Method::kAuto) return StepAuto(request, control);
   if (IsGpuMethod(request.method) && !gpu) {
     return MakeError(ErrorCode::kUnavailable, "method '" + std::string(ToString(request.method)) +
                                                   "' needs the GPU, and this pipeline has no GL "
                                                   "context");
   }
-  StepState state{request, {}, {}, {}, {}};
+  StepState state{request, control, {}, {}, {}, {}};
   state.result.stats.method = ConfigName(request);
   StageTimer timer(state.result.stats);
-  auto finish = [&]() -> Result<StepResult> {
-    timer.Finish();
-    return std::move(state.result);
+  if (auto ran = RunStages(state, timer); !ran) return ran.error();
+  timer.Finish();
+  return std::move(state.result);
+}
+
+// The stages of a concrete method, each entered through EnterStage (progress, cancellation)
+// and timed; a stage that stops the step returns its error.
+Result<void> Pipeline::Impl::RunStages(StepState& state, StageTimer& timer) {
+  const StepRequest& request = state.request;
+  auto stage = [&](const char* name, auto&& run) -> Result<void> {
+    if (auto ok = EnterStage(state, name); !ok) return ok;
+    if (auto ok = run(); !ok) return ok;
+    timer.End(name);
+    return {};
   };
-  cache.RefreshWorld();
-  state.objects = cache.Objects();
-  timer.End("update");
+  auto ok = stage("update", [&]() -> Result<void> {
+    cache.RefreshWorld();
+    state.objects = cache.Objects();
+    return {};
+  });
+  if (!ok) return ok;
   if (request.method == Method::kExact || request.method == Method::kFcl) {
-    RunWholeScene(state);
-    timer.End("exact");
-    return finish();
+    if (ok = stage("exact", [&] { return RunWholeScene(state); }); !ok) return ok;
+    return {};
   }
-  if (auto ok = CullObjectsStage(state); !ok) return ok.error();
-  timer.End("object_cull");
-  if (request.output == Output::kObjectPcs && !IsCpuCulling(request.method)) return finish();
-  PairObjectsStage(state);
-  timer.End("sweep_and_prune");
-  if (request.output == Output::kObjectPcs || request.output == Output::kObjectPairs)
-    return finish();
+  if (ok = stage("object_cull", [&] { return CullObjectsStage(state); }); !ok) return ok;
+  if (request.output == Output::kObjectPcs && !IsCpuCulling(request.method)) return {};
+  ok = stage("sweep_and_prune", [&]() -> Result<void> {
+    PairObjectsStage(state);
+    return {};
+  });
+  if (!ok) return ok;
+  if (request.output == Output::kObjectPcs || request.output == Output::kObjectPairs) return {};
   if (request.method == Method::kBvh) {
-    HierarchyStage(state, timer);
-    return finish();
+    const char* name = WantsExact(request.output) ? "exact" : "primitive_cull";
+    if (ok = stage(name, [&] { return HierarchyStage(state); }); !ok) return ok;
+    return {};
   }
-  if (auto ok = CullPrimitivesStage(state); !ok) return ok.error();
-  timer.End("primitive_cull");
-  if (!WantsExact(request.output)) return finish();
-  ExactStage(state);
-  timer.End("exact");
-  return finish();
+  if (ok = stage("primitive_cull", [&] { return CullPrimitivesStage(state); }); !ok) return ok;
+  if (!WantsExact(request.output)) return {};
+  if (ok = stage("exact", [&] { return ExactStage(state); }); !ok) return ok;
+  return {};
 }
 
 Pipeline::Pipeline(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -442,7 +505,9 @@ Result<void> Pipeline::LoadScene(const Scene& scene) {
   return Apply(std::move(updates), [&](size_t i) { return "objects[" + std::to_string(i) + "]."; });
 }
 
-Result<StepResult> Pipeline::Step(const StepRequest& request) { return impl_->Step(request); }
+Result<StepResult> Pipeline::Step(const StepRequest& request, const StepControl& control) {
+  return impl_->Step(request, control);
+}
 int Pipeline::num_objects() const { return impl_->cache.size(); }
 const SceneCounters& Pipeline::counters() const { return impl_->cache.counters(); }
 std::string Pipeline::gl_renderer() const { return impl_->renderer_name; }

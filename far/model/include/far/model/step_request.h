@@ -52,8 +52,9 @@ struct StepRequest {
 };
 
 /// Names used on command lines and in messages: "auto", "aabb", "bvh", "cullide", "far",
-/// "far-exact-offset", "fcl", "exact"; "occlusion-query", "id-buffer"; "object-pcs", "pairs", "pcs", "contacts",
-/// "distance"; "depth16", "depth24", "depth32f". Parse* return nullopt for unknown names.
+/// "far-exact-offset", "fcl", "exact"; "occlusion-query", "id-buffer"; "object-pcs", "pairs",
+/// "pcs", "contacts", "distance"; "depth16", "depth24", "depth32f". Parse* return nullopt for
+/// unknown names.
 std::string_view ToString(Method method);
 std::string_view ToString(QueryMechanism mechanism);
 std::string_view ToString(Output output);

@@ -33,6 +33,8 @@ struct BvhQuery {
   bool want_distance_pairs = true;
   bool run_exact = true;        ///< false: no exact tests (only candidates, when asked)
   bool want_candidates = true;  ///< fill BvhResult::candidates (the primitive PCS)
+  /// Cancellation, deadline and pair cap (null: none); see ExactResult::stopped.
+  const StepControl* control = nullptr;
 };
 
 /// The answer, and the candidate triangles: per object (indexed like `objects`), sorted, the

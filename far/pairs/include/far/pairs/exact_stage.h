@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "far/model/contact_pair.h"
+#include "far/model/step_control.h"
 #include "far/pairs/thread_pool.h"
 #include "far/pairs/world_object.h"
 
@@ -21,6 +22,8 @@ struct ExactQuery {
   std::span<const std::vector<uint32_t>> triangle_subsets;
   bool want_contacts = true;           ///< compute intersecting pairs
   std::optional<double> max_distance;  ///< also compute pairs with distance <= this
+  /// Cancellation, deadline and pair cap (null: none); see ExactResult::stopped.
+  const StepControl* control = nullptr;
 };
 
 /// Exact answers, sorted ascending (object_a < object_b).
@@ -29,6 +32,9 @@ struct ExactResult {
   std::vector<DistancePair> distance_pairs;
   size_t pairs_considered = 0;  ///< triangle pairs before the AABB prefilter
   size_t pairs_tested = 0;      ///< triangle pairs that reached an exact test
+  /// Why the stage stopped early (its control's cancel flag, deadline or pair cap); when it is
+  /// not kNone, contacts and distance_pairs are empty: a partial answer is never returned.
+  StopReason stopped = StopReason::kNone;
 };
 
 /// Runs exact triangle-triangle tests (TrianglesIntersect, TrianglesWithinDistance) on the
@@ -39,6 +45,11 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool);
 /// The brute-force reference: every cross-object triangle pair (AABB prefilter only). The
 /// oracle every culling path is tested against.
 ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
-                                std::optional<double> max_distance, ThreadPool& pool);
+                                std::optional<double> max_distance, ThreadPool& pool,
+                                const StepControl* control = nullptr);
+
+/// The cross-object triangle pairs BruteForceReference would consider for these objects
+/// (sum of n_i n_j over object pairs i < j): what a caller checks before running it.
+uint64_t BruteForcePairs(std::span<const WorldObjectView> objects);
 
 }  // namespace far

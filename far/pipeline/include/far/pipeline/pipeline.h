@@ -15,6 +15,7 @@
 #include "far/model/scene.h"
 #include "far/model/scene_model.h"
 #include "far/model/scene_update.h"
+#include "far/model/step_control.h"
 #include "far/model/step_request.h"
 #include "far/model/step_result.h"
 
@@ -70,9 +71,14 @@ class Pipeline {
   /// Adds every object of `scene` (frames are the caller's to apply).
   Result<void> LoadScene(const Scene& scene);
 
-  /// Runs one step. Errors: kInvalidArgument (bad request: resolution, sub-object size,
-  /// distance, output needs a distance), kUnavailable (GPU method without GL), kInternal.
-  Result<StepResult> Step(const StepRequest& request);
+  /// Runs one step. `control` may stop it (checked at each stage and inside the long ones):
+  /// kUnavailable when its cancel flag was set, kTimeout at its deadline, kLimitExceeded when the
+  /// answer would hold more than its max_pairs contact and distance pairs; the scene is as the
+  /// updates left it either way. Other errors: kInvalidArgument (bad request: resolution,
+  /// sub-object size, distance, output needs a distance), kLimitExceeded ('exact' on a scene of
+  /// more than kMaxBruteForcePairs triangle pairs), kUnavailable (GPU method without GL),
+  /// kInternal.
+  Result<StepResult> Step(const StepRequest& request, const StepControl& control = {});
 
   int num_objects() const;
   const SceneCounters& counters() const;

@@ -1,0 +1,49 @@
+#pragma once
+
+// What may end a step early, and what it tells its caller while it runs. A daemon serving many
+// clients gives each step one: the client's cancellation (it closed its session or gave up),
+// a deadline, and a cap on the pairs its reply may carry.
+
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string_view>
+
+namespace far {
+
+/// Why a step or stage ended before its work was done.
+enum class StopReason {
+  kNone,       ///< it ran to the end
+  kCancelled,  ///< the caller's cancel flag was set
+  kDeadline,   ///< the deadline passed
+  kPairLimit,  ///< it found more pairs (contacts + distance pairs) than max_pairs
+};
+
+/// Limits and signals of one step. Stages check them between their parts and, in the long
+/// stages (exact tests, hierarchy descent, brute force, FCL), every few hundred triangle pairs,
+/// so a stopped step ends within milliseconds. Default: nothing stops a step.
+struct StepControl {
+  using Clock = std::chrono::steady_clock;
+  /// Set (by another thread) to abandon the step; read with relaxed loads.
+  const std::atomic<bool>* cancel = nullptr;
+  Clock::time_point deadline = Clock::time_point::max();
+  /// The most contacts + distance pairs a step may report: a reply larger than this is refused
+  /// while the pairs are found, not after they all are.
+  size_t max_pairs = std::numeric_limits<size_t>::max();
+  /// Called at the start of each stage with its name ("update", "object_cull", ...), on the
+  /// step's thread: progress for a client that waits.
+  std::function<void(std::string_view stage)> on_stage;
+
+  /// kCancelled or kDeadline when the step must stop now, else kNone (reads the clock).
+  StopReason Check() const {
+    if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return StopReason::kCancelled;
+    if (deadline != Clock::time_point::max() && Clock::now() >= deadline)
+      return StopReason::kDeadline;
+    return StopReason::kNone;
+  }
+};
+
+}  // namespace far

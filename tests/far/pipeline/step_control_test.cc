@@ -1,0 +1,142 @@
+// Pipeline::Step under a StepControl: progress per stage, cancellation, deadline and the cap on
+// the reply's pairs; the brute-force reference refused on scenes too large for it.
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "far/model/limits.h"
+#include "far/pipeline/pipeline.h"
+
+namespace far {
+namespace {
+
+// A flat n x n grid (2 n^2 triangles) in the plane z = 0, its corner at (dx, 0, 0).
+Mesh Grid(int n, double dx) {
+  Mesh mesh;
+  for (int y = 0; y <= n; ++y) {
+    for (int x = 0; x <= n; ++x) mesh.p_MV.emplace_back(x + dx, y, 0);
+  }
+  const auto at = [n](int x, int y) { return static_cast<uint32_t>(y * (n + 1) + x); };
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      mesh.triangles.push_back({at(x, y), at(x + 1, y), at(x + 1, y + 1)});
+      mesh.triangles.push_back({at(x, y), at(x + 1, y + 1), at(x, y + 1)});
+    }
+  }
+  return mesh;
+}
+
+// Two coplanar grids half a cell apart: hundreds of contacts.
+std::unique_ptr<Pipeline> TwoGrids(int n) {
+  PipelineOptions options;
+  options.use_gl = false;
+  options.num_threads = 2;
+  auto pipeline = Pipeline::Create(options);
+  EXPECT_TRUE(pipeline.ok());
+  EXPECT_TRUE((*pipeline)->AddObject(1, Grid(n, 0), Motion::kStatic).ok());
+  EXPECT_TRUE((*pipeline)->AddObject(2, Grid(n, 0.5), Motion::kRigid).ok());
+  return std::move(*pipeline);
+}
+
+StepRequest Request(Method method) {
+  StepRequest request;
+  request.method = method;
+  return request;
+}
+
+TEST(StepControlTest, ReportsEveryStageItEntersInOrder) {
+  auto pipeline = TwoGrids(6);
+  std::vector<std::string> stages;
+  StepControl control;
+  control.on_stage = [&](std::string_view stage) { stages.emplace_back(stage); };
+  ASSERT_TRUE(pipeline->Step(Request(Method::kBvh), control).ok());
+  EXPECT_EQ(stages,
+            (std::vector<std::string>{"update", "object_cull", "sweep_and_prune", "exact"}));
+  stages.clear();
+  ASSERT_TRUE(pipeline->Step(Request(Method::kAabb), control).ok());
+  EXPECT_EQ(stages, (std::vector<std::string>{"update", "object_cull", "sweep_and_prune",
+                                              "primitive_cull", "exact"}));
+}
+
+TEST(StepControlTest, ACancelledStepIsAnErrorAndTheNextStepRunsOnTheSameScene) {
+  auto pipeline = TwoGrids(6);
+  const auto expected = pipeline->Step(Request(Method::kBvh));
+  ASSERT_TRUE(expected.ok());
+  std::atomic<bool> cancel{false};
+  StepControl control;
+  control.cancel = &cancel;
+  control.on_stage = [&](std::string_view stage) {
+    if (stage == "sweep_and_prune") cancel = true;
+  };
+  const auto cancelled = pipeline->Step(Request(Method::kBvh), control);
+  ASSERT_FALSE(cancelled.ok());
+  EXPECT_EQ(cancelled.error().code, ErrorCode::kUnavailable);
+  EXPECT_NE(cancelled.error().message.find("cancelled"), std::string::npos);
+  EXPECT_NE(cancelled.error().message.find("sweep_and_prune"), std::string::npos);
+  const auto again = pipeline->Step(Request(Method::kBvh));
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->contacts, expected->contacts);
+}
+
+TEST(StepControlTest, AStepPastItsDeadlineIsATimeout) {
+  auto pipeline = TwoGrids(6);
+  StepControl control;
+  control.deadline = StepControl::Clock::now();
+  const auto late = pipeline->Step(Request(Method::kAabb), control);
+  ASSERT_FALSE(late.ok());
+  EXPECT_EQ(late.error().code, ErrorCode::kTimeout);
+}
+
+TEST(StepControlTest, AnAnswerOverThePairCapIsRefusedByEveryMethod) {
+  auto pipeline = TwoGrids(10);
+  for (Method method : {Method::kBvh, Method::kAabb, Method::kFcl, Method::kExact}) {
+    SCOPED_TRACE(std::string(ToString(method)));
+    const auto full = pipeline->Step(Request(method));
+    ASSERT_TRUE(full.ok());
+    ASSERT_GT(full->contacts.size(), 50u);
+    StepControl control;
+    control.max_pairs = 50;
+    const auto capped = pipeline->Step(Request(method), control);
+    ASSERT_FALSE(capped.ok());
+    EXPECT_EQ(capped.error().code, ErrorCode::kLimitExceeded);
+    EXPECT_NE(capped.error().message.find("more than 50 contact and distance pairs"),
+              std::string::npos)
+        << capped.error().message;
+  }
+}
+
+TEST(StepControlTest, DistancePairsCountAgainstTheCapToo) {
+  auto pipeline = TwoGrids(10);
+  StepRequest request = Request(Method::kBvh);
+  request.distance = 1e6;  // every triangle pair
+  request.output = Output::kDistancePairs;
+  StepControl control;
+  control.max_pairs = 10'000;
+  const auto capped = pipeline->Step(request, control);
+  ASSERT_FALSE(capped.ok());
+  EXPECT_EQ(capped.error().code, ErrorCode::kLimitExceeded);
+}
+
+TEST(StepControlTest, TheBruteForceReferenceIsRefusedAboveItsSize) {
+  // Two grids of 2 * 128^2 = 32,768 triangles: 2^30 pairs, at the limit; one more row is over.
+  PipelineOptions options;
+  options.use_gl = false;
+  auto pipeline = Pipeline::Create(options);
+  ASSERT_TRUE(pipeline.ok());
+  ASSERT_TRUE((*pipeline)->AddObject(1, Grid(128, 0), Motion::kStatic).ok());
+  Mesh bigger = Grid(128, 1000);
+  bigger.p_MV.emplace_back(2000, 0, 0);
+  bigger.triangles.push_back({0, 1, static_cast<uint32_t>(bigger.p_MV.size() - 1)});
+  ASSERT_TRUE((*pipeline)->AddObject(2, bigger, Motion::kStatic).ok());
+  const auto refused = (*pipeline)->Step(Request(Method::kExact));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kLimitExceeded);
+  EXPECT_NE(refused.error().message.find(std::to_string(kMaxBruteForcePairs)), std::string::npos);
+  EXPECT_NE(refused.error().message.find("'bvh'"), std::string::npos);
+  EXPECT_TRUE((*pipeline)->Step(Request(Method::kBvh)).ok());
+}
+
+}  // namespace
+}  // namespace far
