@@ -1,0 +1,121 @@
+#pragma once
+
+// far-study's configurations and the interleaved run of one scene: every configuration owns a
+// far::Pipeline (all on the caller's current GL context), gets the same updates, and all run
+// one after the other within each step, in an order that rotates from step to step, so that
+// machine noise and cache effects hit all of them alike.
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "study_scenes.h"
+
+#include "far/model/result.h"
+#include "far/model/step_request.h"
+
+namespace far_study {
+
+/// One configuration: what a step request asks for.
+struct ConfigSpec {
+  far::Method method = far::Method::kBvh;
+  std::optional<far::QueryMechanism> mechanism;  ///< GPU methods only
+  int resolution = 0;                            ///< GPU methods only
+  far::Output output = far::Output::kContacts;   ///< kDistancePairs: the distance pass
+
+  /// As StepStats::method names it: "bvh", "far/id-buffer/256".
+  std::string Name() const;
+};
+
+/// Parses "far/id-buffer/256" (a GPU method, a mechanism, a resolution); nullopt when malformed.
+std::optional<ConfigSpec> ParseGpuConfig(const std::string& text);
+
+/// Which configurations run where (see ConfigsFor).
+struct RunOptions {
+  std::vector<int> resolutions = {256, 512, 1024, 2048};  ///< small scenes' GPU configurations
+  int oq_steps = 0;  ///< occlusion-query configurations on the first N steps only (0: all)
+  std::vector<ConfigSpec> paper_gpu;    ///< GPU configurations of the paper-scale scenes
+  std::vector<ConfigSpec> scaling_gpu;  ///< ... of the scaling scenes up to scaling_gpu_max
+  int64_t scaling_gpu_max = 50000;
+  int64_t scaling_reference_max = 300000;
+  std::set<std::string> methods;  ///< method names to run (empty: all); the reference always
+  bool distance_on_paper = true;  ///< the distance pass on the paper-scale scenes
+  bool distance_on_scaling = false;
+  double distance_fraction = 0.01;  ///< D of the distance pass, as a fraction of the scene size
+
+  /// The resolution the small-scene bars compare at: 1024 when run, else the largest.
+  int PrimaryResolution() const;
+};
+
+constexpr std::array<const char*, 5> kStages = {"update", "object_cull", "sweep_and_prune",
+                                                "primitive_cull", "exact"};
+
+/// What one step of one configuration measured.
+struct Sample {
+  double step_ms = 0;    ///< ingest + Step, wall clock
+  double cpu_ms = 0;     ///< the same span in CPU time of the whole process (llvmpipe's too)
+  double ingest_ms = 0;  ///< Pipeline::Apply of the step's updates
+  double cull_ms = 0;    ///< object_cull + primitive_cull stages
+  std::map<std::string, double> stage_ms;
+  int64_t pcs_objects = 0, pcs_primitives = 0, object_pairs = 0, pairs_considered = 0;
+  int64_t pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
+  int64_t contacts = 0, reference = 0, missed = 0, false_positives = 0;
+  int64_t distance_pairs = 0, distance_reference = 0, distance_missed = 0, distance_spurious = 0;
+  std::string method_run, method_reason;  ///< StepStats::method and method_reason
+};
+
+/// A configuration's samples on one scene, summarized: medians per step, totals over steps.
+struct Row {
+  ConfigSpec spec;
+  std::string config, method, mechanism, output;  ///< config: spec.Name(); mechanism "-" for CPU
+  int resolution = 0;
+  int samples = 0;
+  bool reference = false;  ///< this row is the scene's reference (exact)
+  bool checked = false;    ///< the scene had a reference: missed / false positives are known
+  double ms_median = 0, ms_p25 = 0, ms_p75 = 0, ms_min = 0, ms_max = 0, cpu_ms = 0;
+  double ingest_ms = 0, cull_ms = 0;
+  std::array<double, kStages.size()> stage_ms{};
+  double pcs_objects = 0, pcs_primitives = 0, object_pairs = 0, pairs_considered = 0;
+  double pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
+  int64_t contacts = 0, reference_contacts = 0, missed = 0, false_positives = 0;
+  int64_t distance_pairs = 0, distance_reference = 0, distance_missed = 0, distance_spurious = 0;
+  int64_t object_pairs_total = 0, pairs_considered_total = 0;
+  std::map<std::string, int> runs;  ///< StepStats::method -> measured steps it ran
+  std::string method_run;           ///< the configuration that ran most often
+  std::string method_reason;        ///< auto: the reason of its last measured step
+
+  bool distance() const { return spec.output == far::Output::kDistancePairs; }
+};
+
+/// One scene's run: what it was and a row per configuration.
+struct SceneReport {
+  std::string name, description, break_note;
+  Family family = Family::kSmall;
+  Kind kind = Kind::kRigid;
+  int64_t triangles = 0;
+  int objects = 0, steps = 0;
+  std::optional<double> distance;  ///< D of the distance pass, when it ran
+  bool checked = false;            ///< a reference ran
+  double seconds = 0;
+  std::vector<Row> rows;
+};
+
+/// The configurations of `scene`, the reference (exact) last, or none when the scene is past
+/// scaling_reference_max. Where the distance pass runs, the reference asks for distance pairs
+/// (it answers contacts too, so one brute force serves both).
+std::vector<ConfigSpec> ConfigsFor(const StudyScene& scene, const RunOptions& options,
+                                   bool* has_reference);
+
+/// Runs every configuration of `scene` over its frames (an unmeasured warm-up step 0, then
+/// one measured step per frame). Errors: a pipeline cannot be made, an update or step failed.
+far::Result<SceneReport> RunScene(const StudyScene& scene, const RunOptions& options);
+
+/// The row of a configuration ("far/id-buffer/1024") and output; nullptr when not run.
+const Row* Find(const SceneReport& report, const std::string& config,
+                far::Output output = far::Output::kContacts);
+
+}  // namespace far_study
