@@ -30,26 +30,27 @@ export FAR_BIN=build/release FAR_FRAMES=$frames FAR_LEAVES=$leaves FAR_RESOLUTIO
 exec deploy/netns-run.sh bash -c '
   set -euo pipefail
   work=$(mktemp -d)
-  "$FAR_BIN/server/far-daemon" --log-level info >"$work/daemon.log" 2>&1 &
+  # A daemon of its own (its own socket), whatever else runs on this machine.
+  "$FAR_BIN/server/far-daemon" --socket "$work/far.sock" --log-level info >"$work/daemon.log" 2>&1 &
   daemon=$!
   trap "kill $daemon 2>/dev/null || true; rm -rf $work" EXIT
-  for _ in $(seq 50); do "$FAR_BIN/client/far-client" ping >/dev/null 2>&1 && break; sleep 0.2; done
-  "$FAR_BIN/client/far-client" ping
-  "$FAR_BIN/client/far-client" make-scene "$work/demo/scene.json" --leaves "$FAR_LEAVES" --frames "$FAR_FRAMES"
+  far_client() { "$FAR_BIN/client/far-client" --socket "$work/far.sock" "$@"; }
+  far_client --connect-timeout 20s ping
+  far_client make-scene "$work/demo/scene.json" --leaves "$FAR_LEAVES" --frames "$FAR_FRAMES"
 
   echo "== three simulators at once: two tree-and-leaves scenes (one with distance queries) and a load client"
-  "$FAR_BIN/client/far-client" play "$work/demo/scene.json" --resolution "$FAR_RESOLUTION" \
+  far_client play "$work/demo/scene.json" --resolution "$FAR_RESOLUTION" \
       | sed "s/^/[leaves-1] /" &
   a=$!
-  "$FAR_BIN/client/far-client" play "$work/demo/scene.json" --resolution "$FAR_RESOLUTION" --distance 0.05 \
+  far_client play "$work/demo/scene.json" --resolution "$FAR_RESOLUTION" --distance 0.05 \
       | sed "s/^/[leaves-2 D=0.05] /" &
   b=$!
-  "$FAR_BIN/client/far-client" load --clients 3 --steps 15 --resolution 256 | sed "s/^/[load] /" &
+  far_client load --clients 3 --steps 15 --resolution 256 | sed "s/^/[load] /" &
   c=$!
   wait $a $b $c
 
   echo "== daemon status"
-  "$FAR_BIN/client/far-client" status
+  far_client status
   kill -TERM $daemon
   wait $daemon
   echo "== daemon log (last lines)"

@@ -8,11 +8,17 @@
 int main(int argc, char** argv) {
   CLI::App app{"far-client: probe a far-daemon, run scene files through it, load-test it"};
   app.require_subcommand(1);
-  app.fallthrough();  // --lcm-url and --timeout-ms may also come after the command
+  app.fallthrough();  // the global flags may also come after the command
   far::cli::GlobalFlags global;
-  app.add_option("--lcm-url", global.options.lcm_url, "LCM URL of the daemon")
+  app.add_option("--daemon", global.options.daemon,
+                 "the daemon's name (far-daemon --name): its socket is <dir>/<name>.sock")
       ->capture_default_str();
-  app.add_option("--timeout-ms", global.timeout_ms, "wait this long for the daemon's replies")
+  app.add_option("--socket", global.options.socket_path,
+                 "the daemon's socket path, when not the default for its name");
+  app.add_option("--lcm-url", global.options.lcm_url,
+                 "LCM URL of the session channels (default: the one the daemon names)");
+  app.add_option("--connect-timeout", global.connect_timeout,
+                 "how long to look for a daemon that is not (yet) there before saying so")
       ->capture_default_str();
 
   const std::vector<far::cli::Command> commands = {

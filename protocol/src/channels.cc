@@ -1,23 +1,56 @@
 #include "far/protocol/channels.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdlib>
+
 namespace far::protocol {
 
-std::string SessionRequestChannel(int64_t session_id) {
-  return "FAR_S" + std::to_string(session_id) + "_REQ";
+bool IsValidDaemonName(std::string_view name) {
+  if (name.empty() || name.size() > 16 || name[0] < 'a' || name[0] > 'z') return false;
+  for (const char c : name) {
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-')) return false;
+  }
+  return true;
 }
 
-std::string SessionReplyChannel(int64_t session_id) {
-  return "FAR_S" + std::to_string(session_id) + "_REPLY";
+std::string ChannelPrefix(std::string_view name) {
+  if (name == kDefaultDaemonName) return "FAR_";
+  std::string prefix = "FAR_";
+  for (const char c : name) {
+    if (c == '-') {
+      prefix += '_';
+    } else if (c >= 'a' && c <= 'z') {
+      prefix += static_cast<char>(c - 'a' + 'A');
+    } else {
+      prefix += c;
+    }
+  }
+  return prefix + "_";
 }
 
-std::optional<int64_t> ParseSessionRequestChannel(std::string_view channel) {
-  constexpr std::string_view kPrefix = "FAR_S";
+std::string SessionRequestChannel(std::string_view prefix, int64_t session_id) {
+  return std::string(prefix) + "S" + std::to_string(session_id) + "_REQ";
+}
+
+std::string SessionReplyChannel(std::string_view prefix, int64_t session_id) {
+  return std::string(prefix) + "S" + std::to_string(session_id) + "_REPLY";
+}
+
+std::string SessionRequestChannelPattern(std::string_view prefix) {
+  return std::string(prefix) + "S[0-9]+_REQ";
+}
+
+std::optional<int64_t> ParseSessionRequestChannel(std::string_view prefix,
+                                                  std::string_view channel) {
   constexpr std::string_view kSuffix = "_REQ";
-  if (channel.size() <= kPrefix.size() + kSuffix.size()) return std::nullopt;
-  if (channel.substr(0, kPrefix.size()) != kPrefix) return std::nullopt;
+  if (channel.size() <= prefix.size() + 1 + kSuffix.size()) return std::nullopt;
+  if (channel.substr(0, prefix.size()) != prefix || channel[prefix.size()] != 'S')
+    return std::nullopt;
   if (channel.substr(channel.size() - kSuffix.size()) != kSuffix) return std::nullopt;
   const std::string_view digits =
-      channel.substr(kPrefix.size(), channel.size() - kPrefix.size() - kSuffix.size());
+      channel.substr(prefix.size() + 1, channel.size() - prefix.size() - 1 - kSuffix.size());
   // At most 18 digits: no overflow of int64; no leading zero: one name per session.
   if (digits.empty() || digits.size() > 18 || digits[0] == '0') return std::nullopt;
   int64_t id = 0;
@@ -28,16 +61,16 @@ std::optional<int64_t> ParseSessionRequestChannel(std::string_view channel) {
   return id;
 }
 
-bool IsValidOpenReplyChannel(std::string_view channel) {
-  if (channel.substr(0, kOpenReplyPrefix.size()) != kOpenReplyPrefix) return false;
-  const std::string_view suffix = channel.substr(kOpenReplyPrefix.size());
-  if (suffix.empty() || suffix.size() > 48) return false;
-  for (const char c : suffix) {
-    const bool ok = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
-                    c == '_' || c == '-';
-    if (!ok) return false;
-  }
-  return true;
+std::string DefaultSocketDirectory() {
+  struct stat info {};
+  if (stat("/run/far", &info) == 0 && S_ISDIR(info.st_mode)) return "/run/far";
+  if (const char* runtime = std::getenv("XDG_RUNTIME_DIR"); runtime != nullptr && *runtime == '/')
+    return std::string(runtime) + "/far";
+  return "/tmp/far-" + std::to_string(geteuid());
+}
+
+std::string DefaultSocketPath(std::string_view name) {
+  return DefaultSocketDirectory() + "/" + std::string(name) + ".sock";
 }
 
 }  // namespace far::protocol

@@ -55,6 +55,8 @@ far_lcm::step_reply_t EmptyReply(const StepReplyIds& ids) {
   reply.pairs_tested = 0;
   reply.object_radius = 0;
   reply.primitive_radius = 0;
+  reply.guaranteed = false;
+  reply.num_levels = 0;
   return reply;
 }
 
@@ -78,7 +80,8 @@ ErrorCode FromWireStatus(int32_t status) {
 }
 
 far_lcm::step_request_t MakeStepRequest(int64_t session_id, int64_t request_id, int64_t step_id,
-                                        uint64_t ring_commit_sequence, const StepRequest& request) {
+                                        uint64_t ring_commit_sequence, const StepRequest& request,
+                                        int32_t timeout_ms) {
   far_lcm::step_request_t message{};
   message.protocol_version = kProtocolVersion;
   message.session_id = session_id;
@@ -94,6 +97,7 @@ far_lcm::step_request_t MakeStepRequest(int64_t session_id, int64_t request_id, 
   message.subobject_size = request.subobject_size;
   message.has_distance = request.distance.has_value();
   message.distance = request.distance.value_or(0.0);
+  message.timeout_ms = timeout_ms;
   return message;
 }
 
@@ -193,6 +197,25 @@ void SetStats(far_lcm::step_reply_t& reply, const StepStats& stats) {
   reply.pairs_tested = stats.pairs_tested;
   reply.object_radius = stats.object_radius;
   reply.primitive_radius = stats.primitive_radius;
+  const Certificate& certificate = stats.certificate;
+  reply.guaranteed = certificate.guaranteed;
+  reply.guarantee_basis = certificate.basis;
+  reply.num_levels = static_cast<int32_t>(certificate.levels.size());
+  for (const LevelCertificate& level : certificate.levels) {
+    reply.level_name.push_back(level.level);
+    reply.level_views.push_back(level.views);
+    reply.level_resolution.push_back(level.resolution);
+    reply.level_offset_radius.push_back(level.offset_radius);
+    reply.level_pixel_size.push_back(level.pixel_size);
+    reply.level_depth_step.push_back(level.depth_step);
+    reply.level_rounding.push_back(level.rounding);
+    reply.level_world_min_x.push_back(level.world_min[0]);
+    reply.level_world_min_y.push_back(level.world_min[1]);
+    reply.level_world_min_z.push_back(level.world_min[2]);
+    reply.level_world_max_x.push_back(level.world_max[0]);
+    reply.level_world_max_y.push_back(level.world_max[1]);
+    reply.level_world_max_z.push_back(level.world_max[2]);
+  }
 }
 
 }  // namespace
@@ -218,6 +241,22 @@ far_lcm::step_reply_t MakeStepErrorReply(const StepReplyIds& ids, const Error& e
   SetStatus(reply, &error);
   reply.output = "";
   return reply;
+}
+
+far_lcm::step_status_t MakeStepStatus(int64_t session_id, int64_t request_id, int64_t step_id,
+                                      std::string_view state, int32_t queue_position,
+                                      std::string_view stage, double elapsed_ms) {
+  far_lcm::step_status_t message{};
+  message.protocol_version = kProtocolVersion;
+  message.session_id = session_id;
+  std::memset(message.auth, 0, sizeof(message.auth));
+  message.request_id = request_id;
+  message.step_id = step_id;
+  message.state = std::string(state);
+  message.queue_position = queue_position;
+  message.stage = stage.empty() ? "-" : std::string(stage);
+  message.elapsed_ms = elapsed_ms;
+  return message;
 }
 
 far_lcm::error_t MakeErrorMessage(int64_t session_id, int64_t request_id, const Error& error,
@@ -362,6 +401,23 @@ void ReadStats(const far_lcm::step_reply_t& reply, StepResult& result) {
   stats.pairs_tested = reply.pairs_tested;
   stats.object_radius = reply.object_radius;
   stats.primitive_radius = reply.primitive_radius;
+  stats.certificate.guaranteed = reply.guaranteed;
+  stats.certificate.basis = reply.guarantee_basis;
+  for (int32_t i = 0; i < reply.num_levels; ++i) {
+    LevelCertificate level;
+    level.level = reply.level_name[i];
+    level.views = reply.level_views[i];
+    level.resolution = reply.level_resolution[i];
+    level.offset_radius = reply.level_offset_radius[i];
+    level.pixel_size = reply.level_pixel_size[i];
+    level.depth_step = reply.level_depth_step[i];
+    level.rounding = reply.level_rounding[i];
+    level.world_min = {reply.level_world_min_x[i], reply.level_world_min_y[i],
+                       reply.level_world_min_z[i]};
+    level.world_max = {reply.level_world_max_x[i], reply.level_world_max_y[i],
+                       reply.level_world_max_z[i]};
+    stats.certificate.levels.push_back(std::move(level));
+  }
 }
 
 }  // namespace

@@ -41,8 +41,8 @@ constexpr FieldSpec StringArray(const char* name, uint8_t count_field) {
 // tests/protocol/message_test.cc fail (the pre-scan must consume exactly the encoded bytes of
 // messages with every array and string filled).
 constexpr std::array kOpenSession{
-    Scalar("protocol_version", 4), Scalar("request_id", 8),        String("client_name"),
-    String("reply_channel"),       Scalar("update_ring_bytes", 8), Scalar("reply_ring_bytes", 8),
+    Scalar("protocol_version", 4),  Scalar("request_id", 8),       String("client_name"),
+    Scalar("update_ring_bytes", 8), Scalar("reply_ring_bytes", 8),
 };
 constexpr std::array kOpenSessionReply{
     Scalar("protocol_version", 4),
@@ -51,28 +51,27 @@ constexpr std::array kOpenSessionReply{
     String("status_name"),
     String("message"),
     Scalar("session_id", 8),
-    String("shm_name"),
     Scalar("shm_bytes", 8),
     Scalar("ring_layout_version", 4),
     Scalar("update_ring_bytes", 8),
     Scalar("reply_ring_bytes", 8),
+    String("lcm_url"),
     String("request_channel"),
     String("session_reply_channel"),
-    Scalar("heartbeat_timeout_ms", 8),
     Scalar("max_objects", 4),
     Scalar("max_vertices_per_object", 4),
     Scalar("max_triangles_per_object", 4),
+    Scalar("max_reply_pairs", 8),
+    Scalar("step_deadline_ms", 8),
 };
-constexpr std::array kCloseSession{
-    Scalar("protocol_version", 4),
-    Scalar("session_id", 8),
-    Scalar("auth", 32),
-    Scalar("request_id", 8),
+constexpr std::array kSealed{
+    Scalar("protocol_version", 4), Scalar("session_id", 8), Scalar("request_id", 8),
+    Scalar("nonce", 24),           Count("box_bytes"),      Array("box", 1, 4),
 };
-constexpr std::array kHeartbeat{
-    Scalar("protocol_version", 4), Scalar("session_id", 8),   Scalar("auth", 32),
-    Scalar("request_id", 8),       Scalar("sent_time_ns", 8), Scalar("last_applied_sequence", 8),
-    Scalar("last_step_id", 8),
+constexpr std::array kStepStatus{
+    Scalar("protocol_version", 4), Scalar("session_id", 8), Scalar("auth", 32),
+    Scalar("request_id", 8),       Scalar("step_id", 8),    String("state"),
+    Scalar("queue_position", 4),   String("stage"),         Scalar("elapsed_ms", 8),
 };
 constexpr std::array kStepRequest{
     Scalar("protocol_version", 4),
@@ -89,6 +88,7 @@ constexpr std::array kStepRequest{
     Scalar("subobject_size", 4),
     Scalar("has_distance", 1),
     Scalar("distance", 8),
+    Scalar("timeout_ms", 4),
 };
 constexpr std::array kStepReply{
     Scalar("protocol_version", 4),           // 0
@@ -142,6 +142,22 @@ constexpr std::array kStepReply{
     Scalar("pairs_tested", 8),               // 48
     Scalar("object_radius", 8),              // 49
     Scalar("primitive_radius", 8),           // 50
+    Scalar("guaranteed", 1),                 // 51
+    String("guarantee_basis"),               // 52
+    Count("num_levels"),                     // 53
+    StringArray("level_name", 53),           // 54
+    Array("level_views", 4, 53),             // 55
+    Array("level_resolution", 4, 53),        // 56
+    Array("level_offset_radius", 8, 53),     // 57
+    Array("level_pixel_size", 8, 53),        // 58
+    Array("level_depth_step", 8, 53),        // 59
+    Array("level_rounding", 8, 53),          // 60
+    Array("level_world_min_x", 8, 53),       // 61
+    Array("level_world_min_y", 8, 53),       // 62
+    Array("level_world_min_z", 8, 53),       // 63
+    Array("level_world_max_x", 8, 53),       // 64
+    Array("level_world_max_y", 8, 53),       // 65
+    Array("level_world_max_z", 8, 53),       // 66
 };
 constexpr std::array kError{
     Scalar("protocol_version", 4),
@@ -158,30 +174,38 @@ constexpr std::array kStatusRequest{
     Scalar("request_id", 8),
 };
 constexpr std::array kStatusReply{
-    Scalar("protocol_version", 4),          // 0
-    Scalar("request_id", 8),                // 1
-    String("daemon_version"),               // 2
-    String("gl_renderer"),                  // 3
-    Scalar("uptime_ms", 8),                 // 4
-    Scalar("max_sessions", 4),              // 5
-    Scalar("steps_total", 8),               // 6
-    Scalar("errors_total", 8),              // 7
-    Scalar("rejected_messages_total", 8),   // 8
-    Count("num_sessions"),                  // 9
-    Array("session_id", 8, 9),              // 10
-    StringArray("session_client_name", 9),  // 11
-    Array("session_steps", 8, 9),           // 12
-    Array("session_objects", 4, 9),         // 13
-    Scalar("latency_p50_ms", 8),            // 14
-    Scalar("latency_p90_ms", 8),            // 15
-    Scalar("latency_p99_ms", 8),            // 16
-    Scalar("latency_max_ms", 8),            // 17
-    Scalar("latency_samples", 8),           // 18
-    Array("session_latency_p50_ms", 8, 9),  // 19
-    Array("session_latency_p99_ms", 8, 9),  // 20
-    Count("num_error_kinds"),               // 21
-    StringArray("error_kind", 21),          // 22
-    Array("error_count", 8, 21),            // 23
+    Scalar("protocol_version", 4),           // 0
+    Scalar("request_id", 8),                 // 1
+    String("daemon_version"),                // 2
+    String("daemon_name"),                   // 3
+    String("gl_renderer"),                   // 4
+    String("gl_device"),                     // 5
+    String("lcm_url"),                       // 6
+    String("channel_prefix"),                // 7
+    Scalar("uptime_ms", 8),                  // 8
+    Scalar("max_sessions", 4),               // 9
+    Scalar("max_sessions_per_user", 4),      // 10
+    Scalar("sessions_open", 4),              // 11
+    Scalar("steps_total", 8),                // 12
+    Scalar("errors_total", 8),               // 13
+    Scalar("rejected_messages_total", 8),    // 14
+    Scalar("latency_p50_ms", 8),             // 15
+    Scalar("latency_p90_ms", 8),             // 16
+    Scalar("latency_p99_ms", 8),             // 17
+    Scalar("latency_max_ms", 8),             // 18
+    Scalar("latency_samples", 8),            // 19
+    Count("num_sessions"),                   // 20
+    Array("session_id", 8, 20),              // 21
+    Array("session_uid", 4, 20),             // 22
+    StringArray("session_client_name", 20),  // 23
+    Array("session_steps", 8, 20),           // 24
+    Array("session_objects", 4, 20),         // 25
+    Array("session_triangles", 8, 20),       // 26
+    Array("session_latency_p50_ms", 8, 20),  // 27
+    Array("session_latency_p99_ms", 8, 20),  // 28
+    Count("num_error_kinds"),                // 29
+    StringArray("error_kind", 29),           // 30
+    Array("error_count", 8, 29),             // 31
 };
 
 struct TypeInfo {
@@ -197,9 +221,8 @@ const std::array<TypeInfo, 9>& Types() {
        kOpenSession},
       {MessageType::kOpenSessionReply, "open_session_reply_t",
        &far_lcm::open_session_reply_t::getHash, kOpenSessionReply},
-      {MessageType::kCloseSession, "close_session_t", &far_lcm::close_session_t::getHash,
-       kCloseSession},
-      {MessageType::kHeartbeat, "heartbeat_t", &far_lcm::heartbeat_t::getHash, kHeartbeat},
+      {MessageType::kSealed, "sealed_t", &far_lcm::sealed_t::getHash, kSealed},
+      {MessageType::kStepStatus, "step_status_t", &far_lcm::step_status_t::getHash, kStepStatus},
       {MessageType::kStepRequest, "step_request_t", &far_lcm::step_request_t::getHash,
        kStepRequest},
       {MessageType::kStepReply, "step_reply_t", &far_lcm::step_reply_t::getHash, kStepReply},

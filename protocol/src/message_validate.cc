@@ -70,12 +70,6 @@ Result<OpenSessionParams> ValidateOpenSession(const far_lcm::open_session_t& mes
     }
   }
   params.client_name = name;
-  if (!IsValidOpenReplyChannel(message.reply_channel)) {
-    return Invalid("open_session_t", "reply_channel",
-                   Quote(message.reply_channel) + " is not '" + std::string(kOpenReplyPrefix) +
-                       "' followed by 1..48 of [A-Za-z0-9_-]");
-  }
-  params.reply_channel = message.reply_channel;
   auto update = CheckRingBytes("update_ring_bytes", message.update_ring_bytes);
   if (!update) return update.error();
   auto reply = CheckRingBytes("reply_ring_bytes", message.reply_ring_bytes);
@@ -123,9 +117,7 @@ Result<StepCommand> ValidateStepRequest(const far_lcm::step_request_t& message) 
   } else if (auto method = ParseMethod(message.method)) {
     request.method = *method;
   } else {
-    return Invalid(
-        kType, "method",
-        Quote(message.method) + " is not one of " + MethodNames());
+    return Invalid(kType, "method", Quote(message.method) + " is not one of " + MethodNames());
   }
   if (auto mechanism = ParseMechanism(message.mechanism)) {
     request.mechanism = *mechanism;
@@ -136,9 +128,7 @@ Result<StepCommand> ValidateStepRequest(const far_lcm::step_request_t& message) 
   if (auto output = ParseOutput(message.output)) {
     request.output = *output;
   } else {
-    return Invalid(
-        kType, "output",
-        Quote(message.output) + " is not one of " + OutputNames());
+    return Invalid(kType, "output", Quote(message.output) + " is not one of " + OutputNames());
   }
   if (auto format = ParseDepthFormat(message.depth_format)) {
     request.depth_format = *format;
@@ -161,6 +151,10 @@ Result<StepCommand> ValidateStepRequest(const far_lcm::step_request_t& message) 
   if (auto ok = CheckStepRequest(request); !ok) {
     return MakeError(ok.error().code, std::string(kType) + "." + ok.error().message);
   }
+  if (message.timeout_ms < 0) {
+    return Invalid(kType, "timeout_ms", std::to_string(message.timeout_ms) + " is negative");
+  }
+  command.timeout_ms = message.timeout_ms;
   return command;
 }
 

@@ -114,25 +114,23 @@ far_lcm::step_reply_t MakeShmReplyStub(const far_lcm::step_reply_t& full, const 
 
 Result<std::vector<uint8_t>> EncodeStepReplyForTransport(const far_lcm::step_reply_t& full,
                                                          RingWriter& reply_ring,
-                                                         const SessionKey& key) {
+                                                         const SessionKey& key,
+                                                         int64_t seal_sequence) {
   auto encoded = EncodeMessage(full);
   if (!encoded) return encoded.error();
-  if (!ShouldUseShmReply(encoded->size())) {
-    if (auto ok = SignEncoded(*encoded, key); !ok) return ok.error();
-    return encoded;
+  if (ShouldUseShmReply(encoded->size())) {
+    auto ref = WriteShmReply(reply_ring, *encoded);
+    if (!ref) return ref.error();
+    encoded = EncodeMessage(MakeShmReplyStub(full, *ref));
+    if (!encoded) return encoded.error();
   }
-  auto ref = WriteShmReply(reply_ring, *encoded);
-  if (!ref) return ref.error();
-  return EncodeSigned(MakeShmReplyStub(full, *ref), key);
+  return SealEncoded(*encoded, full.session_id, seal_sequence, key);
 }
 
-Result<far_lcm::step_reply_t> ReceiveStepReply(const void* data, size_t size, const SessionKey& key,
+Result<far_lcm::step_reply_t> ReceiveStepReply(std::span<const uint8_t> inner,
                                                RingReader& reply_ring) {
-  auto reply = DecodeMessage<far_lcm::step_reply_t>(data, size, kMaxStepReplyBytes);
+  auto reply = DecodeMessage<far_lcm::step_reply_t>(inner.data(), inner.size(), kMaxStepReplyBytes);
   if (!reply) return reply.error();
-  if (auto ok = VerifyEncoded({static_cast<const uint8_t*>(data), size}, key); !ok) {
-    return ok.error();
-  }
   if (!reply->reply_in_shm) return reply;
 
   // A stub: fetch, check and decode the full reply.

@@ -1,6 +1,5 @@
 #include "far/protocol/shm_segment.h"
 
-#include <dirent.h>
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/mman.h>
@@ -8,7 +7,6 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <charconv>
 #include <cinttypes>
 #include <cstddef>
 #include <cstdio>
@@ -26,34 +24,6 @@ std::string Hex64(uint64_t value) {
   char text[24];
   std::snprintf(text, sizeof(text), "0x%016" PRIx64, value);
   return text;
-}
-
-bool AllDigits(std::string_view text) {
-  if (text.empty() || text.size() > 20) return false;
-  for (const char c : text) {
-    if (c < '0' || c > '9') return false;
-  }
-  return true;
-}
-
-// Splits "far-<pid>-<session>-<hex>" (no leading '/'); false when it does not have that form.
-bool SplitName(std::string_view name, std::string_view* pid) {
-  constexpr std::string_view kPrefix = "far-";
-  if (name.substr(0, kPrefix.size()) != kPrefix) return false;
-  name.remove_prefix(kPrefix.size());
-  const size_t first = name.find('-');
-  if (first == std::string_view::npos) return false;
-  const size_t second = name.find('-', first + 1);
-  if (second == std::string_view::npos) return false;
-  const std::string_view pid_text = name.substr(0, first);
-  const std::string_view session_text = name.substr(first + 1, second - first - 1);
-  const std::string_view hex = name.substr(second + 1);
-  if (!AllDigits(pid_text) || !AllDigits(session_text) || hex.size() != 32) return false;
-  for (const char c : hex) {
-    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return false;
-  }
-  if (pid != nullptr) *pid = pid_text;
-  return true;
 }
 
 // The constant part of a SegmentHeader, read field by field from a private copy of its bytes.
@@ -92,10 +62,6 @@ HeaderCopy CopyHeader(const uint8_t* bytes) {
 
 }  // namespace
 
-bool IsValidSegmentName(std::string_view name) {
-  return !name.empty() && name[0] == '/' && SplitName(name.substr(1), nullptr);
-}
-
 Result<std::unique_ptr<ShmSegment>> ShmSegment::Create(uint64_t session_id,
                                                        const SegmentOptions& options) {
   if (session_id == 0) {
@@ -114,33 +80,31 @@ Result<std::unique_ptr<ShmSegment>> ShmSegment::Create(uint64_t session_id,
   segment->owner_ = true;
   segment->layout_ = MakeSegmentLayout(options.update_ring_bytes, options.reply_ring_bytes);
 
-  // An unguessable name: 128 random bits.
-  uint8_t random[16];
-  RandomBytes(random, sizeof(random));
-  char hex[33];
-  for (size_t i = 0; i < sizeof(random); ++i) std::snprintf(hex + 2 * i, 3, "%02x", random[i]);
-  segment->name_ = "/far-" + std::to_string(getpid()) + "-" + std::to_string(session_id) + "-" +
-                   std::string(hex, 32);
-
-  // Create exclusively, owner-only; umask can only remove bits, fchmod makes it exact.
-  const int fd = shm_open(segment->name_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  segment->name_ = "far-session-" + std::to_string(session_id);
+  const int fd = memfd_create(segment->name_.c_str(), MFD_CLOEXEC | MFD_ALLOW_SEALING);
   if (fd < 0) {
-    return MakeError(ErrorCode::kUnavailable,
-                     "segment: shm_open(" + segment->name_ + ") failed: " + ErrnoText(errno));
+    return MakeError(ErrorCode::kUnavailable, "segment: memfd_create failed: " + ErrnoText(errno));
   }
   const uint64_t size = segment->layout_.segment_size;
   auto fail = [&](const char* what) {
     const int error = errno;
     close(fd);
-    shm_unlink(segment->name_.c_str());
-    return MakeError(ErrorCode::kUnavailable, "segment: " + std::string(what) + "(" +
-                                                  segment->name_ + ") failed: " + ErrnoText(error));
+    if (error == ENOSPC || error == ENOMEM) {
+      return MakeError(ErrorCode::kUnavailable, "segment: no memory for " + std::to_string(size) +
+                                                    " bytes of shared memory (" + what + ": " +
+                                                    ErrnoText(error) + ")");
+    }
+    return MakeError(ErrorCode::kUnavailable,
+                     "segment: " + std::string(what) + " failed: " + ErrnoText(error));
   };
-  if (fchmod(fd, 0600) != 0) return fail("fchmod");
   if (ftruncate(fd, static_cast<off_t>(size)) != 0) return fail("ftruncate");
+  // Every page now, so that running out of memory is this error and not a SIGBUS mid-step.
+  if (fallocate(fd, 0, 0, static_cast<off_t>(size)) != 0) return fail("fallocate");
+  if (fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0)
+    return fail("F_ADD_SEALS");
   void* base = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
   if (base == MAP_FAILED) return fail("mmap");
-  close(fd);
+  segment->fd_ = fd;
   segment->mapping_ = std::make_unique<internal::MappedRange>();
   segment->mapping_->base = static_cast<uint8_t*>(base);
   segment->mapping_->size = size;
@@ -163,42 +127,29 @@ Result<std::unique_ptr<ShmSegment>> ShmSegment::Create(uint64_t session_id,
   segment->header_ = header;
   if (access.faulted()) {
     return MakeError(ErrorCode::kUnavailable,
-                     "segment: " + segment->name_ + " could not be written (out of shm space?)");
+                     "segment: " + segment->name_ + " could not be written");
   }
   return segment;
 }
 
-Result<std::unique_ptr<ShmSegment>> ShmSegment::Open(std::string_view name, uint64_t session_id) {
-  if (!IsValidSegmentName(name)) {
-    return MakeError(ErrorCode::kInvalidArgument,
-                     "segment: '" + std::string(name.substr(0, 80)) +
-                         "' is not a far segment name (/far-<pid>-<session>-<32 hex>)");
-  }
+Result<std::unique_ptr<ShmSegment>> ShmSegment::Open(int fd, uint64_t session_id) {
   std::unique_ptr<ShmSegment> segment(new ShmSegment());
-  segment->name_ = std::string(name);
+  segment->name_ = "far-session-" + std::to_string(session_id);
   segment->session_id_ = session_id;
-  const int fd = shm_open(segment->name_.c_str(), O_RDWR | O_CLOEXEC | O_NOFOLLOW, 0);
-  if (fd < 0) {
-    const int error = errno;
-    return MakeError(error == ENOENT ? ErrorCode::kNotFound : ErrorCode::kUnavailable,
-                     "segment: shm_open(" + segment->name_ + ") failed: " + ErrnoText(error));
-  }
-  // The file itself: ours, owner-only, a plausible size.
+  if (fd < 0) return MakeError(ErrorCode::kInvalidArgument, "segment: no file descriptor");
   struct stat info {};
   if (fstat(fd, &info) != 0) {
     const int error = errno;
     close(fd);
     return MakeError(ErrorCode::kUnavailable, "segment: fstat failed: " + ErrnoText(error));
   }
-  if (!S_ISREG(info.st_mode) || info.st_uid != geteuid() || (info.st_mode & 07777) != 0600) {
+  // A sealed regular file: nobody can change its size under this mapping.
+  const int seals = fcntl(fd, F_GET_SEALS);
+  if (!S_ISREG(info.st_mode) || seals < 0 ||
+      (seals & (F_SEAL_SHRINK | F_SEAL_GROW)) != (F_SEAL_SHRINK | F_SEAL_GROW)) {
     close(fd);
-    char mode[8];
-    std::snprintf(mode, sizeof(mode), "%04o", static_cast<unsigned>(info.st_mode & 07777));
     return MakeError(ErrorCode::kPermissionDenied,
-                     "segment: " + segment->name_ + " is owned by uid " +
-                         std::to_string(info.st_uid) + " with mode " + mode +
-                         "; expected this user (uid " + std::to_string(geteuid()) +
-                         ") and mode 0600");
+                     "segment: the descriptor is not a memory file sealed against resizing");
   }
   const auto size = static_cast<uint64_t>(info.st_size);
   if (size < kRingAlignment + 2 * kMinRingCapacity ||
@@ -270,14 +221,12 @@ Result<std::unique_ptr<ShmSegment>> ShmSegment::Open(std::string_view name, uint
 
 ShmSegment::~ShmSegment() {
   if (mapping_ != nullptr) munmap(mapping_->base, mapping_->size);
-  if (owner_) Unlink();
+  CloseFd();
 }
 
-void ShmSegment::Unlink() {
-  if (owner_ && !unlinked_) {
-    shm_unlink(name_.c_str());
-    unlinked_ = true;
-  }
+void ShmSegment::CloseFd() {
+  if (fd_ >= 0) close(fd_);
+  fd_ = -1;
 }
 
 bool ShmSegment::faulted() const { return mapping_ != nullptr && mapping_->faulted != 0; }
@@ -302,30 +251,6 @@ RingRegion ShmSegment::update_ring() const {
 RingRegion ShmSegment::reply_ring() const {
   return Ring(layout_.reply_ring_offset, layout_.reply_ring_capacity, &header_->reply_write_index,
               &header_->reply_read_index, "reply ring");
-}
-
-int RemoveStaleSegments() {
-  DIR* dir = opendir("/dev/shm");
-  if (dir == nullptr) return 0;
-  int removed = 0;
-  const uid_t me = geteuid();
-  while (dirent* entry = readdir(dir)) {
-    const std::string_view name = entry->d_name;
-    std::string_view pid_text;
-    if (!SplitName(name, &pid_text)) continue;
-    // The name comes from a directory anyone can write to: parse without throwing.
-    int64_t pid = 0;
-    const auto parsed = std::from_chars(pid_text.data(), pid_text.data() + pid_text.size(), pid);
-    if (parsed.ec != std::errc() || pid <= 0 || pid > INT32_MAX || pid == getpid()) continue;
-    // Still running (or not ours to signal): leave it.
-    if (kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
-    struct stat info {};
-    const std::string path = "/dev/shm/" + std::string(name);
-    if (lstat(path.c_str(), &info) != 0 || !S_ISREG(info.st_mode) || info.st_uid != me) continue;
-    if (shm_unlink(("/" + std::string(name)).c_str()) == 0) ++removed;
-  }
-  closedir(dir);
-  return removed;
 }
 
 }  // namespace far::protocol

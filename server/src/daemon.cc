@@ -1,7 +1,6 @@
 #include "daemon.h"
 
 #include <chrono>
-#include <future>
 #include <mutex>
 #include <thread>
 
@@ -9,23 +8,32 @@
 #include "message_handlers.h"
 #include "replier.h"
 #include "session_registry.h"
-#include "step_runner.h"
+#include "session_worker.h"
+#include "socket_server.h"
+#include "status_reply.h"
 #include <spdlog/spdlog.h>
 
+#include "far/gpu/gl_context.h"
+#include "far/model/scene_budget.h"
+#include "far/pipeline/pipeline.h"
 #include "far/protocol/lcm_bus.h"
-#include "far/protocol/shm_segment.h"
+#include "far/protocol/local_socket.h"
 
 namespace far::server {
 
 struct Daemon::Impl {
   DaemonConfig config;
   std::unique_ptr<protocol::LcmBus> bus;
+  std::unique_ptr<protocol::LocalListener> listener;
   DaemonStats stats;
   SessionRegistry sessions{config};
+  SharedSceneBudget budget{config.max_vertices_total, config.max_triangles_total};
   std::unique_ptr<Replier> replier;
   std::unique_ptr<MessageHandlers> handlers;
-  std::unique_ptr<StepRunner> runner;
+  std::unique_ptr<WorkerContext> workers;
+  std::unique_ptr<StatusSources> status;
   std::atomic<bool> stop{false};
+  const std::chrono::steady_clock::time_point created = std::chrono::steady_clock::now();
   mutable std::mutex renderer_mutex;
   std::string renderer;
 
@@ -34,6 +42,8 @@ struct Daemon::Impl {
     return stop || (stop_flag != nullptr && stop_flag->load());
   }
   void ServeMessages(const std::atomic<bool>* stop_flag);
+  void CloseSession(int64_t id, const std::string& reason);
+  void CloseEverySession();
 };
 
 Daemon::Daemon(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -45,20 +55,41 @@ Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, Daemo
   auto bus = protocol::LcmBus::Create(config.lcm_url);
   if (!bus) return bus.error();
   impl->bus = std::move(*bus);
-  const int stale = protocol::RemoveStaleSegments();
-  if (stale > 0) spdlog::info("event=stale_segments_removed count={}", stale);
+  auto listener = protocol::LocalListener::Listen(SocketPathOf(config));
+  if (!listener) return listener.error();
+  impl->listener = std::move(*listener);
   impl->replier = std::make_unique<Replier>(*impl->bus, impl->stats);
   impl->handlers =
       std::make_unique<MessageHandlers>(impl->config, impl->sessions, *impl->replier, impl->stats);
-  impl->runner = std::make_unique<StepRunner>(impl->config, impl->sessions, *impl->handlers,
-                                              *impl->replier, impl->stats);
   impl->handlers->Subscribe(*impl->bus, std::move(hooks.before_message));
+  Impl* raw = impl.get();
+  impl->workers = std::make_unique<WorkerContext>(WorkerContext{
+      impl->config, *impl->replier, impl->stats, impl->budget, true,
+      [raw](int64_t id, const std::string& reason) { raw->CloseSession(id, reason); }});
   return std::unique_ptr<Daemon>(new Daemon(std::move(impl)));
 }
 
-// The LCM thread: handles messages and reaps silent sessions until stopped.
+// The daemon ends a session: its client is told (sealed, so it trusts it), then the worker
+// ends and the socket server closes the connection.
+void Daemon::Impl::CloseSession(int64_t id, const std::string& reason) {
+  auto session = sessions.Close(id);
+  if (!session) return;
+  replier->SessionError(*session, -1,
+                        MakeError(ErrorCode::kUnavailable, "session closed: " + reason), true);
+  spdlog::info("event=session_close session={} reason=\"{}\"", id, reason);
+}
+
+void Daemon::Impl::CloseEverySession() {
+  for (auto& session : sessions.CloseAll()) {
+    replier->SessionError(
+        *session, -1,
+        MakeError(ErrorCode::kUnavailable, "session closed: far-daemon is shutting down"), true);
+  }
+  sessions.ReapWorkers(/*wait=*/true);
+}
+
+// The LCM thread: handles step requests until stopped.
 void Daemon::Impl::ServeMessages(const std::atomic<bool>* stop_flag) {
-  auto last_reap = std::chrono::steady_clock::now();
   while (!Stopping(stop_flag)) {
     const bool handled = bus->Handle(std::chrono::milliseconds(100));
     // (a signal that stops the daemon also interrupts LCM's wait: not an error)
@@ -66,35 +97,37 @@ void Daemon::Impl::ServeMessages(const std::atomic<bool>* stop_flag) {
       spdlog::error("event=lcm_error lcm_url={}", config.lcm_url);
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
-    if (std::chrono::steady_clock::now() - last_reap > std::chrono::milliseconds(250)) {
-      handlers->ReapSilentSessions();
-      last_reap = std::chrono::steady_clock::now();
-    }
   }
 }
 
 Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   Impl& d = *impl_;
-  std::promise<Result<std::string>> ready;
-  auto renderer = ready.get_future();
-  std::thread gl([&d, p = std::move(ready)]() mutable { d.runner->Run(std::move(p)); });
-  auto made = renderer.get();
-  if (!made) {
-    gl.join();
-    return made.error();
-  }
+  // GL must work before anyone is served: each session makes its own context later.
+  std::string device;
   {
+    auto context = GlContext::Create(d.config.gl_platform);
+    if (!context) return context.error();
     std::lock_guard lock(d.renderer_mutex);
-    d.renderer = *made;
+    d.renderer = (*context)->renderer();
+    device = (*context)->platform_description();
+    // auto's GPU cost model, once for every session to come.
+    if (!MeasureGpuCost()) spdlog::warn("event=gpu_cost_unknown renderer=\"{}\"", d.renderer);
   }
-  d.handlers->set_renderer(*made);
-  spdlog::info("event=daemon_ready gl_renderer=\"{}\" lcm_url={} max_sessions={}", *made,
-               d.config.lcm_url, d.config.max_sessions);
+  d.status = std::make_unique<StatusSources>(
+      StatusSources{d.config, d.stats, d.sessions, d.renderer, device, d.created});
+  SocketServer server(std::move(d.listener), d.config, d.sessions, d.stats, *d.workers, *d.status);
+  std::atomic<bool> stop_socket{false};
+  std::thread socket_thread([&] { server.Run(stop_socket); });
+  spdlog::info(
+      "event=daemon_ready name={} socket={} gl_renderer=\"{}\" gl_device=\"{}\" "
+      "lcm_url={} max_sessions={}",
+      d.config.name, SocketPathOf(d.config), d.renderer, device, d.config.lcm_url,
+      d.config.max_sessions);
   d.ServeMessages(stop_flag);
-  // Drain: no new steps; the GL thread finishes the queued ones, then frees every session.
-  spdlog::info("event=daemon_stopping queued_steps={}", d.sessions.queued());
-  d.sessions.Stop();
-  gl.join();
+  spdlog::info("event=daemon_stopping sessions={}", d.sessions.size());
+  d.CloseEverySession();
+  stop_socket = true;
+  socket_thread.join();
   spdlog::info("event=daemon_stopped steps_total={}", d.stats.steps_total());
   return {};
 }

@@ -13,23 +13,36 @@
 namespace far::server {
 
 /// Everything far-daemon can be told, with defaults that work on the embedded llvmpipe.
-/// Read from a JSON file (keys as below) and overridden by command-line flags.
+/// Read from a JSON file (keys as below) and overridden by command-line flags. docs/daemon.md
+/// explains each.
 struct DaemonConfig {
+  // Where the daemon is.
+  std::string name = std::string(protocol::kDefaultDaemonName);  ///< socket and channel prefix
+  std::string socket_path;  ///< "" = protocol::DefaultSocketPath(name)
   std::string lcm_url = std::string(protocol::kDefaultLcmUrl);  ///< docs/protocol.md
-  int max_resolution = 4096;  ///< larger requests are refused: one GL thread serves all
   GlPlatform gl_platform = GlPlatform::kAuto;
+  int gpu = -1;  ///< EGL device index (far-daemon --gpu N); -1: the first that works
+  // Sessions.
   int max_sessions = 64;
-  int64_t max_triangles_per_session = 2'000'000;
+  int max_sessions_per_user = 16;
+  double max_opens_per_second_per_user = 20;  ///< sustained; bursts of as many
   int64_t max_objects_per_session = 100'000;
-  uint64_t ring_bytes = 64ull << 20;      ///< update ring per session (power of two): the most a
-                                          ///< client may ask for
-  uint64_t reply_bytes = 16ull << 20;     ///< reply ring per session (power of two): the same
+  int64_t max_triangles_per_session = 2'000'000;
+  int64_t max_vertices_per_session = 6'000'000;
+  int64_t max_triangles_total = 8'000'000;  ///< all sessions together
+  int64_t max_vertices_total = 16'000'000;  ///< all sessions together
+  uint64_t ring_bytes = 64ull << 20;        ///< update ring per session (power of two): the most a
+                                            ///< client may ask for
+  uint64_t reply_bytes = 16ull << 20;       ///< reply ring per session (power of two): the same
+  // Steps.
+  int max_resolution = 4096;              ///< larger requests are refused
   double max_requests_per_second = 2000;  ///< per session, sustained
   int max_queued_per_session = 4;
-  int max_queued_total = 256;
-  int heartbeat_timeout_ms = 5000;  ///< a session silent this long is closed
-  int exact_threads = 0;            ///< CPU pool for exact tests (0: all cores)
-  std::string log_level = "info";   ///< trace, debug, info, warn, error
+  int64_t max_reply_pairs = 2'000'000;  ///< contacts + distance pairs in one reply
+  int step_deadline_ms = 60'000;        ///< the longest a step may wait and run
+  int heavy_step_ms = 50;  ///< a session whose step takes longer runs at a lower CPU priority
+  int exact_threads = 0;   ///< CPU threads per session for the exact tests (0: all cores)
+  std::string log_level = "info";  ///< trace, debug, info, warn, error
 };
 
 /// Reads a JSON config file; unknown keys are errors (a typo must not be silently ignored).
@@ -39,8 +52,11 @@ Result<DaemonConfig> LoadDaemonConfig(const std::filesystem::path& path, DaemonC
 /// Checks ranges. Errors: kInvalidArgument naming the field and value.
 Result<void> ValidateDaemonConfig(const DaemonConfig& config);
 
-/// A session's scene budgets (max_objects_per_session, max_triangles_per_session; vertices at
-/// most three per triangle).
+/// The socket path: socket_path, or the default for the name.
+std::string SocketPathOf(const DaemonConfig& config);
+
+/// A session's scene budgets (max_objects_per_session, max_triangles_per_session,
+/// max_vertices_per_session).
 SceneLimits SceneLimitsOf(const DaemonConfig& config);
 
 /// What one record of a session's update ring may carry (a record never exceeds the session's

@@ -1,12 +1,15 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <map>
 #include <mutex>
 #include <string>
+#include <string_view>
 
 #include "latency_stats.h"
+#include <spdlog/spdlog.h>
 
 namespace far::server {
 
@@ -19,14 +22,27 @@ class DaemonStats {
     errors_by_kind_[kind]++;
     errors_total_++;
   }
-  /// Counts one message dropped before it reached a session: an error of its code, and one
-  /// more rejected message (each rejection is counted once in errors_total).
-  void CountRejected(const std::string& kind) {
+  /// Counts one message dropped unanswered before it reached a session (undecodable, not
+  /// authenticated, replayed, for no session): an error of its kind and one more rejected
+  /// message. Nobody is answered, and the log gets at most one line per kind every
+  /// kDropLogPeriod, with the count since the last one: a flood costs a counter, not a reply
+  /// and a log line per message.
+  void CountRejected(const std::string& kind, std::string_view example = {}) {
     std::lock_guard lock(mutex_);
     errors_by_kind_[kind]++;
     errors_total_++;
     rejected_total_++;
+    DropLog& log = drop_logs_[kind];
+    log.unlogged++;
+    const auto now = std::chrono::steady_clock::now();
+    if (log.last != std::chrono::steady_clock::time_point{} && now - log.last < kDropLogPeriod)
+      return;
+    spdlog::warn("event=messages_dropped kind={} count={} example=\"{}\"", kind, log.unlogged,
+                 example);
+    log.unlogged = 0;
+    log.last = now;
   }
+  static constexpr std::chrono::seconds kDropLogPeriod{10};
   /// Counts one step served in `ms` (request received to reply published).
   void CountStep(double ms) {
     std::lock_guard lock(mutex_);
@@ -65,6 +81,11 @@ class DaemonStats {
   int64_t rejected_total_ = 0;
   int64_t steps_total_ = 0;
   LatencyWindow latency_{8192};
+  struct DropLog {
+    int64_t unlogged = 0;
+    std::chrono::steady_clock::time_point last{};
+  };
+  std::map<std::string, DropLog> drop_logs_;
 };
 
 }  // namespace far::server

@@ -25,6 +25,17 @@ int main(int argc, char** argv) {
   std::string config_path, gl_platform;
   DaemonConfig flags;
   app.add_option("--config", config_path, "JSON config file (docs/daemon.md); flags override it");
+  auto* name = app.add_option("--name", flags.name,
+                              "this daemon's name: its socket <dir>/<name>.sock and LCM channel "
+                              "prefix; clients choose a daemon by name (far-client --daemon)")
+                   ->capture_default_str();
+  auto* socket = app.add_option("--socket", flags.socket_path,
+                                "socket path (default: /run/far/<name>.sock when /run/far "
+                                "exists, else $XDG_RUNTIME_DIR/far/<name>.sock, else "
+                                "/tmp/far-<uid>/<name>.sock)");
+  auto* gpu = app.add_option("--gpu", flags.gpu,
+                             "EGL device index of the GPU to use (see far-client status; "
+                             "implies --gl-platform device)");
   auto* url = app.add_option("--lcm-url", flags.lcm_url, "LCM URL")->capture_default_str();
   auto* platform =
       app.add_option("--gl-platform", gl_platform, "auto (default), device or surfaceless");
@@ -32,6 +43,9 @@ int main(int argc, char** argv) {
       app.add_option("--max-sessions", flags.max_sessions, "session limit")->capture_default_str();
   auto* triangles =
       app.add_option("--max-triangles", flags.max_triangles_per_session, "triangles per session")
+          ->capture_default_str();
+  auto* vertices =
+      app.add_option("--max-vertices", flags.max_vertices_per_session, "vertices per session")
           ->capture_default_str();
   auto* objects =
       app.add_option("--max-objects", flags.max_objects_per_session, "objects per session")
@@ -45,9 +59,12 @@ int main(int argc, char** argv) {
   auto* rate = app.add_option("--max-rate", flags.max_requests_per_second,
                               "step requests per second per session")
                    ->capture_default_str();
-  auto* heartbeat = app.add_option("--heartbeat-timeout-ms", flags.heartbeat_timeout_ms,
-                                   "close sessions silent this long")
-                        ->capture_default_str();
+  auto* per_user = app.add_option("--max-sessions-per-user", flags.max_sessions_per_user,
+                                  "sessions one user may hold")
+                       ->capture_default_str();
+  auto* deadline = app.add_option("--step-deadline-ms", flags.step_deadline_ms,
+                                  "the longest a step may wait and run")
+                       ->capture_default_str();
   auto* threads =
       app.add_option("--threads", flags.exact_threads, "CPU threads for exact tests (0: all)")
           ->capture_default_str();
@@ -65,6 +82,12 @@ int main(int argc, char** argv) {
     }
     config = *loaded;
   }
+  if (*name) config.name = flags.name;
+  if (*socket) config.socket_path = flags.socket_path;
+  if (*gpu) {
+    config.gpu = flags.gpu;
+    config.gl_platform = far::GlPlatform::kDevice;
+  }
   if (*url) config.lcm_url = flags.lcm_url;
   if (*platform) {
     if (gl_platform == "auto")
@@ -81,10 +104,12 @@ int main(int argc, char** argv) {
   if (*max_resolution) config.max_resolution = flags.max_resolution;
   if (*sessions) config.max_sessions = flags.max_sessions;
   if (*triangles) config.max_triangles_per_session = flags.max_triangles_per_session;
+  if (*vertices) config.max_vertices_per_session = flags.max_vertices_per_session;
   if (*objects) config.max_objects_per_session = flags.max_objects_per_session;
   if (*ring) config.ring_bytes = flags.ring_bytes;
   if (*rate) config.max_requests_per_second = flags.max_requests_per_second;
-  if (*heartbeat) config.heartbeat_timeout_ms = flags.heartbeat_timeout_ms;
+  if (*per_user) config.max_sessions_per_user = flags.max_sessions_per_user;
+  if (*deadline) config.step_deadline_ms = flags.step_deadline_ms;
   if (*threads) config.exact_threads = flags.exact_threads;
   if (*level) config.log_level = flags.log_level;
   if (auto ok = far::server::ValidateDaemonConfig(config); !ok) {
@@ -96,11 +121,12 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e level=%l %v");
   spdlog::set_level(spdlog::level::from_str(config.log_level));
 
-  // Ring records and meshes are large (a 10k-vertex update is 240 KB): keep such buffers on the
-  // heap for reuse instead of glibc's default fresh mmap (zero-filled pages) for every one of
-  // them, which cost more than the copies themselves (bench/RESULTS.md, ring ingest).
-  mallopt(M_MMAP_THRESHOLD, 256 << 20);
-  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+  // Memory goes back to the system when sessions close (malloc_trim after each, see
+  // SessionRegistry::ReapWorkers). Large buffers (meshes, ring records) stay on the heap up to
+  // 32 MiB for reuse rather than costing a fresh zero-filled mmap each (bench/RESULTS.md, ring
+  // ingest), and few arenas keep the many worker threads from scattering it.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_ARENA_MAX, 4);
 
   auto daemon = far::server::Daemon::Create(config);
   if (!daemon) {

@@ -2,9 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
-#include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/message.h"
+#include "far/protocol/shm_reply.h"
 
 namespace far::server {
 
@@ -14,35 +14,43 @@ void Replier::Publish(const std::string& channel, std::span<const uint8_t> bytes
   }
 }
 
-void Replier::PublishErrorMessage(int64_t session_id, const protocol::SessionKey* key,
-                                  int64_t request_id, const Error& error, bool session_closed) {
-  auto message = protocol::MakeErrorMessage(session_id, request_id, error, session_closed);
-  auto bytes =
-      key != nullptr ? protocol::EncodeSigned(message, *key) : protocol::EncodeMessage(message);
-  if (bytes) Publish(protocol::SessionReplyChannel(session_id), *bytes);
+void Replier::Seal(Session& session, std::span<const uint8_t> inner) {
+  auto sealed = protocol::SealEncoded(inner, session.id, session.next_reply_id++, session.key);
+  if (sealed) Publish(session.reply_channel, *sealed);
 }
 
-void Replier::SessionError(int64_t session_id, const protocol::SessionKey* key, int64_t request_id,
-                           const Error& error, bool session_closed) {
+Result<void> Replier::StepReply(Session& session, const far_lcm::step_reply_t& full) {
+  auto bytes = protocol::EncodeStepReplyForTransport(full, *session.replies, session.key,
+                                                     session.next_reply_id++);
+  if (!bytes) return bytes.error();
+  Publish(session.reply_channel, *bytes);
+  return {};
+}
+
+void Replier::StepError(Session& session, const protocol::StepCommand& command,
+                        const Error& error) {
   stats_.CountError(far::ToString(error.code));
-  PublishErrorMessage(session_id, key, request_id, error, session_closed);
+  const protocol::StepReplyIds ids{session.id, command.request_id, command.step_id,
+                                   session.applied_sequence.load()};
+  if (auto bytes = protocol::EncodeMessage(protocol::MakeStepErrorReply(ids, error)))
+    Seal(session, *bytes);
+  spdlog::info("event=step_error session={} step={} code={} reason=\"{}\"", session.id,
+               command.step_id, far::ToString(error.code), error.message);
 }
 
-void Replier::StepError(Session& session, int64_t step_id, const Error& error) {
+void Replier::StepStatus(Session& session, const StepJob& job, std::string_view state,
+                         int32_t queue_position, std::string_view stage) {
+  const auto message =
+      protocol::MakeStepStatus(session.id, job.command.request_id, job.command.step_id, state,
+                               queue_position, stage, MsBetween(job.received, Clock::now()));
+  if (auto bytes = protocol::EncodeMessage(message)) Seal(session, *bytes);
+}
+
+void Replier::SessionError(Session& session, int64_t request_id, const Error& error,
+                           bool session_closed) {
   stats_.CountError(far::ToString(error.code));
-  protocol::StepReplyIds ids{session.id, session.next_reply_id++, step_id,
-                             session.applied_sequence.load()};
-  auto bytes = protocol::EncodeSigned(protocol::MakeStepErrorReply(ids, error), session.key);
-  if (bytes) Publish(session.reply_channel, *bytes);
-  spdlog::info("event=step_error session={} step={} code={} reason=\"{}\"", session.id, step_id,
-               far::ToString(error.code), error.message);
-}
-
-void Replier::Reject(std::string_view channel, const Error& error, int64_t reply_session,
-                     int64_t request_id, bool session_closed, const protocol::SessionKey* key) {
-  stats_.CountRejected(far::ToString(error.code));
-  spdlog::warn("event=message_rejected channel={} reason=\"{}\"", channel, ToString(error));
-  if (reply_session > 0) PublishErrorMessage(reply_session, key, request_id, error, session_closed);
+  const auto message = protocol::MakeErrorMessage(session.id, request_id, error, session_closed);
+  if (auto bytes = protocol::EncodeMessage(message)) Seal(session, *bytes);
 }
 
 }  // namespace far::server

@@ -10,38 +10,33 @@
 
 #include "far/model/result.h"
 #include "far/protocol/lcm_bus.h"
-#include "far/protocol/session_auth.h"
 
 namespace far::server {
 
-/// Everything the daemon publishes on LCM goes through here, so that every error is counted
-/// once and logged once. Thread-safe (LcmBus::Publish is).
+/// Everything the daemon publishes on LCM goes through here: every message for a session is
+/// sealed with its key (only its client can read it), and every error is counted once.
+/// Thread-safe (LcmBus::Publish is; each session's sequence is atomic).
 class Replier {
  public:
   Replier(protocol::LcmBus& bus, DaemonStats& stats) : bus_(bus), stats_(stats) {}
 
-  /// Publishes bytes; a failure is logged, not returned (nobody to tell).
-  void Publish(const std::string& channel, std::span<const uint8_t> bytes);
-
-  /// An error_t on session `session_id`'s reply channel, counted under its code. Signed with
-  /// `key` when given, so that the session's client trusts it; unsigned for senders we cannot
-  /// authenticate.
-  void SessionError(int64_t session_id, const protocol::SessionKey* key, int64_t request_id,
-                    const Error& error, bool session_closed);
-
+  /// Seals an encoded session message (step_reply_t, step_status_t, error_t) for `session`
+  /// and publishes it on its reply channel.
+  void Seal(Session& session, std::span<const uint8_t> inner);
+  /// A step's reply (inline or through the reply ring). Errors: those of
+  /// EncodeStepReplyForTransport (nothing was published; answer with StepError).
+  Result<void> StepReply(Session& session, const far_lcm::step_reply_t& full);
   /// A failed step's reply (the client waits for a step_reply_t with its step id), counted.
-  void StepError(Session& session, int64_t step_id, const Error& error);
-
-  /// A message dropped before it reached a session: counted once (DaemonStats::CountRejected)
-  /// and logged. With `reply_session` > 0 an error_t also goes to that session's reply channel,
-  /// signed with `key` when the sender was authenticated (a replay), else unsigned.
-  void Reject(std::string_view channel, const Error& error, int64_t reply_session = 0,
-              int64_t request_id = -1, bool session_closed = false,
-              const protocol::SessionKey* key = nullptr);
+  void StepError(Session& session, const protocol::StepCommand& command, const Error& error);
+  /// Where a step is: "queued" (with its place), "started", or "stage" (with the stage).
+  void StepStatus(Session& session, const StepJob& job, std::string_view state,
+                  int32_t queue_position, std::string_view stage);
+  /// An error_t for the session (an authenticated message that cannot be answered otherwise,
+  /// or the end of the session), counted.
+  void SessionError(Session& session, int64_t request_id, const Error& error, bool session_closed);
 
  private:
-  void PublishErrorMessage(int64_t session_id, const protocol::SessionKey* key, int64_t request_id,
-                           const Error& error, bool session_closed);
+  void Publish(const std::string& channel, std::span<const uint8_t> bytes);
 
   protocol::LcmBus& bus_;
   DaemonStats& stats_;

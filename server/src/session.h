@@ -1,13 +1,19 @@
 #pragma once
 
+#include <sys/types.h>
+
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include "latency_stats.h"
+#include "rate_limiter.h"
 
 #include "far/pipeline/pipeline.h"
 #include "far/protocol/message_validate.h"
@@ -17,43 +23,55 @@
 
 namespace far::server {
 
-/// One client's session. Each field is owned by the thread its group names.
+using Clock = std::chrono::steady_clock;
+
+/// A validated step request waiting for its session's worker.
+struct StepJob {
+  protocol::StepCommand command;
+  Clock::time_point received;
+  Clock::time_point deadline;  ///< received + min(the client's timeout, step_deadline_ms)
+};
+
+/// One client's session. Each group of fields is owned by the thread its comment names; the
+/// queue is shared under `mutex`.
 struct Session {
   // Set at open, then read-only:
   int64_t id = 0;
+  uid_t uid = 0;
+  pid_t pid = 0;
   std::string client_name;
   std::string request_channel, reply_channel;
   protocol::SessionKey key{};
-  std::unique_ptr<protocol::ShmSegment> segment;  // destroyed (and unlinked) on the GL thread
   // LCM thread:
   int64_t last_request_id = -1;
-  // GL thread:
+  RateLimiter request_rate{1000, 50};
+  // Worker thread (session_worker.h), which also frees them when the session ends:
+  std::unique_ptr<protocol::ShmSegment> segment;
   std::unique_ptr<protocol::UpdateReader> updates;
   std::unique_ptr<protocol::RingWriter> replies;
-  std::unique_ptr<Pipeline> pipeline;  // made on the first step, with the GL context current
+  std::unique_ptr<Pipeline> pipeline;
+  bool demoted = false;  ///< runs at a lower CPU priority (its steps are heavy)
+  std::thread worker;    ///< joined by the registry (ReapWorkers)
+  // Shared under `mutex`:
+  std::mutex mutex;
+  std::condition_variable wake;
+  std::deque<StepJob> queue;
+  bool closing = false;
   // Any thread:
-  std::atomic<int64_t> last_heard_ms{0};
-  std::atomic<int64_t> next_reply_id{1};  // daemon -> client request_id, strictly increasing
+  std::atomic<bool> cancel{false};  ///< the running step stops at its next check
+  std::atomic<bool> worker_done{false};
+  std::atomic<int64_t> next_reply_id{1};  ///< daemon -> client sequence (sealed_t.request_id)
   std::atomic<int64_t> steps{0};
-  std::atomic<int64_t> last_step_id{-1};
   std::atomic<uint64_t> applied_sequence{0};
   std::atomic<int> num_objects{0};
+  std::atomic<int64_t> num_triangles{0};
   std::mutex latency_mutex;
   LatencyWindow latency{1024};
 };
 
-/// A validated step request waiting for the GL thread.
-struct StepJob {
-  std::shared_ptr<Session> session;
-  protocol::StepCommand command;
-  std::chrono::steady_clock::time_point received;
-};
-
-/// Milliseconds on the steady clock (heartbeat bookkeeping).
-inline int64_t NowMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+/// Milliseconds between two times.
+inline double MsBetween(Clock::time_point from, Clock::time_point to) {
+  return std::chrono::duration<double, std::milli>(to - from).count();
 }
 
 }  // namespace far::server

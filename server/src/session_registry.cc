@@ -1,17 +1,14 @@
 #include "session_registry.h"
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <string>
 
+#include "far/protocol/channels.h"
+
 namespace far::server {
 namespace {
-
-SchedulerLimits LimitsOf(const DaemonConfig& config) {
-  return SchedulerLimits{static_cast<size_t>(config.max_queued_per_session),
-                         static_cast<size_t>(config.max_queued_total),
-                         config.max_requests_per_second,
-                         std::max(8.0, config.max_requests_per_second / 20)};
-}
 
 // The segment of a new session, with the ring sizes its client asked for: smaller than the
 // daemon's are fine, larger ones are refused.
@@ -34,10 +31,8 @@ Result<std::unique_ptr<protocol::ShmSegment>> MakeSegment(const DaemonConfig& co
 
 }  // namespace
 
-SessionRegistry::SessionRegistry(const DaemonConfig& config)
-    : config_(config), scheduler_(LimitsOf(config)) {}
-
-Result<std::shared_ptr<Session>> SessionRegistry::Open(const protocol::OpenSessionParams& params) {
+Result<std::shared_ptr<Session>> SessionRegistry::Open(const protocol::OpenSessionParams& params,
+                                                       const protocol::PeerCredentials& peer) {
   int64_t id = 0;
   {
     std::lock_guard lock(mutex_);
@@ -47,22 +42,35 @@ Result<std::shared_ptr<Session>> SessionRegistry::Open(const protocol::OpenSessi
           ErrorCode::kLimitExceeded,
           "max_sessions: " + std::to_string(config_.max_sessions) + " sessions are open");
     }
+    const auto mine = std::count_if(sessions_.begin(), sessions_.end(), [&](const auto& entry) {
+      return entry.second->uid == peer.uid;
+    });
+    if (mine >= config_.max_sessions_per_user) {
+      return MakeError(ErrorCode::kLimitExceeded, "max_sessions_per_user: user " +
+                                                      std::to_string(peer.uid) + " has " +
+                                                      std::to_string(mine) + " sessions open");
+    }
     id = next_session_id_++;
   }
   auto segment = MakeSegment(config_, params, id);
   if (!segment) return segment.error();
   auto session = std::make_shared<Session>();
   session->id = id;
+  session->uid = peer.uid;
+  session->pid = peer.pid;
   session->segment = std::move(*segment);
   session->client_name = params.client_name;
   session->key = session->segment->session_key();
-  session->request_channel = protocol::SessionRequestChannel(id);
-  session->reply_channel = protocol::SessionReplyChannel(id);
+  const std::string prefix = protocol::ChannelPrefix(config_.name);
+  session->request_channel = protocol::SessionRequestChannel(prefix, id);
+  session->reply_channel = protocol::SessionReplyChannel(prefix, id);
   session->updates = std::make_unique<protocol::UpdateReader>(session->segment->update_ring(),
                                                               RingLimitsOf(config_));
   session->replies = std::make_unique<protocol::RingWriter>(session->segment->reply_ring());
-  session->last_heard_ms = NowMs();
+  session->request_rate = RateLimiter(config_.max_requests_per_second,
+                                      std::max(8.0, config_.max_requests_per_second / 20));
   std::lock_guard lock(mutex_);
+  if (stopping_) return MakeError(ErrorCode::kUnavailable, "the daemon is shutting down");
   sessions_[id] = session;
   return session;
 }
@@ -73,43 +81,6 @@ std::shared_ptr<Session> SessionRegistry::Find(int64_t id) const {
   return it == sessions_.end() ? nullptr : it->second;
 }
 
-std::optional<SessionRegistry::Closed> SessionRegistry::Close(int64_t id) {
-  Closed closed;
-  {
-    std::lock_guard lock(mutex_);
-    auto it = sessions_.find(id);
-    if (it == sessions_.end()) return std::nullopt;
-    closed.session = it->second;
-    sessions_.erase(it);
-    closed.pending = scheduler_.RemoveSession(id);
-    to_free_.push_back(closed.session);
-  }
-  work_.notify_one();
-  return closed;
-}
-
-Result<void> SessionRegistry::Queue(StepJob job) {
-  {
-    std::lock_guard lock(mutex_);
-    if (stopping_) return MakeError(ErrorCode::kUnavailable, "the daemon is shutting down");
-    const int64_t id = job.session->id;
-    if (auto ok = scheduler_.Push(id, std::move(job)); !ok) return ok;
-  }
-  work_.notify_one();
-  return {};
-}
-
-SessionRegistry::Work SessionRegistry::WaitForWork(std::chrono::milliseconds timeout) {
-  Work work;
-  std::unique_lock lock(mutex_);
-  work_.wait_for(lock, timeout,
-                 [&] { return stopping_ || scheduler_.size() > 0 || !to_free_.empty(); });
-  work.freed.swap(to_free_);
-  if (auto next = scheduler_.Pop()) work.job = std::move(next->second);
-  work.done = stopping_ && !work.job && work.freed.empty();
-  return work;
-}
-
 std::vector<std::shared_ptr<Session>> SessionRegistry::Sessions() const {
   std::lock_guard lock(mutex_);
   std::vector<std::shared_ptr<Session>> open;
@@ -117,34 +88,72 @@ std::vector<std::shared_ptr<Session>> SessionRegistry::Sessions() const {
   return open;
 }
 
-std::vector<int64_t> SessionRegistry::Silent(int64_t now_ms, int64_t timeout_ms) const {
+size_t SessionRegistry::size() const {
   std::lock_guard lock(mutex_);
-  std::vector<int64_t> silent;
-  for (const auto& [id, session] : sessions_) {
-    if (now_ms - session->last_heard_ms > timeout_ms) silent.push_back(id);
+  return sessions_.size();
+}
+
+namespace {
+// Tells a session's worker to end: the running step stops, the queue is dropped.
+void EndSession(Session& session) {
+  session.cancel = true;
+  {
+    std::lock_guard lock(session.mutex);
+    session.closing = true;
+    session.queue.clear();
   }
-  return silent;
+  session.wake.notify_all();
+}
+}  // namespace
+
+std::shared_ptr<Session> SessionRegistry::Close(int64_t id) {
+  std::shared_ptr<Session> session;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = sessions_.find(id);
+    if (it == sessions_.end()) return nullptr;
+    session = it->second;
+    sessions_.erase(it);
+    closed_.push_back(session);
+  }
+  EndSession(*session);
+  return session;
 }
 
-std::vector<std::shared_ptr<Session>> SessionRegistry::TakeAll() {
-  std::lock_guard lock(mutex_);
+std::vector<std::shared_ptr<Session>> SessionRegistry::CloseAll() {
   std::vector<std::shared_ptr<Session>> all;
-  for (auto& [id, session] : sessions_) all.push_back(std::move(session));
-  sessions_.clear();
-  return all;
-}
-
-void SessionRegistry::Stop() {
   {
     std::lock_guard lock(mutex_);
     stopping_ = true;
+    for (auto& [id, session] : sessions_) all.push_back(session);
+    sessions_.clear();
+    closed_.insert(closed_.end(), all.begin(), all.end());
   }
-  work_.notify_all();
+  for (auto& session : all) EndSession(*session);
+  return all;
 }
 
-size_t SessionRegistry::queued() const {
-  std::lock_guard lock(mutex_);
-  return scheduler_.size();
+int SessionRegistry::ReapWorkers(bool wait) {
+  std::vector<std::shared_ptr<Session>> ended;
+  {
+    std::lock_guard lock(mutex_);
+    auto keep = std::partition(closed_.begin(), closed_.end(), [&](const auto& session) {
+      return !wait && !session->worker_done.load();
+    });
+    ended.assign(keep, closed_.end());
+    closed_.erase(keep, closed_.end());
+  }
+  for (auto& session : ended) {
+    if (session->worker.joinable()) session->worker.join();
+  }
+  const int joined = static_cast<int>(ended.size());
+  if (joined > 0) {
+    ended.clear();  // the last references: segments and pipelines are gone now
+    // Give the freed memory back to the system (glibc keeps it in its arenas otherwise), so
+    // that the daemon's RSS returns to its baseline once sessions close.
+    malloc_trim(0);
+  }
+  return joined;
 }
 
 }  // namespace far::server

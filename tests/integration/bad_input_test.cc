@@ -1,8 +1,11 @@
-// Hostile input against a real far-daemon: every bad message or ring record gets an error reply
-// that names the problem, the session (where it can) goes on, and a second, well-behaved client
-// is still served. Messages are built by hand with far::protocol (RawSession), so each test
-// sends exactly the bytes it means to.
+// Hostile input against a real far-daemon. A message that cannot be authenticated (garbage,
+// truncated, forged, replayed, for another session) is dropped unanswered and counted; an
+// authenticated request or ring record that is bad gets a sealed error reply that names the
+// problem; the session (where it can) goes on, and a second, well-behaved client is still
+// served. Messages are built by hand with far::protocol (RawSession), so each test sends
+// exactly the bytes it means to.
 #include <fcntl.h>
+#include <linux/falloc.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -76,33 +79,24 @@ bool ContainsAll(const std::string& text, std::initializer_list<std::string_view
   return ::testing::AssertionSuccess();
 }
 
-// An error_t for `request_id` arrived, signed or not as `want_signed` says, with `code` and
-// a message containing `parts`.
-::testing::AssertionResult ErrorReply(RawSession& raw, int64_t request_id, ErrorCode code,
-                                      bool want_signed,
-                                      std::initializer_list<std::string_view> parts,
-                                      std::optional<bool> session_closed = std::nullopt) {
-  auto reply = raw.WaitError(request_id);
-  if (!reply) return ::testing::AssertionFailure() << "no error_t with request_id " << request_id;
-  const far_lcm::error_t& e = *reply->error;
-  if (reply->signed_ok != want_signed) {
-    return ::testing::AssertionFailure() << "error_t signed_ok " << reply->signed_ok << ", want "
-                                         << want_signed << ": " << e.message;
+// The daemon's count of messages it dropped unanswered.
+int64_t RejectedTotal() {
+  auto status = client::Client::Status(TestClientOptions("counter"));
+  return status ? status->rejected_messages_total : -1;
+}
+
+// `count` messages sent since the count was `before` were dropped: the daemon counted them,
+// and nothing at all came back on the session's reply channel (no answer helps a flood, and
+// none may carry what the sender wrote).
+::testing::AssertionResult Dropped(RawSession& raw, int64_t before, int count) {
+  if (!WaitUntil([&] { return RejectedTotal() >= before + count; }, std::chrono::seconds(5))) {
+    return ::testing::AssertionFailure()
+           << "rejected_messages_total " << RejectedTotal() << ", want " << before + count;
   }
-  if (e.status != ToWireStatus(code) || e.status_name != far::ToString(code)) {
-    return ::testing::AssertionFailure() << "expected " << far::ToString(code) << ", got "
-                                         << e.status << " (" << e.status_name << "): " << e.message;
-  }
-  if (e.session_id != raw.id())
-    return ::testing::AssertionFailure() << "session_id " << e.session_id;
-  if (session_closed && e.session_closed != *session_closed) {
-    return ::testing::AssertionFailure() << "session_closed " << e.session_closed;
-  }
-  std::string missing;
-  if (!ContainsAll(e.message, parts, &missing)) {
-    return ::testing::AssertionFailure() << "message lacks \"" << missing << "\": " << e.message;
-  }
-  return ::testing::AssertionSuccess() << e.message;
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  if (const auto replies = raw.RawReplies(); !replies.empty())
+    return ::testing::AssertionFailure() << replies.size() << " messages came back";
+  return ::testing::AssertionSuccess();
 }
 
 // Copies bytes into the ring's byte stream at `index` (wrapping), as a writer that ignores
@@ -117,7 +111,7 @@ class BadInputTest : public DaemonTest {
   void SetUp() override {
     // A small update ring so that scribbling and capacity cases are quick.
     ASSERT_NE(StartDaemon({"--ring-bytes", "1048576"}), nullptr);
-    auto session = RawSession::Open(TestLcmUrl(), "hostile");
+    auto session = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "hostile");
     ASSERT_TRUE(session.ok()) << far::ToString(session.error());
     raw_ = std::move(*session);
   }
@@ -134,39 +128,31 @@ class BadInputTest : public DaemonTest {
   std::unique_ptr<RawSession> raw_;
 };
 
-TEST_F(BadInputTest, TruncatedStepRequestGetsAParseErrorNamingTheField) {
+TEST_F(BadInputTest, TruncatedStepRequestsAreDroppedUnanswered) {
   auto message = protocol::MakeStepRequest(raw_->id(), raw_->NextRequestId(), 0, 0, SmallRequest());
   auto bytes = protocol::EncodeSigned(message, raw_->key());
   ASSERT_TRUE(bytes.ok());
-  // Cut inside request_id (bytes 52..59): the pre-scan names it.
-  bytes->resize(56);
-  ASSERT_TRUE(raw_->PublishRequest(*bytes).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, -1, ErrorCode::kParseError, false,
-                         {"step_request_t.request_id", "truncated"}));
-  // Cut at the end of a string: its length runs past the end.
-  bytes = protocol::EncodeSigned(message, raw_->key());
-  bytes->resize(bytes->size() - 40);
-  ASSERT_TRUE(raw_->PublishRequest(*bytes).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, -1, ErrorCode::kParseError, false, {"step_request_t."}));
+  const int64_t before = RejectedTotal();
+  // Cut inside request_id, and at the end of a string.
+  auto cut = *bytes;
+  cut.resize(56);
+  ASSERT_TRUE(raw_->PublishRequest(cut).ok());
+  cut = *bytes;
+  cut.resize(cut.size() - 40);
+  ASSERT_TRUE(raw_->PublishRequest(cut).ok());
+  EXPECT_TRUE(Dropped(*raw_, before, 2));
   ExpectSessionStillWorks(1);
   EXPECT_TRUE(HealthyClientSteps());
 }
 
-TEST_F(BadInputTest, GarbageMessagesGetParseErrorsAndTheDaemonGoesOn) {
+TEST_F(BadInputTest, GarbageMessagesAreDroppedAndTheDaemonGoesOn) {
   std::mt19937_64 random(7);
   std::vector<uint8_t> garbage(300);
   for (auto& b : garbage) b = static_cast<uint8_t>(random());
+  const int64_t before = RejectedTotal();
   ASSERT_TRUE(raw_->PublishRequest(garbage).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, -1, ErrorCode::kParseError, false,
-                         {"fingerprint", "is not a far_lcm type"}));
-  const std::vector<uint8_t> tiny = {1, 2, 3};
-  ASSERT_TRUE(raw_->PublishRequest(tiny).ok());
-  EXPECT_TRUE(
-      ErrorReply(*raw_, -1, ErrorCode::kParseError, false, {"too short for an LCM fingerprint"}));
-  const std::vector<uint8_t> empty;
-  ASSERT_TRUE(raw_->PublishRequest(empty).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, -1, ErrorCode::kParseError, false, {"too short"}));
-
+  ASSERT_TRUE(raw_->PublishRequest(std::vector<uint8_t>{1, 2, 3}).ok());
+  ASSERT_TRUE(raw_->PublishRequest(std::vector<uint8_t>{}).ok());
   // A step request whose method string claims 2^31 - 1 bytes (LCM's decode would allocate).
   auto message = protocol::MakeStepRequest(raw_->id(), raw_->NextRequestId(), 0, 0, SmallRequest());
   auto bytes = protocol::EncodeSigned(message, raw_->key());
@@ -177,9 +163,6 @@ TEST_F(BadInputTest, GarbageMessagesGetParseErrorsAndTheDaemonGoesOn) {
   (*bytes)[method_length_at + 2] = 0xff;
   (*bytes)[method_length_at + 3] = 0xff;
   ASSERT_TRUE(raw_->PublishRequest(*bytes).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, -1, ErrorCode::kParseError, false,
-                         {"step_request_t.method", "runs past the end"}));
-
   // A daemon-to-client type sent to the daemon.
   far_lcm::step_reply_t reply{};
   reply.protocol_version = protocol::kProtocolVersion;
@@ -191,61 +174,46 @@ TEST_F(BadInputTest, GarbageMessagesGetParseErrorsAndTheDaemonGoesOn) {
   auto reply_bytes = protocol::EncodeSigned(reply, raw_->key());
   ASSERT_TRUE(reply_bytes.ok());
   ASSERT_TRUE(raw_->PublishRequest(*reply_bytes).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, -1, ErrorCode::kInvalidArgument, false,
-                         {"step_reply_t", "not a client-to-daemon"}));
-
-  // Garbage where no session can be answered: the open and status channels.
-  ASSERT_TRUE(raw_->listener().Publish(std::string(protocol::kOpenChannel), garbage).ok());
-  ASSERT_TRUE(raw_->listener().Publish(std::string(protocol::kStatusChannel), garbage).ok());
-  ASSERT_TRUE(raw_->listener().Publish(std::string(protocol::kOpenChannel), tiny).ok());
-
+  EXPECT_TRUE(Dropped(*raw_, before, 5));
   ExpectSessionStillWorks(1);
   EXPECT_TRUE(HealthyClientSteps());
-  auto status = client::Client::Status(TestLcmUrl(), std::chrono::seconds(3));
+  auto status = client::Client::Status(TestClientOptions("status"));
   ASSERT_TRUE(status.ok());
-  EXPECT_GE(status->rejected_messages_total, 8);
+  bool parse_errors = false;
+  for (const auto& [kind, count] : status->errors_by_kind) parse_errors |= kind == "parse_error";
+  EXPECT_TRUE(parse_errors) << "dropped messages are counted by kind";
 }
 
-TEST_F(BadInputTest, WrongProtocolVersionIsAVersionMismatch) {
-  // A session message of protocol version 2.
+TEST_F(BadInputTest, WrongProtocolVersionIsDroppedOrRefusedInTheAskersTerms) {
+  // A session message of another protocol version: dropped (it cannot be authenticated).
   auto message = protocol::MakeStepRequest(raw_->id(), raw_->NextRequestId(), 0, 0, SmallRequest());
   message.protocol_version = protocol::kProtocolVersion + 1;
   auto bytes = protocol::EncodeSigned(message, raw_->key());
   ASSERT_TRUE(bytes.ok());
+  const int64_t before = RejectedTotal();
   ASSERT_TRUE(raw_->PublishRequest(*bytes).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, -1, ErrorCode::kVersionMismatch, false,
-                         {"step_request_t.protocol_version: got 3, expected 2"}));
+  EXPECT_TRUE(Dropped(*raw_, before, 1));
 
-  // An open request of protocol version 2 gets a version_mismatch open_session_reply_t.
-  auto listener = Listener::Create(TestLcmUrl());
-  ASSERT_TRUE(listener.ok());
-  const std::string channel = RandomOpenReplyChannel();
-  (*listener)->Subscribe(channel);
-  (*listener)->Start();
-  far_lcm::open_session_t open = MakeOpenSession(channel, "from-the-future");
+  // An open request of another version gets a version_mismatch answer on the socket.
+  far_lcm::open_session_t open = MakeOpenSession("from-the-future");
   open.protocol_version = protocol::kProtocolVersion + 1;
-  auto open_bytes = protocol::EncodeMessage(open);
-  ASSERT_TRUE(open_bytes.ok());
-  ASSERT_TRUE((*listener)->Publish(std::string(protocol::kOpenChannel), *open_bytes).ok());
-  auto got = (*listener)->WaitFor([&](const Received& r) { return r.channel == channel; },
-                                  std::chrono::seconds(5));
-  ASSERT_TRUE(got.has_value()) << "no open_session_reply_t for a version 2 open request";
-  auto reply = protocol::DecodeMessage<far_lcm::open_session_reply_t>(
-      got->bytes.data(), got->bytes.size(), protocol::kMaxControlMessageBytes);
+  auto answer = AskDaemon(CurrentSocketPath(), *protocol::EncodeMessage(open));
+  ASSERT_TRUE(answer.ok()) << far::ToString(answer.error());
+  auto reply = protocol::DecodeMessageAnyVersion<far_lcm::open_session_reply_t>(
+      answer->data(), answer->size(), protocol::kMaxControlMessageBytes);
   ASSERT_TRUE(reply.ok()) << far::ToString(reply.error());
   EXPECT_EQ(reply->request_id, open.request_id);
   EXPECT_EQ(reply->status, ToWireStatus(ErrorCode::kVersionMismatch));
   EXPECT_EQ(reply->status_name, "version_mismatch");
-  EXPECT_NE(reply->message.find("protocol_version: got 3, expected 2"), std::string::npos)
+  EXPECT_NE(reply->message.find("protocol_version: got 4, expected 3"), std::string::npos)
       << reply->message;
   EXPECT_EQ(reply->session_id, 0);
-  EXPECT_EQ(reply->shm_name, "");
 
   ExpectSessionStillWorks(1);
   EXPECT_TRUE(HealthyClientSteps());
 }
 
-TEST_F(BadInputTest, UnknownOrMismatchedSessionIsRefused) {
+TEST_F(BadInputTest, MessagesForUnknownOrOtherSessionsAreDropped) {
   // A session that does not exist (signed with some key: it cannot be checked anyway).
   constexpr int64_t kUnknown = 987654;
   protocol::SessionKey some_key{};
@@ -253,67 +221,41 @@ TEST_F(BadInputTest, UnknownOrMismatchedSessionIsRefused) {
   auto message = protocol::MakeStepRequest(kUnknown, 1, 0, 0, SmallRequest());
   auto bytes = protocol::EncodeSigned(message, some_key);
   ASSERT_TRUE(bytes.ok());
-  ASSERT_TRUE(raw_->listener().Publish(protocol::SessionRequestChannel(kUnknown), *bytes).ok());
-  auto got = raw_->listener().WaitFor(
-      [&](const Received& r) { return r.channel == protocol::SessionReplyChannel(kUnknown); },
-      std::chrono::seconds(5));
-  ASSERT_TRUE(got.has_value()) << "no answer on " << protocol::SessionReplyChannel(kUnknown);
-  auto error = DecodeError(got->bytes);
-  ASSERT_TRUE(error.has_value());
-  EXPECT_EQ(error->status, ToWireStatus(ErrorCode::kNotFound));
-  EXPECT_EQ(error->session_id, kUnknown);
-  EXPECT_EQ(error->request_id, 1);
-  EXPECT_TRUE(error->session_closed);
-  EXPECT_NE(error->message.find("no open session 987654"), std::string::npos) << error->message;
-
+  const int64_t before = RejectedTotal();
+  ASSERT_TRUE(
+      raw_->listener().Publish(protocol::SessionRequestChannel("FAR_", kUnknown), *bytes).ok());
   // Our session's channel, another session id in the message.
   auto other =
       protocol::MakeStepRequest(raw_->id() + 5, raw_->NextRequestId(), 0, 0, SmallRequest());
-  auto other_bytes = protocol::EncodeSigned(other, raw_->key());
-  ASSERT_TRUE(raw_->PublishRequest(*other_bytes).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, other.request_id, ErrorCode::kInvalidArgument, false,
-                         {"session_id", "does not match channel"}));
-
-  // A channel name that only looks like a session's.
+  ASSERT_TRUE(raw_->PublishRequest(*protocol::EncodeSigned(other, raw_->key())).ok());
+  EXPECT_TRUE(Dropped(*raw_, before, 2));
+  // A channel name that only looks like a session's is not even delivered to the daemon.
   ASSERT_TRUE(raw_->listener().Publish("FAR_S0001_REQ", *bytes).ok());
-
   ExpectSessionStillWorks(1);
   EXPECT_TRUE(HealthyClientSteps());
 }
 
-TEST_F(BadInputTest, ForgedTagsAreRefusedAndDoNotAdvanceTheReplayWindow) {
+TEST_F(BadInputTest, ForgedTagsAreDroppedAndDoNotAdvanceTheReplayWindow) {
   // A tag made with the wrong key, with a request id far ahead.
   protocol::SessionKey wrong = raw_->key();
   wrong[0] ^= 1;
   auto forged = protocol::MakeStepRequest(raw_->id(), 1000, 0, 0, SmallRequest());
   auto bytes = protocol::EncodeSigned(forged, wrong);
   ASSERT_TRUE(bytes.ok());
+  const int64_t before = RejectedTotal();
   ASSERT_TRUE(raw_->PublishRequest(*bytes).ok());
-  EXPECT_TRUE(
-      ErrorReply(*raw_, 1000, ErrorCode::kPermissionDenied, false, {"auth", "does not match"}));
   // No tag at all (zero auth), and a valid tag over changed bytes.
-  auto unsigned_bytes = protocol::EncodeMessage(forged);
-  ASSERT_TRUE(raw_->PublishRequest(*unsigned_bytes).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, 1000, ErrorCode::kPermissionDenied, false, {"auth"}));
+  ASSERT_TRUE(raw_->PublishRequest(*protocol::EncodeMessage(forged)).ok());
   auto tampered = protocol::EncodeSigned(forged, raw_->key());
-  tampered->back() ^= 0x40;  // the last byte of `distance`
+  tampered->back() ^= 0x40;  // a byte of timeout_ms
   ASSERT_TRUE(raw_->PublishRequest(*tampered).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, 1000, ErrorCode::kPermissionDenied, false, {"auth"}));
-  // A forged heartbeat and close are refused too; the session stays open.
-  far_lcm::close_session_t close{};
-  close.protocol_version = protocol::kProtocolVersion;
-  close.session_id = raw_->id();
-  close.request_id = 1001;
-  auto close_bytes = protocol::EncodeSigned(close, wrong);
-  ASSERT_TRUE(raw_->PublishRequest(*close_bytes).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, 1001, ErrorCode::kPermissionDenied, false, {"auth"}));
-
+  EXPECT_TRUE(Dropped(*raw_, before, 3));
   // The real client's next request id (small) still works: forgeries did not move the window.
   ExpectSessionStillWorks(0);
   EXPECT_TRUE(HealthyClientSteps());
 }
 
-TEST_F(BadInputTest, ReplayedRequestIsRefusedWithASignedError) {
+TEST_F(BadInputTest, ReplayedRequestIsDroppedUnanswered) {
   ASSERT_TRUE(raw_->writer().AddObject(1, TriangleRow(1), Motion::kRigid, Pose{}).ok());
   auto message = protocol::MakeStepRequest(raw_->id(), raw_->NextRequestId(), 0,
                                            raw_->writer().last_sequence(), SmallRequest());
@@ -321,10 +263,11 @@ TEST_F(BadInputTest, ReplayedRequestIsRefusedWithASignedError) {
   ASSERT_TRUE(bytes.ok());
   ASSERT_TRUE(raw_->PublishRequest(*bytes).ok());
   ASSERT_TRUE(StepSucceeds(*raw_, 0));
+  raw_->listener().Clear();
   // The same bytes again (a sniffed message replayed).
+  const int64_t before = RejectedTotal();
   ASSERT_TRUE(raw_->PublishRequest(*bytes).ok());
-  EXPECT_TRUE(ErrorReply(*raw_, message.request_id, ErrorCode::kInvalidArgument, true,
-                         {"request_id", "replayed"}, false));
+  EXPECT_TRUE(Dropped(*raw_, before, 1));
   ExpectSessionStillWorks(1);
   EXPECT_TRUE(HealthyClientSteps());
 }
@@ -358,7 +301,7 @@ TEST_F(BadInputTest, WriteIndexOrRecordSizePastTheCapacityIsAFramingError) {
                         {"write_index", "more than the capacity", "ring is corrupt"}));
 
   // A second session: a whole ring "committed", and a record claiming nearly 4 GiB.
-  auto second = RawSession::Open(TestLcmUrl(), "hostile-2");
+  auto second = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "hostile-2");
   ASSERT_TRUE(second.ok()) << far::ToString(second.error());
   const protocol::RingRegion ring2 = (*second)->segment().update_ring();
   const protocol::RecordHeader huge{static_cast<uint32_t>(protocol::RecordType::kSetVertices),
@@ -370,7 +313,7 @@ TEST_F(BadInputTest, WriteIndexOrRecordSizePastTheCapacityIsAFramingError) {
       StepFails(**second, 0, ErrorCode::kParseError, {"size 4294967288", "runs past the end"}));
 
   // A third: a record size that is not a multiple of 8, and one smaller than its header.
-  auto third = RawSession::Open(TestLcmUrl(), "hostile-3");
+  auto third = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "hostile-3");
   ASSERT_TRUE(third.ok()) << far::ToString(third.error());
   const protocol::RingRegion ring3 = (*third)->segment().update_ring();
   const protocol::RecordHeader odd{static_cast<uint32_t>(protocol::RecordType::kRemoveObject), 20,
@@ -382,7 +325,7 @@ TEST_F(BadInputTest, WriteIndexOrRecordSizePastTheCapacityIsAFramingError) {
 
   // A commit sequence beyond what was written is a plain error: nothing is consumed and the
   // same request works once the records are there.
-  auto fourth = RawSession::Open(TestLcmUrl(), "hostile-4");
+  auto fourth = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "hostile-4");
   ASSERT_TRUE(fourth.ok()) << far::ToString(fourth.error());
   ASSERT_TRUE((*fourth)->writer().AddObject(1, TriangleRow(1), Motion::kRigid, Pose{}).ok());
   ASSERT_TRUE((*fourth)->SendStep(0, SmallRequest(), 2).ok());
@@ -502,7 +445,8 @@ TEST_F(BadInputTest, RingScribbledWhileTheDaemonReadsGetsErrorsNotACrash) {
   for (int s = 0; s < 4; ++s) {
     SCOPED_TRACE("session " + std::to_string(s));
     const bool payload_only = s % 2 == 0;
-    auto session = RawSession::Open(TestLcmUrl(), "scribbled-" + std::to_string(s));
+    auto session =
+        RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "scribbled-" + std::to_string(s));
     ASSERT_TRUE(session.ok()) << far::ToString(session.error());
     RawSession& raw = **session;
     const protocol::RingRegion ring = raw.segment().update_ring();
@@ -594,82 +538,60 @@ TEST_F(BadInputTest, RingScribbledWhileTheDaemonReadsGetsErrorsNotACrash) {
   EXPECT_TRUE(HealthyClientSteps());
 }
 
-TEST_F(BadInputTest, SegmentTruncatedByTheClientIsAnErrorNotASigbus) {
+TEST_F(BadInputTest, TheClientCannotResizeTheSegmentAndHolesAreZerosNotASigbus) {
   DaemonProcess& daemon = *daemons_.front();
   ASSERT_TRUE(raw_->writer().AddObject(1, TriangleRow(2), Motion::kRigid, Pose{}).ok());
-  // Shrink the segment under the daemon's mapping: its next ring access would raise SIGBUS.
-  const int fd = shm_open(raw_->shm_name().c_str(), O_RDWR, 0);
-  ASSERT_GE(fd, 0);
-  ASSERT_EQ(ftruncate(fd, 4096), 0);
-  close(fd);
+  // Shrinking would make the daemon's next ring access raise SIGBUS: the seals forbid it.
+  ASSERT_GE(raw_->segment_fd(), 0);
+  EXPECT_NE(ftruncate(raw_->segment_fd(), 4096), 0);
+  EXPECT_EQ(errno, EPERM);
+  // Punching a hole is allowed, and reads back zeros: the records the daemon reads are then
+  // nonsense, which is an error for this session only.
+  const auto& layout = raw_->segment().layout();
+  ASSERT_EQ(fallocate(raw_->segment_fd(), FALLOC_FL_PUNCH_HOLE | FALLOC_FL_KEEP_SIZE,
+                      static_cast<off_t>(layout.update_ring_offset),
+                      static_cast<off_t>(layout.update_ring_capacity)),
+            0);
   ASSERT_TRUE(raw_->SendStep(0, SmallRequest()).ok());
-  EXPECT_TRUE(StepFails(*raw_, 0, ErrorCode::kParseError, {"truncated by its peer"}));
-  // The segment can never be read again: the daemon ends the session and tells its client.
-  auto closed =
-      raw_->WaitReply([](const ReplyMessage& m) { return m.error && m.error->session_closed; });
-  ASSERT_TRUE(closed.has_value()) << "no session_closed error_t";
-  EXPECT_TRUE(closed->signed_ok);
-  EXPECT_NE(closed->error->message.find("truncated"), std::string::npos) << closed->error->message;
-  EXPECT_TRUE(WaitUntil([&] { return !ShmExists(raw_->shm_name()); }, std::chrono::seconds(3)));
+  EXPECT_TRUE(StepFails(*raw_, 0, ErrorCode::kParseError, {"update ring"}));
   EXPECT_TRUE(daemon.Running());
   EXPECT_TRUE(HealthyClientSteps());
 }
 
-TEST_F(BadInputTest, OpenRequestsAreCheckedAndAnsweredOnlyWhereAsked) {
-  auto listener = Listener::Create(TestLcmUrl());
-  ASSERT_TRUE(listener.ok());
-  const std::string channel = RandomOpenReplyChannel();
-  (*listener)->Subscribe(channel);
-  (*listener)->Subscribe("FAR_S[0-9]+_REPLY");
-  (*listener)->Start();
-  auto open_and_wait =
+TEST_F(BadInputTest, OpenRequestsAreCheckedAndAnsweredOnTheirOwnConnection) {
+  auto ask =
       [&](const far_lcm::open_session_t& open) -> std::optional<far_lcm::open_session_reply_t> {
-    auto bytes = protocol::EncodeMessage(open);
-    EXPECT_TRUE(bytes.ok());
-    EXPECT_TRUE((*listener)->Publish(std::string(protocol::kOpenChannel), *bytes).ok());
-    auto got = (*listener)->WaitFor([&](const Received& r) { return r.channel == channel; },
-                                    std::chrono::seconds(5));
-    if (!got) return std::nullopt;
+    auto answer = AskDaemon(CurrentSocketPath(), *protocol::EncodeMessage(open));
+    if (!answer) return std::nullopt;
     auto reply = protocol::DecodeMessage<far_lcm::open_session_reply_t>(
-        got->bytes.data(), got->bytes.size(), protocol::kMaxControlMessageBytes);
+        answer->data(), answer->size(), protocol::kMaxControlMessageBytes);
     if (!reply) return std::nullopt;
     return *reply;
   };
-
-  far_lcm::open_session_t bad_name = MakeOpenSession(channel, "evil\nlevel=error event=forged");
-  auto reply = open_and_wait(bad_name);
+  auto reply = ask(MakeOpenSession("evil\nlevel=error event=forged"));
   ASSERT_TRUE(reply.has_value());
   EXPECT_EQ(reply->status, ToWireStatus(ErrorCode::kInvalidArgument));
   EXPECT_NE(reply->message.find("client_name"), std::string::npos) << reply->message;
   EXPECT_EQ(reply->message.find('\n'), std::string::npos)
       << "client text must be escaped: " << reply->message;
 
-  far_lcm::open_session_t bad_ring = MakeOpenSession(channel, "odd-ring");
+  far_lcm::open_session_t bad_ring = MakeOpenSession("odd-ring");
   bad_ring.update_ring_bytes = 100000;
-  reply = open_and_wait(bad_ring);
+  reply = ask(bad_ring);
   ASSERT_TRUE(reply.has_value());
   EXPECT_EQ(reply->status, ToWireStatus(ErrorCode::kInvalidArgument));
   EXPECT_NE(reply->message.find("update_ring_bytes"), std::string::npos) << reply->message;
 
-  // A reply channel that is another session's: the daemon must not publish there.
-  (*listener)->Clear();
-  far_lcm::open_session_t hijack = MakeOpenSession(raw_->reply_channel(), "hijacker");
-  auto hijack_bytes = protocol::EncodeMessage(hijack);
-  ASSERT_TRUE((*listener)->Publish(std::string(protocol::kOpenChannel), *hijack_bytes).ok());
-  far_lcm::open_session_t other = MakeOpenSession("FAR_STATUS_REPLY", "hijacker-2");
-  ASSERT_TRUE((*listener)
-                  ->Publish(std::string(protocol::kOpenChannel), *protocol::EncodeMessage(other))
-                  .ok());
-  auto leaked = (*listener)->WaitFor(
-      [&](const Received& r) {
-        auto type = protocol::IdentifyMessage(r.bytes.data(), r.bytes.size());
-        return type.ok() && *type == protocol::MessageType::kOpenSessionReply;
-      },
-      std::chrono::milliseconds(500));
-  EXPECT_FALSE(leaked.has_value()) << "open_session_reply_t published on " << leaked->channel;
-  auto status = client::Client::Status(TestLcmUrl(), std::chrono::seconds(3));
+  // A first message that is neither an open nor a status request: no answer at all.
+  const int64_t before = RejectedTotal();
+  auto garbage = AskDaemon(CurrentSocketPath(), std::vector<uint8_t>(64, 0x41),
+                           std::chrono::milliseconds(1000));
+  ASSERT_FALSE(garbage.ok());
+  EXPECT_EQ(garbage.error().code, ErrorCode::kUnavailable) << garbage.error().message;
+  EXPECT_TRUE(WaitUntil([&] { return RejectedTotal() > before; }, std::chrono::seconds(3)));
+  auto status = client::Client::Status(TestClientOptions("status"));
   ASSERT_TRUE(status.ok());
-  EXPECT_EQ(status->sessions.size(), 1u) << "only the hostile session is open";
+  EXPECT_EQ(status->sessions_open, 1) << "only the hostile session is open";
   EXPECT_TRUE(HealthyClientSteps());
 }
 
@@ -708,7 +630,7 @@ TEST_F(BadInputTest, StepFloodIsAnsweredWithBusyWhileOthersAreServed) {
 }
 
 TEST_F(BadInputTest, ResolutionOverTheDaemonsLimitIsRefused) {
-  // One GL thread serves every session: a huge viewport from one client would stall the rest.
+  // A huge viewport costs every session its share of the GPU: the daemon caps it.
   ASSERT_TRUE(raw_->writer().AddObject(1, TriangleRow(2), Motion::kRigid, Pose{}).ok());
   StepRequest request = SmallRequest();
   request.resolution = 8192;  // valid on the wire, over the default max_resolution 4096
@@ -777,9 +699,10 @@ class LimitsTest : public DaemonTest {};
 
 TEST_F(LimitsTest, CountsOverTheLimitsAreLimitExceeded) {
   // Room for the healthy client's scene (8 objects, 192 triangles), little more.
-  ASSERT_NE(StartDaemon({"--max-triangles", "200", "--max-objects", "8", "--max-sessions", "3"}),
+  ASSERT_NE(StartDaemon({"--max-triangles", "200", "--max-vertices", "600", "--max-objects", "8",
+                         "--max-sessions", "3"}),
             nullptr);
-  auto session = RawSession::Open(TestLcmUrl(), "greedy");
+  auto session = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "greedy");
   ASSERT_TRUE(session.ok()) << far::ToString(session.error());
   RawSession& raw = **session;
 
@@ -831,25 +754,26 @@ TEST_F(LimitsTest, CountsOverTheLimitsAreLimitExceeded) {
   EXPECT_TRUE(StepSucceeds(raw, 5));
 
   // Sessions: 3 allowed; the fourth open is refused with a reason.
-  auto second = RawSession::Open(TestLcmUrl(), "greedy-2");
+  auto second = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "greedy-2");
   ASSERT_TRUE(second.ok());
-  auto third = RawSession::Open(TestLcmUrl(), "greedy-3");
+  auto third = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "greedy-3");
   ASSERT_TRUE(third.ok());
   auto fourth = client::Client::Connect(TestClientOptions("one-too-many"));
   ASSERT_FALSE(fourth.ok());
   EXPECT_EQ(fourth.error().code, ErrorCode::kLimitExceeded);
   EXPECT_NE(fourth.error().message.find("max_sessions"), std::string::npos)
       << fourth.error().message;
-  // Closing one makes room for the healthy client.
-  far_lcm::close_session_t close{};
-  close.protocol_version = protocol::kProtocolVersion;
-  close.session_id = (*third)->id();
-  close.request_id = (*third)->NextRequestId();
-  auto close_bytes = protocol::EncodeSigned(close, (*third)->key());
-  ASSERT_TRUE((*third)->PublishRequest(*close_bytes).ok());
-  const std::string third_shm = (*third)->shm_name();
-  EXPECT_TRUE(WaitUntil([&] { return !ShmExists(third_shm); }, std::chrono::seconds(3)))
-      << third_shm << " still exists after close_session_t";
+  // Closing one (its client lets go of the connection) makes room for the healthy client.
+  const std::string third_segment = (*third)->segment().name();
+  const pid_t daemon_pid = daemons_.front()->pid();
+  (*third)->Disconnect();
+  EXPECT_TRUE(WaitUntil(
+      [&] {
+        const auto mapped = SessionSegmentsOf(daemon_pid);
+        return std::find(mapped.begin(), mapped.end(), third_segment) == mapped.end();
+      },
+      std::chrono::seconds(3)))
+      << third_segment << " is still mapped by the daemon after its client left";
   EXPECT_TRUE(HealthyClientSteps());
 }
 

@@ -1,6 +1,5 @@
 #include "daemon_process.h"
 
-#include <dirent.h>
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -10,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -53,7 +53,19 @@ bool HasFlag(const std::vector<std::string>& args, const std::string& flag) {
   return false;
 }
 
+// The value of "--flag value" in args, or "".
+std::string FlagValue(const std::vector<std::string>& args, const std::string& flag) {
+  for (size_t i = 0; i + 1 < args.size(); ++i) {
+    if (args[i] == flag) return args[i + 1];
+  }
+  return "";
+}
+
+std::string g_current_socket;
+
 }  // namespace
+
+std::string CurrentSocketPath() { return g_current_socket; }
 
 std::string TestLcmUrl() { return std::string(protocol::kDefaultLcmUrl); }
 
@@ -73,6 +85,8 @@ TempDir::~TempDir() {
 
 DaemonProcess::DaemonProcess(std::vector<std::string> args) : args_(std::move(args)) {
   log_path_ = dir_.path() / "far-daemon.log";
+  socket_path_ = FlagValue(args_, "--socket");
+  if (socket_path_.empty()) socket_path_ = (dir_.path() / "far.sock").string();
 }
 
 DaemonProcess::~DaemonProcess() {
@@ -85,6 +99,7 @@ Result<void> DaemonProcess::Start(std::chrono::milliseconds ready_timeout) {
   std::vector<std::string> args = {FAR_DAEMON_PATH};
   if (!HasFlag(args_, "--lcm-url")) args.insert(args.end(), {"--lcm-url", TestLcmUrl()});
   if (!HasFlag(args_, "--log-level")) args.insert(args.end(), {"--log-level", "info"});
+  if (!HasFlag(args_, "--socket")) args.insert(args.end(), {"--socket", socket_path_});
   args.insert(args.end(), args_.begin(), args_.end());
   std::vector<char*> argv = CArgs(args);
   // Everything the child needs is prepared before fork: it only dup2s and execs.
@@ -102,6 +117,10 @@ Result<void> DaemonProcess::Start(std::chrono::milliseconds ready_timeout) {
     return MakeError(ErrorCode::kUnavailable, std::string("fork: ") + std::strerror(errno));
 
   // Ready when it answers a status request.
+  g_current_socket = socket_path_;
+  client::ClientOptions options;
+  options.socket_path = socket_path_;
+  options.connect_timeout = std::chrono::milliseconds(300);
   const auto deadline = Clock::now() + ready_timeout;
   while (Clock::now() < deadline) {
     if (!Running()) {
@@ -109,7 +128,7 @@ Result<void> DaemonProcess::Start(std::chrono::milliseconds ready_timeout) {
                                                     std::to_string(DecodeStatus(exit_status_)) +
                                                     " during start-up; log:\n" + Log());
     }
-    auto status = client::Client::Status(TestLcmUrl(), std::chrono::milliseconds(300));
+    auto status = client::Client::Status(options);
     if (status) return {};
   }
   return MakeError(ErrorCode::kUnavailable, "far-daemon did not answer within " +
@@ -299,29 +318,24 @@ std::string SelfPath() { return std::filesystem::read_symlink("/proc/self/exe").
 
 ProcessResult RunFarClient(const std::vector<std::string>& args,
                            std::chrono::milliseconds timeout) {
-  std::vector<std::string> argv = {FAR_CLIENT_PATH, "--lcm-url", TestLcmUrl()};
+  std::vector<std::string> argv = {FAR_CLIENT_PATH};
+  if (!HasFlag(args, "--socket") && !HasFlag(args, "--daemon"))
+    argv.insert(argv.end(), {"--socket", CurrentSocketPath()});
   argv.insert(argv.end(), args.begin(), args.end());
   return RunProcess(argv, timeout);
 }
 
-bool ShmExists(const std::string& shm_name) { return ShmMode(shm_name) >= 0; }
-
-int ShmMode(const std::string& shm_name) {
-  struct stat info {};
-  if (stat(("/dev/shm" + shm_name).c_str(), &info) != 0) return -1;
-  return static_cast<int>(info.st_mode & 07777);
-}
-
-std::vector<std::string> ShmSegmentsOf(pid_t daemon_pid) {
+std::vector<std::string> SessionSegmentsOf(pid_t pid) {
+  std::ifstream maps("/proc/" + std::to_string(pid) + "/maps");
   std::vector<std::string> names;
-  const std::string prefix = "far-" + std::to_string(daemon_pid) + "-";
-  DIR* dir = opendir("/dev/shm");
-  if (dir == nullptr) return names;
-  while (dirent* entry = readdir(dir)) {
-    const std::string name = entry->d_name;
-    if (name.rfind(prefix, 0) == 0) names.push_back("/" + name);
+  std::string line;
+  while (std::getline(maps, line)) {
+    const size_t at = line.find("/memfd:far-session-");
+    if (at == std::string::npos) continue;
+    std::string name = line.substr(at + 7);  // after "/memfd:"
+    name = name.substr(0, name.find(' '));
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
   }
-  closedir(dir);
   return names;
 }
 
@@ -337,7 +351,7 @@ bool WaitUntil(const std::function<bool()>& condition, std::chrono::milliseconds
 client::ClientOptions TestClientOptions(const std::string& name,
                                         std::chrono::milliseconds timeout) {
   client::ClientOptions options;
-  options.lcm_url = TestLcmUrl();
+  options.socket_path = CurrentSocketPath();
   options.client_name = name;
   options.timeout = timeout;
   return options;

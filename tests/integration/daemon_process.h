@@ -1,8 +1,8 @@
 #pragma once
 
 // Real processes for the integration tests: far-daemon started with fork/exec (its output in a
-// log file that a failing test prints), far-client runs with their output captured, and the
-// shared-memory files the daemon leaves in /dev/shm.
+// log file that a failing test prints, its socket in a folder of its own), far-client runs with
+// their output captured, and the session segments a daemon has mapped.
 //
 // Every test runs in its own network namespace (deploy/netns-run.sh, set as the test target's
 // CROSSCOMPILING_EMULATOR), so the default udpm URL reaches only the processes of that test.
@@ -39,8 +39,10 @@ class TempDir {
 };
 
 /// One far-daemon process. Start() forks and execs FAR_DAEMON_PATH with `args` (plus
-/// --lcm-url and --log-level unless given), its stdout and stderr in a log file, then waits
-/// until it answers a status request (Client::Status, retried for up to `ready_timeout`).
+/// --lcm-url, --log-level and --socket <its folder>/far.sock unless given), its stdout and
+/// stderr in a log file, then waits until it answers a status request (Client::Status,
+/// retried for up to `ready_timeout`). The most recently started daemon's socket is the one
+/// TestClientOptions and RunFarClient use.
 /// Stop() sends SIGTERM and waits (bounded) for the exit status. The destructor SIGKILLs a
 /// process that is still running, so no test leaves one behind whatever fails.
 class DaemonProcess {
@@ -62,6 +64,8 @@ class DaemonProcess {
   bool Running();
 
   pid_t pid() const { return pid_; }
+  /// Its socket (--socket).
+  const std::string& socket_path() const { return socket_path_; }
   /// The whole log so far (stdout and stderr of the daemon).
   std::string Log() const;
   /// The log file's path.
@@ -71,6 +75,7 @@ class DaemonProcess {
   std::vector<std::string> args_;
   TempDir dir_;
   std::filesystem::path log_path_;
+  std::string socket_path_;
   pid_t pid_ = -1;
   int exit_status_ = -1;  // raw waitpid status once reaped
 };
@@ -113,21 +118,21 @@ class ChildProcess {
 /// The path of this test binary (/proc/self/exe).
 std::string SelfPath();
 
-/// Runs FAR_CLIENT_PATH with `args`.
+/// The socket of the most recently started DaemonProcess ("" before any).
+std::string CurrentSocketPath();
+
+/// Runs FAR_CLIENT_PATH with `args` (and --socket CurrentSocketPath() unless `args` name a
+/// socket or a daemon).
 ProcessResult RunFarClient(const std::vector<std::string>& args,
                            std::chrono::milliseconds timeout = std::chrono::seconds(60));
 
-/// True when /dev/shm holds the segment `shm_name` ("/far-...").
-bool ShmExists(const std::string& shm_name);
-/// The mode bits (st_mode & 07777) of the segment, or -1 when it does not exist.
-int ShmMode(const std::string& shm_name);
-/// Names ("/far-<pid>-...") of the segments in /dev/shm made by the daemon with this pid.
-std::vector<std::string> ShmSegmentsOf(pid_t daemon_pid);
+/// The session segments ("far-session-<id>") the process `pid` has mapped (/proc/<pid>/maps).
+std::vector<std::string> SessionSegmentsOf(pid_t pid);
 
 /// Waits until `condition` holds, checking every 20 ms, up to `timeout`. Returns whether it held.
 bool WaitUntil(const std::function<bool()>& condition, std::chrono::milliseconds timeout);
 
-/// Client options for the tests: the test URL, a name, a timeout.
+/// Client options for the tests: the current daemon's socket, a name, a step timeout.
 client::ClientOptions TestClientOptions(
     const std::string& name, std::chrono::milliseconds timeout = std::chrono::seconds(5));
 

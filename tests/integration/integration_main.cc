@@ -1,6 +1,6 @@
 // far_integration_test's main. Besides running the tests, the binary is its own misbehaving
-// client: `far_integration_test --far-half-writer <mode>` opens a session, prints
-// "<session id> <shm name> <key hex>" on stdout, then writes part of an update and dies
+// client: `far_integration_test --far-half-writer <mode> <socket>` opens a session, prints
+// "<session id> <segment name> <key hex>" on stdout, then writes part of an update and dies
 // (tests/integration/session_lifetime_test.cc starts it with fork/exec: a forked copy of a
 // multi-threaded test process must not go on to use LCM or malloc-heavy code).
 #include <signal.h>
@@ -23,8 +23,8 @@
 namespace far::integration {
 namespace {
 
-int HalfWriterMain(const std::string& mode) {
-  auto session = RawSession::Open(TestLcmUrl(), "half-writer-" + mode);
+int HalfWriterMain(const std::string& mode, const std::string& socket) {
+  auto session = RawSession::Open(socket, TestLcmUrl(), "half-writer-" + mode);
   if (!session) {
     std::fprintf(stderr, "half-writer: %s\n", far::ToString(session.error()).c_str());
     return 2;
@@ -36,7 +36,7 @@ int HalfWriterMain(const std::string& mode) {
     std::snprintf(hex, sizeof(hex), "%02x", b);
     key += hex;
   }
-  std::printf("%lld %s %s\n", static_cast<long long>(raw.id()), raw.shm_name().c_str(),
+  std::printf("%lld %s %s\n", static_cast<long long>(raw.id()), raw.segment().name().c_str(),
               key.c_str());
   std::fflush(stdout);
   const protocol::RingRegion ring = raw.segment().update_ring();
@@ -86,7 +86,7 @@ int HalfWriterMain(const std::string& mode) {
 }  // namespace far::integration
 
 int main(int argc, char** argv) {
-  // LCM udpm traffic must stay inside a private network namespace (DESIGN.md). ctest runs
+  // LCM udpm traffic must stay inside a private network namespace (docs/daemon.md). ctest runs
   // this binary through deploy/netns-run.sh (the target's CROSSCOMPILING_EMULATOR); run by
   // hand, it re-executes itself through it.
   const char* in_netns = std::getenv("FAR_IN_NETNS");
@@ -101,8 +101,8 @@ int main(int argc, char** argv) {
                  std::strerror(errno));
     return 1;
   }
-  if (argc == 3 && std::strcmp(argv[1], "--far-half-writer") == 0) {
-    return far::integration::HalfWriterMain(argv[2]);
+  if (argc == 4 && std::strcmp(argv[1], "--far-half-writer") == 0) {
+    return far::integration::HalfWriterMain(argv[2], argv[3]);
   }
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

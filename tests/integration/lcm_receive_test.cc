@@ -301,17 +301,17 @@ TEST_F(LcmForgedDatagramTest, WrapAroundPairKillsNeitherTheDaemonNorItsClients) 
   // itself receives there: with the unpatched LCM it dies here).
   uint32_t seqno = 100;
   for (const std::string& channel :
-       {std::string(protocol::kOpenChannel), std::string(protocol::kStatusChannel),
-        protocol::SessionRequestChannel((*client)->session_id()),
-        protocol::SessionReplyChannel((*client)->session_id())}) {
+       {protocol::SessionRequestChannel("FAR_", (*client)->session_id()),
+        protocol::SessionRequestChannel("FAR_", 999),
+        protocol::SessionReplyChannel("FAR_", (*client)->session_id())}) {
     SCOPED_TRACE(channel);
     RawSender sender;
     for (const Bytes& datagram : WrapAroundPair(seqno++, channel)) {
       ASSERT_TRUE(sender.Send(datagram));
     }
-    // The daemon answers a status request sent after the pair, so it handled the pair.
-    auto status = client::Client::Status(TestLcmUrl(), std::chrono::seconds(3));
-    EXPECT_TRUE(status.ok()) << far::ToString(status.error());
+    // A step sent after the pair is answered: both ends handled the pair and live on.
+    auto step = (*client)->Step(SmallRequest());
+    EXPECT_TRUE(step.ok()) << far::ToString(step.error());
     ASSERT_TRUE(daemon->Running()) << "far-daemon died:\n" << daemon->Log();
   }
 
@@ -325,14 +325,14 @@ TEST_F(LcmForgedDatagramTest, WrapAroundPairKillsNeitherTheDaemonNorItsClients) 
 TEST_F(LcmForgedDatagramTest, IncompleteFragmentedMessagesNeverReachTheDaemon) {
   DaemonProcess* daemon = StartDaemon();
   ASSERT_NE(daemon, nullptr);
-  auto session = RawSession::Open(TestLcmUrl(), "forged-fragments");
+  auto session = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "forged-fragments");
   ASSERT_TRUE(session.ok()) << far::ToString(session.error());
   RawSession& raw = **session;
-  auto before = client::Client::Status(TestLcmUrl(), std::chrono::seconds(3));
+  auto before = client::Client::Status(TestClientOptions("status"));
   ASSERT_TRUE(before.ok());
 
-  // On the session's request channel liblcm 1.3.1 delivered each of these to the daemon, which
-  // answered with an unsigned error_t quoting bytes of the garbage (issue 12).
+  // On the session's request channel liblcm 1.3.1 delivered each of these to the daemon (which
+  // then quoted bytes of freed heap in an unsigned error): the patched LCM delivers none.
   for (const std::vector<Bytes>& datagrams : IncompleteMessages(raw.request_channel())) {
     RawSender sender;
     for (const Bytes& datagram : datagrams) ASSERT_TRUE(sender.Send(datagram));
@@ -343,10 +343,7 @@ TEST_F(LcmForgedDatagramTest, IncompleteFragmentedMessagesNeverReachTheDaemon) {
   auto reply = raw.WaitStepReply(1);
   ASSERT_TRUE(reply.has_value());
   EXPECT_EQ(reply->status, 0) << reply->message;
-  auto error = raw.WaitError(-1, std::chrono::milliseconds(200));
-  EXPECT_FALSE(error.has_value()) << "the daemon got a forged message: " << error->error->message;
-
-  auto after = client::Client::Status(TestLcmUrl(), std::chrono::seconds(3));
+  auto after = client::Client::Status(TestClientOptions("status"));
   ASSERT_TRUE(after.ok());
   EXPECT_EQ(after->rejected_messages_total, before->rejected_messages_total);
   EXPECT_TRUE(HealthyClientSteps("after-incomplete"));

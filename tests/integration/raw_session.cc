@@ -1,5 +1,7 @@
 #include "raw_session.h"
 
+#include <unistd.h>
+
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/shm_reply.h"
@@ -72,13 +74,6 @@ std::vector<Received> Listener::Snapshot() {
 
 // ---- helpers -------------------------------------------------------------------------------
 
-std::optional<far_lcm::error_t> DecodeError(std::span<const uint8_t> bytes) {
-  auto error = protocol::DecodeMessage<far_lcm::error_t>(bytes.data(), bytes.size(),
-                                                         protocol::kMaxControlMessageBytes);
-  if (!error) return std::nullopt;
-  return *error;
-}
-
 StepRequest SmallRequest(Method method) {
   StepRequest request;
   request.method = method;
@@ -88,143 +83,126 @@ StepRequest SmallRequest(Method method) {
   return request;
 }
 
-far_lcm::open_session_t MakeOpenSession(const std::string& reply_channel, const std::string& name) {
+far_lcm::open_session_t MakeOpenSession(const std::string& name) {
   far_lcm::open_session_t open{};
   open.protocol_version = protocol::kProtocolVersion;
   int64_t id = 0;
   protocol::RandomBytes(reinterpret_cast<uint8_t*>(&id), sizeof(id));
   open.request_id = id & 0x3fffffffffffffff;
   open.client_name = name;
-  open.reply_channel = reply_channel;
   open.update_ring_bytes = 0;
   open.reply_ring_bytes = 0;
   return open;
 }
 
-std::string RandomOpenReplyChannel() {
-  uint8_t random[12];
-  protocol::RandomBytes(random, sizeof(random));
-  static const char* kDigits = "0123456789abcdef";
-  std::string channel(protocol::kOpenReplyPrefix);
-  for (uint8_t b : random) {
-    channel += kDigits[b >> 4];
-    channel += kDigits[b & 15];
-  }
-  return channel;
+Result<std::vector<uint8_t>> AskDaemon(const std::string& socket_path,
+                                       std::span<const uint8_t> bytes,
+                                       std::chrono::milliseconds timeout) {
+  auto connection = protocol::LocalConnection::Connect(socket_path);
+  if (!connection) return connection.error();
+  if (auto sent = connection->Send(bytes); !sent) return sent.error();
+  auto answer = connection->Receive(protocol::kMaxStatusReplyBytes, timeout, true);
+  if (!answer) return answer.error();
+  if (answer->fd >= 0) close(answer->fd);
+  return std::move(answer->bytes);
 }
 
 // ---- RawSession ----------------------------------------------------------------------------
 
-Result<std::unique_ptr<RawSession>> RawSession::Open(const std::string& url,
+Result<std::unique_ptr<RawSession>> RawSession::Open(const std::string& socket_path,
+                                                     const std::string& lcm_url,
                                                      const std::string& name,
                                                      std::chrono::milliseconds timeout) {
   std::unique_ptr<RawSession> session(new RawSession());
-  auto listener = Listener::Create(url);
-  if (!listener) return listener.error();
-  session->listener_ = std::move(*listener);
-  const std::string open_channel = RandomOpenReplyChannel();
-  session->listener_->Subscribe(open_channel);
-  session->listener_->Subscribe("FAR_S[0-9]+_REPLY");
-  session->listener_->Start();
-
-  const far_lcm::open_session_t open = MakeOpenSession(open_channel, name);
+  auto connection = protocol::LocalConnection::Connect(socket_path);
+  if (!connection) return connection.error();
+  session->connection_ = std::make_unique<protocol::LocalConnection>(std::move(*connection));
+  const far_lcm::open_session_t open = MakeOpenSession(name);
   auto bytes = protocol::EncodeMessage(open);
   if (!bytes) return bytes.error();
-  if (auto sent = session->listener_->Publish(std::string(protocol::kOpenChannel), *bytes); !sent) {
-    return sent.error();
-  }
-  auto got = session->listener_->WaitFor(
-      [&](const Received& r) { return r.channel == open_channel; }, timeout);
-  if (!got)
-    return MakeError(ErrorCode::kTimeout,
-                     "no open_session_reply_t within " + std::to_string(timeout.count()) + " ms");
+  if (auto sent = session->connection_->Send(*bytes); !sent) return sent.error();
+  auto answer = session->connection_->Receive(protocol::kMaxControlMessageBytes, timeout, true);
+  if (!answer) return answer.error();
   auto reply = protocol::DecodeMessage<far_lcm::open_session_reply_t>(
-      got->bytes.data(), got->bytes.size(), protocol::kMaxControlMessageBytes);
-  if (!reply) return reply.error();
-  if (reply->status != protocol::kWireOk) {
+      answer->bytes.data(), answer->bytes.size(), protocol::kMaxControlMessageBytes);
+  if (!reply || reply->status != protocol::kWireOk) {
+    if (answer->fd >= 0) close(answer->fd);
+    if (!reply) return reply.error();
     return MakeError(protocol::FromWireStatus(reply->status), "open refused: " + reply->message);
   }
-  auto segment =
-      protocol::ShmSegment::Open(reply->shm_name, static_cast<uint64_t>(reply->session_id));
+  session->segment_fd_ = dup(answer->fd);
+  auto segment = protocol::ShmSegment::Open(answer->fd, static_cast<uint64_t>(reply->session_id));
   if (!segment) return segment.error();
   session->id_ = reply->session_id;
+  session->request_channel_ = reply->request_channel;
+  session->reply_channel_ = reply->session_reply_channel;
   session->segment_ = std::move(*segment);
   session->key_ = session->segment_->session_key();
   session->writer_ = std::make_unique<protocol::UpdateWriter>(session->segment_->update_ring());
   session->replies_ = std::make_unique<protocol::RingReader>(
       session->segment_->reply_ring(), session->segment_->layout().reply_ring_capacity);
+  auto listener = Listener::Create(lcm_url);
+  if (!listener) return listener.error();
+  session->listener_ = std::move(*listener);
+  session->listener_->Subscribe(session->reply_channel_);
+  session->listener_->Start();
   return session;
 }
 
 RawSession::~RawSession() {
   // The listener's thread stops before the segment is unmapped.
   listener_.reset();
+  if (segment_fd_ >= 0) close(segment_fd_);
 }
 
-std::string RawSession::request_channel() const { return protocol::SessionRequestChannel(id_); }
-std::string RawSession::reply_channel() const { return protocol::SessionReplyChannel(id_); }
-
 Result<void> RawSession::PublishRequest(std::span<const uint8_t> bytes) {
-  return listener_->Publish(request_channel(), bytes);
+  return listener_->Publish(request_channel_, bytes);
 }
 
 Result<int64_t> RawSession::SendStep(int64_t step_id, const StepRequest& request,
                                      std::optional<uint64_t> commit,
-                                     const protocol::SessionKey* key) {
+                                     const protocol::SessionKey* key, int32_t timeout_ms) {
   const int64_t request_id = NextRequestId();
-  auto message = protocol::MakeStepRequest(id_, request_id, step_id,
-                                           commit.value_or(writer_->last_sequence()), request);
+  auto message = protocol::MakeStepRequest(
+      id_, request_id, step_id, commit.value_or(writer_->last_sequence()), request, timeout_ms);
   auto bytes = protocol::EncodeSigned(message, key != nullptr ? *key : key_);
   if (!bytes) return bytes.error();
   if (auto sent = PublishRequest(*bytes); !sent) return sent.error();
   return request_id;
 }
 
-Result<void> RawSession::SendHeartbeat() {
-  far_lcm::heartbeat_t heartbeat{};
-  heartbeat.protocol_version = protocol::kProtocolVersion;
-  heartbeat.session_id = id_;
-  heartbeat.request_id = NextRequestId();
-  auto bytes = protocol::EncodeSigned(heartbeat, key_);
-  if (!bytes) return bytes.error();
-  return PublishRequest(*bytes);
-}
-
 std::optional<ReplyMessage> RawSession::Decode(const Received& message) {
-  auto type = protocol::IdentifyMessage(message.bytes.data(), message.bytes.size());
+  auto opened = protocol::OpenSealed(message.bytes.data(), message.bytes.size(), id_, key_,
+                                     protocol::kMaxStepReplyBytes);
+  if (!opened) return std::nullopt;
+  auto type = protocol::IdentifyMessage(opened->inner.data(), opened->inner.size());
   if (!type) return std::nullopt;
   ReplyMessage decoded;
   decoded.type = *type;
-  const std::span<const uint8_t> bytes(message.bytes);
+  decoded.sequence = opened->request_id;
+  const std::span<const uint8_t> inner(opened->inner);
   switch (*type) {
     case MessageType::kStepReply: {
-      auto full = protocol::ReceiveStepReply(bytes.data(), bytes.size(), key_, *replies_);
-      if (full) {
-        auto stub = protocol::DecodeMessage<far_lcm::step_reply_t>(bytes.data(), bytes.size(),
-                                                                   protocol::kMaxStepReplyBytes);
-        decoded.from_shm = stub.ok() && stub->reply_in_shm;
-        decoded.signed_ok = true;
-        decoded.step = std::move(*full);
-      } else {
-        auto plain = protocol::DecodeMessage<far_lcm::step_reply_t>(bytes.data(), bytes.size(),
-                                                                    protocol::kMaxStepReplyBytes);
-        if (!plain) return std::nullopt;
-        decoded.step = std::move(*plain);
-      }
+      auto stub = protocol::DecodeMessage<far_lcm::step_reply_t>(inner.data(), inner.size(),
+                                                                 protocol::kMaxStepReplyBytes);
+      auto full = protocol::ReceiveStepReply(inner, *replies_);
+      if (!full) return std::nullopt;
+      decoded.from_shm = stub.ok() && stub->reply_in_shm;
+      decoded.step = std::move(*full);
       return decoded;
     }
     case MessageType::kError: {
-      decoded.error = DecodeError(bytes);
-      if (!decoded.error) return std::nullopt;
-      decoded.signed_ok = protocol::VerifyEncoded(bytes, key_).ok();
+      auto error = protocol::DecodeMessage<far_lcm::error_t>(inner.data(), inner.size(),
+                                                             protocol::kMaxControlMessageBytes);
+      if (!error) return std::nullopt;
+      decoded.error = std::move(*error);
       return decoded;
     }
-    case MessageType::kHeartbeat: {
-      auto heartbeat = protocol::DecodeMessage<far_lcm::heartbeat_t>(
-          bytes.data(), bytes.size(), protocol::kMaxControlMessageBytes);
-      if (!heartbeat) return std::nullopt;
-      decoded.heartbeat = std::move(*heartbeat);
-      decoded.signed_ok = protocol::VerifyEncoded(bytes, key_).ok();
+    case MessageType::kStepStatus: {
+      auto status = protocol::DecodeMessage<far_lcm::step_status_t>(
+          inner.data(), inner.size(), protocol::kMaxControlMessageBytes);
+      if (!status) return std::nullopt;
+      decoded.status = std::move(*status);
       return decoded;
     }
     default:
@@ -243,12 +221,12 @@ std::optional<ReplyMessage> RawSession::WaitReply(
     }
   }
   const auto deadline = Clock::now() + timeout;
-  const std::string channel = reply_channel();
   while (true) {
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
     if (left.count() <= 0) return std::nullopt;
-    auto got = listener_->WaitFor([&](const Received& r) { return r.channel == channel; }, left);
+    auto got =
+        listener_->WaitFor([&](const Received& r) { return r.channel == reply_channel_; }, left);
     if (!got) return std::nullopt;
     auto decoded = Decode(*got);
     if (!decoded) continue;
@@ -260,8 +238,7 @@ std::optional<ReplyMessage> RawSession::WaitReply(
 std::optional<far_lcm::step_reply_t> RawSession::WaitStepReply(int64_t step_id,
                                                                std::chrono::milliseconds timeout) {
   auto reply = WaitReply(
-      [&](const ReplyMessage& m) { return m.step && m.signed_ok && m.step->step_id == step_id; },
-      timeout);
+      [&](const ReplyMessage& m) { return m.step && m.step->step_id == step_id; }, timeout);
   if (!reply) return std::nullopt;
   return reply->step;
 }

@@ -2,7 +2,8 @@
 
 // A hand-made session for the bad-input tests: it speaks the protocol through far::protocol
 // directly (not through far::client), so a test can send exactly the bytes it wants (truncated,
-// garbage, wrong version, forged tags, replays) and write raw records into the update ring.
+// garbage, wrong version, forged tags, replays), write raw records into the update ring, and
+// drop its connection to the daemon as a crashing client would.
 //
 // Listener: an LCM bus of its own with a receive thread that keeps every message of the
 // channels it subscribed to, so a test can wait for "the error_t about request 7" and decode it.
@@ -24,6 +25,7 @@
 #include "far/model/result.h"
 #include "far/model/step_request.h"
 #include "far/protocol/lcm_bus.h"
+#include "far/protocol/local_socket.h"
 #include "far/protocol/message.h"
 #include "far/protocol/ring.h"
 #include "far/protocol/ring_records.h"
@@ -69,36 +71,41 @@ class Listener {
   std::thread thread_;
 };
 
-/// A decoded message of the session reply channel.
+/// A decoded message of the session reply channel: a sealed_t opened with the session key.
 struct ReplyMessage {
-  protocol::MessageType type = protocol::MessageType::kError;
-  bool signed_ok = false;  ///< the tag verifies with the session key
-  bool from_shm = false;   ///< a step reply that came as a stub, read from the reply ring
+  protocol::MessageType type = protocol::MessageType::kError;  ///< of the inner message
+  int64_t sequence = 0;   ///< sealed_t.request_id: the daemon's sequence
+  bool from_shm = false;  ///< a step reply that came as a stub, read from the reply ring
   std::optional<far_lcm::error_t> error;
   std::optional<far_lcm::step_reply_t> step;  ///< the full reply (ring fetched for stubs)
-  std::optional<far_lcm::heartbeat_t> heartbeat;
+  std::optional<far_lcm::step_status_t> status;
 };
 
-/// A session opened by hand. Owns a Listener on FAR_OPEN_REPLY_<random> and FAR_S.*_REPLY.
+/// A session opened by hand: a connection to the daemon's socket (the session lives as long as
+/// it does), the mapped segment, and a Listener on the session's reply channel.
 class RawSession {
  public:
-  /// Publishes an open_session_t (name, default rings) and maps the segment.
-  /// Errors: kTimeout (no reply), the daemon's refusal, ShmSegment::Open's errors.
+  /// Connects to the daemon's socket, sends an open_session_t (name, default rings), maps the
+  /// segment that comes back and listens on `lcm_url`. Errors: kTimeout (no reply), the
+  /// daemon's refusal, ShmSegment::Open's errors.
   static Result<std::unique_ptr<RawSession>> Open(
-      const std::string& url, const std::string& name,
+      const std::string& socket_path, const std::string& lcm_url, const std::string& name,
       std::chrono::milliseconds timeout = std::chrono::seconds(5));
   ~RawSession();
 
   int64_t id() const { return id_; }
-  const std::string& shm_name() const { return segment_->name(); }
   const protocol::SessionKey& key() const { return key_; }
-  std::string request_channel() const;
-  std::string reply_channel() const;
+  const std::string& request_channel() const { return request_channel_; }
+  const std::string& reply_channel() const { return reply_channel_; }
   protocol::ShmSegment& segment() { return *segment_; }
   protocol::UpdateWriter& writer() { return *writer_; }
   Listener& listener() { return *listener_; }
   /// The client side of the reply ring (Decode reads stubs' replies with it).
   protocol::RingReader& reply_reader() { return *replies_; }
+  /// Closes the connection to the daemon, as a client that exits or crashes does.
+  void Disconnect() { connection_.reset(); }
+  /// A descriptor of the segment (kept for hostile tests: a real client needs none).
+  int segment_fd() const { return segment_fd_; }
 
   /// The next request id (strictly increasing; each call takes one).
   int64_t NextRequestId() { return next_request_id_++; }
@@ -110,30 +117,34 @@ class RawSession {
   /// request id it used.
   Result<int64_t> SendStep(int64_t step_id, const StepRequest& request,
                            std::optional<uint64_t> commit = std::nullopt,
-                           const protocol::SessionKey* key = nullptr);
-  /// Sends a signed heartbeat.
-  Result<void> SendHeartbeat();
+                           const protocol::SessionKey* key = nullptr, int32_t timeout_ms = 0);
 
-  /// Waits for a message on the session reply channel that `match` accepts (after decoding:
-  /// step replies are fetched from the reply ring when they are stubs).
+  /// Waits for a message on the session reply channel that `match` accepts (after opening and
+  /// decoding: step replies are fetched from the reply ring when they are stubs).
   std::optional<ReplyMessage> WaitReply(
       const std::function<bool(const ReplyMessage&)>& match,
       std::chrono::milliseconds timeout = std::chrono::seconds(10));
-  /// The step_reply_t for `step_id` (signed), or nullopt.
+  /// The step_reply_t for `step_id`, or nullopt.
   std::optional<far_lcm::step_reply_t> WaitStepReply(
       int64_t step_id, std::chrono::milliseconds timeout = std::chrono::seconds(10));
-  /// The first error_t on the reply channel with this request_id (signed or not), or nullopt.
+  /// The first error_t on the reply channel with this request_id, or nullopt.
   std::optional<ReplyMessage> WaitError(
       int64_t request_id, std::chrono::milliseconds timeout = std::chrono::seconds(10));
+  /// Every message that arrived on the reply channel so far, opened or not (raw).
+  std::vector<Received> RawReplies() { return listener_->Snapshot(); }
 
-  /// Decodes one reply channel message. Returns nullopt for bytes that do not decode.
+  /// Opens one reply channel message. nullopt for bytes that do not open with the session key
+  /// or do not decode.
   std::optional<ReplyMessage> Decode(const Received& message);
 
  private:
   RawSession() = default;
+  std::unique_ptr<protocol::LocalConnection> connection_;
   std::unique_ptr<Listener> listener_;
   int64_t id_ = 0;
+  std::string request_channel_, reply_channel_;
   std::unique_ptr<protocol::ShmSegment> segment_;
+  int segment_fd_ = -1;
   protocol::SessionKey key_{};
   std::unique_ptr<protocol::UpdateWriter> writer_;
   std::unique_ptr<protocol::RingReader> replies_;
@@ -141,16 +152,17 @@ class RawSession {
   int64_t next_request_id_ = 1;
 };
 
-/// Decodes an error_t without checking its tag. nullopt when it does not decode.
-std::optional<far_lcm::error_t> DecodeError(std::span<const uint8_t> bytes);
+/// Connects to the daemon's socket, sends `bytes` as the first message and returns the
+/// daemon's answer (an encoded message; a descriptor that came with it is closed). Errors:
+/// kUnavailable when the daemon closed the connection without answering, kTimeout.
+Result<std::vector<uint8_t>> AskDaemon(const std::string& socket_path,
+                                       std::span<const uint8_t> bytes,
+                                       std::chrono::milliseconds timeout = std::chrono::seconds(5));
 
 /// A small step request: FAR, id buffer, resolution 128, contacts.
 StepRequest SmallRequest(Method method = Method::kFar);
 
-/// Makes an open_session_t for `reply_channel`.
-far_lcm::open_session_t MakeOpenSession(const std::string& reply_channel, const std::string& name);
-
-/// "FAR_OPEN_REPLY_" + 24 random hex digits.
-std::string RandomOpenReplyChannel();
+/// Makes an open_session_t.
+far_lcm::open_session_t MakeOpenSession(const std::string& name);
 
 }  // namespace far::integration

@@ -13,15 +13,15 @@
 namespace far::protocol {
 namespace {
 
-using testing::SampleCloseSession;
 using testing::SampleError;
-using testing::SampleHeartbeat;
 using testing::SampleOpenSession;
 using testing::SampleOpenSessionReply;
+using testing::SampleSealed;
 using testing::SampleStatusReply;
 using testing::SampleStatusRequest;
 using testing::SampleStepReply;
 using testing::SampleStepRequest;
+using testing::SampleStepStatus;
 
 template <typename T>
 std::vector<uint8_t> Encode(const T& message) {
@@ -66,8 +66,8 @@ void ExpectRoundTrip(const T& message, MessageType type) {
 TEST(MessageTest, EveryTypeRoundTripsThroughThePreScan) {
   ExpectRoundTrip(SampleOpenSession(), MessageType::kOpenSession);
   ExpectRoundTrip(SampleOpenSessionReply(), MessageType::kOpenSessionReply);
-  ExpectRoundTrip(SampleCloseSession(), MessageType::kCloseSession);
-  ExpectRoundTrip(SampleHeartbeat(), MessageType::kHeartbeat);
+  ExpectRoundTrip(SampleSealed(), MessageType::kSealed);
+  ExpectRoundTrip(SampleStepStatus(), MessageType::kStepStatus);
   ExpectRoundTrip(SampleStepRequest(), MessageType::kStepRequest);
   ExpectRoundTrip(SampleStepReply(), MessageType::kStepReply);
   ExpectRoundTrip(SampleError(), MessageType::kError);
@@ -76,19 +76,19 @@ TEST(MessageTest, EveryTypeRoundTripsThroughThePreScan) {
 }
 
 TEST(MessageTest, FingerprintsArePinned) {
-  // The wire contract of protocol version 1. A change of any .lcm file changes its fingerprint
+  // The wire contract of protocol version 3. A change of any .lcm file changes its fingerprint
   // and fails here: update the value, docs/protocol.md, and kProtocolVersion if the meaning
   // changed, so that old and new peers reject each other with a clear error.
-  EXPECT_EQ(far_lcm::open_session_t::getHash(), static_cast<int64_t>(0xf3f709a9e687c054ull));
-  EXPECT_EQ(far_lcm::open_session_reply_t::getHash(), static_cast<int64_t>(0xbdbff3c1f4eed75eull));
-  EXPECT_EQ(far_lcm::close_session_t::getHash(), static_cast<int64_t>(0x774cca24acd09ab9ull));
-  EXPECT_EQ(far_lcm::heartbeat_t::getHash(), static_cast<int64_t>(0xf641100dce8b2bbeull));
-  EXPECT_EQ(far_lcm::step_request_t::getHash(), static_cast<int64_t>(0xa80851807485adfdull));
-  EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0x233c122f92ac3655ull));
+  EXPECT_EQ(far_lcm::open_session_t::getHash(), static_cast<int64_t>(0xfd44631e0fd969b1ull));
+  EXPECT_EQ(far_lcm::open_session_reply_t::getHash(), static_cast<int64_t>(0x133fbd56d0df8f90ull));
+  EXPECT_EQ(far_lcm::sealed_t::getHash(), static_cast<int64_t>(0x71e71b1583d17514ull));
+  EXPECT_EQ(far_lcm::step_status_t::getHash(), static_cast<int64_t>(0x90548ca9dd3567d6ull));
+  EXPECT_EQ(far_lcm::step_request_t::getHash(), static_cast<int64_t>(0x950d72435652b582ull));
+  EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0xb18eb44221dd52e0ull));
   EXPECT_EQ(far_lcm::error_t::getHash(), static_cast<int64_t>(0xb22a7284ae722a4full));
   EXPECT_EQ(far_lcm::status_request_t::getHash(), static_cast<int64_t>(0x232a6c3597e1b397ull));
-  EXPECT_EQ(far_lcm::status_reply_t::getHash(), static_cast<int64_t>(0x6cf89a8321868d65ull));
-  EXPECT_EQ(kProtocolVersion, 2);
+  EXPECT_EQ(far_lcm::status_reply_t::getHash(), static_cast<int64_t>(0x8bceb52ed7defbbcull));
+  EXPECT_EQ(kProtocolVersion, 3);
 }
 
 TEST(MessageTest, EmptyArraysAndStringsRoundTrip) {
@@ -140,10 +140,11 @@ TEST(MessageTest, RejectsEveryTruncation) {
   ExpectEveryPrefixRejected(SampleStepRequest());
   ExpectEveryPrefixRejected(SampleStepReply());
   ExpectEveryPrefixRejected(SampleStatusReply());
+  ExpectEveryPrefixRejected(SampleSealed());
   const auto bytes = Encode(SampleStepRequest());
   ExpectDecodeError<far_lcm::step_request_t>(
       std::vector<uint8_t>(bytes.begin(), bytes.end() - 3), ErrorCode::kParseError,
-      "step_request_t.distance: needs 8 bytes, 5 left (truncated)");
+      "step_request_t.timeout_ms: needs 4 bytes, 1 left (truncated)");
 }
 
 TEST(MessageTest, RejectsTrailingBytes) {
@@ -154,7 +155,7 @@ TEST(MessageTest, RejectsTrailingBytes) {
 }
 
 TEST(MessageTest, RejectsWrongFingerprint) {
-  const auto bytes = Encode(SampleHeartbeat());
+  const auto bytes = Encode(SampleStepStatus());
   ExpectDecodeError<far_lcm::step_request_t>(bytes, ErrorCode::kParseError,
                                              "does not match step_request_t's");
 }
@@ -163,7 +164,7 @@ TEST(MessageTest, RejectsWrongProtocolVersion) {
   auto message = SampleStepRequest();
   message.protocol_version = kProtocolVersion + 1;
   ExpectDecodeError<far_lcm::step_request_t>(Encode(message), ErrorCode::kVersionMismatch,
-                                             "step_request_t.protocol_version: got 3, expected 2");
+                                             "step_request_t.protocol_version: got 4, expected 3");
 }
 
 TEST(MessageTest, RejectsAForgedHugeArrayLengthWithoutAllocating) {

@@ -148,7 +148,6 @@ TEST(ValidateOpenSessionTest, AcceptsAValidRequest) {
   auto params = ValidateOpenSession(SampleOpenSession());
   ASSERT_TRUE(params) << params.error().message;
   EXPECT_EQ(params->client_name, "simulator-1");
-  EXPECT_EQ(params->reply_channel, "FAR_OPEN_REPLY_sim1");
   EXPECT_EQ(params->update_ring_bytes, 1u << 20);
   EXPECT_EQ(params->reply_ring_bytes, 0u);
 }
@@ -164,9 +163,6 @@ TEST(ValidateOpenSessionTest, ChecksEveryField) {
                 "open_session_t.client_name: 'tab\\x09here' has a character that is not "
                 "printable ASCII");
   m = SampleOpenSession();
-  m.reply_channel = "FAR_S1_REPLY";  // another session's channel
-  ExpectInvalid(m, "open_session_t.reply_channel: 'FAR_S1_REPLY' is not 'FAR_OPEN_REPLY_'");
-  m = SampleOpenSession();
   m.update_ring_bytes = 100000;
   ExpectInvalid(m,
                 "open_session_t.update_ring_bytes: 100000 is not 0 or a power of two in "
@@ -179,33 +175,51 @@ TEST(ValidateOpenSessionTest, ChecksEveryField) {
 }
 
 TEST(ValidateSessionIdsTest, NamesTheMessageType) {
-  auto ok = ValidateSessionIds(MessageType::kHeartbeat, -3, 0);
+  auto ok = ValidateSessionIds(MessageType::kStepStatus, -3, 0);
   ASSERT_FALSE(ok);
-  EXPECT_NE(ok.error().message.find("heartbeat_t.session_id: -3 is not > 0"), std::string::npos);
-  EXPECT_TRUE(ValidateSessionIds(MessageType::kCloseSession, 1, 0));
+  EXPECT_NE(ok.error().message.find("step_status_t.session_id: -3 is not > 0"), std::string::npos);
+  EXPECT_TRUE(ValidateSessionIds(MessageType::kStepRequest, 1, 0));
 }
 
-TEST(ChannelsTest, NamesSessionChannels) {
-  EXPECT_EQ(SessionRequestChannel(12), "FAR_S12_REQ");
-  EXPECT_EQ(SessionReplyChannel(12), "FAR_S12_REPLY");
-  EXPECT_EQ(ParseSessionRequestChannel("FAR_S12_REQ"), 12);
-  EXPECT_EQ(ParseSessionRequestChannel("FAR_S999999999999999999_REQ"), 999999999999999999);
-  EXPECT_FALSE(ParseSessionRequestChannel("FAR_S9999999999999999999_REQ"));  // 19 digits
-  EXPECT_FALSE(ParseSessionRequestChannel("FAR_S012_REQ"));
-  EXPECT_FALSE(ParseSessionRequestChannel("FAR_S_REQ"));
-  EXPECT_FALSE(ParseSessionRequestChannel("FAR_S1x_REQ"));
-  EXPECT_FALSE(ParseSessionRequestChannel("FAR_S12_REPLY"));
-  EXPECT_FALSE(ParseSessionRequestChannel(""));
+TEST(ValidateStepRequestTest, CarriesTheClientsTimeout) {
+  auto command = ValidateStepRequest(SampleStepRequest());
+  ASSERT_TRUE(command) << command.error().message;
+  EXPECT_EQ(command->timeout_ms, 30000);
+  auto m = SampleStepRequest();
+  m.timeout_ms = -1;
+  ExpectInvalid(m, "step_request_t.timeout_ms: -1 is negative");
 }
 
-TEST(ChannelsTest, OpenReplyChannelsCannotNameOtherChannels) {
-  EXPECT_TRUE(IsValidOpenReplyChannel("FAR_OPEN_REPLY_a"));
-  EXPECT_TRUE(IsValidOpenReplyChannel("FAR_OPEN_REPLY_pid-123_x"));
-  EXPECT_FALSE(IsValidOpenReplyChannel("FAR_OPEN_REPLY_"));
-  EXPECT_FALSE(IsValidOpenReplyChannel("FAR_S1_REPLY"));
-  EXPECT_FALSE(IsValidOpenReplyChannel("FAR_OPEN_REPLY_a.b"));
-  EXPECT_FALSE(IsValidOpenReplyChannel("FAR_OPEN_REPLY_" + std::string(49, 'a')));
-  EXPECT_FALSE(IsValidOpenReplyChannel("FAR_OPEN"));
+TEST(ChannelsTest, NamesSessionChannelsWithTheDaemonsPrefix) {
+  EXPECT_EQ(ChannelPrefix("far"), "FAR_");
+  EXPECT_EQ(ChannelPrefix("gpu-1"), "FAR_GPU_1_");
+  EXPECT_EQ(SessionRequestChannel("FAR_", 12), "FAR_S12_REQ");
+  EXPECT_EQ(SessionReplyChannel("FAR_GPU_1_", 12), "FAR_GPU_1_S12_REPLY");
+  EXPECT_EQ(SessionRequestChannelPattern("FAR_GPU_1_"), "FAR_GPU_1_S[0-9]+_REQ");
+  EXPECT_EQ(ParseSessionRequestChannel("FAR_", "FAR_S12_REQ"), 12);
+  EXPECT_EQ(ParseSessionRequestChannel("FAR_", "FAR_S999999999999999999_REQ"), 999999999999999999);
+  EXPECT_FALSE(ParseSessionRequestChannel("FAR_", "FAR_S9999999999999999999_REQ"));  // 19 digits
+  EXPECT_FALSE(ParseSessionRequestChannel("FAR_", "FAR_S012_REQ"));
+  EXPECT_FALSE(ParseSessionRequestChannel("FAR_", "FAR_S_REQ"));
+  EXPECT_FALSE(ParseSessionRequestChannel("FAR_", "FAR_S1x_REQ"));
+  EXPECT_FALSE(ParseSessionRequestChannel("FAR_", "FAR_S12_REPLY"));
+  EXPECT_FALSE(ParseSessionRequestChannel("FAR_", ""));
+  // Another daemon's channels are not this one's.
+  EXPECT_FALSE(ParseSessionRequestChannel("FAR_", "FAR_GPU_1_S12_REQ"));
+  EXPECT_EQ(ParseSessionRequestChannel("FAR_GPU_1_", "FAR_GPU_1_S12_REQ"), 12);
+  EXPECT_FALSE(ParseSessionRequestChannel("FAR_GPU_1_", "FAR_S12_REQ"));
+}
+
+TEST(ChannelsTest, DaemonNamesAreShortLowerCaseWords) {
+  EXPECT_TRUE(IsValidDaemonName("far"));
+  EXPECT_TRUE(IsValidDaemonName("gpu-1"));
+  EXPECT_TRUE(IsValidDaemonName("a234567890123456"));
+  EXPECT_FALSE(IsValidDaemonName(""));
+  EXPECT_FALSE(IsValidDaemonName("1gpu"));
+  EXPECT_FALSE(IsValidDaemonName("GPU"));
+  EXPECT_FALSE(IsValidDaemonName("a2345678901234567"));
+  EXPECT_FALSE(IsValidDaemonName("../x"));
+  EXPECT_FALSE(IsValidDaemonName("a b"));
 }
 
 }  // namespace

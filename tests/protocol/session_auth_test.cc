@@ -3,8 +3,10 @@
 
 #include "far/protocol/session_auth.h"
 
+#include <algorithm>
 #include <cstring>
 #include <set>
+#include <string>
 
 #include "test_messages.h"
 #include <gtest/gtest.h>
@@ -25,8 +27,7 @@ void ExpectAuthAtFixedOffset(T message) {
 }
 
 TEST(SessionAuthTest, EverySessionMessageHasAuthAtTheSameOffset) {
-  ExpectAuthAtFixedOffset(testing::SampleCloseSession());
-  ExpectAuthAtFixedOffset(testing::SampleHeartbeat());
+  ExpectAuthAtFixedOffset(testing::SampleStepStatus());
   ExpectAuthAtFixedOffset(testing::SampleStepRequest());
   ExpectAuthAtFixedOffset(testing::SampleStepReply());
   ExpectAuthAtFixedOffset(testing::SampleError());
@@ -34,6 +35,50 @@ TEST(SessionAuthTest, EverySessionMessageHasAuthAtTheSameOffset) {
   EXPECT_TRUE(IsSessionMessage(MessageType::kError));
   EXPECT_FALSE(IsSessionMessage(MessageType::kOpenSession));
   EXPECT_FALSE(IsSessionMessage(MessageType::kStatusReply));
+  EXPECT_FALSE(IsSessionMessage(MessageType::kSealed));
+}
+
+TEST(SessionAuthTest, SealedMessagesOpenOnlyForTheirSessionAndKey) {
+  const SessionKey key = NewSessionKey();
+  auto inner = EncodeMessage(testing::SampleStepReply());
+  ASSERT_TRUE(inner);
+  auto sealed = SealEncoded(*inner, 3, 17, key);
+  ASSERT_TRUE(sealed);
+  // The inner bytes are not readable in the sealed message.
+  const std::string needle = "object_cull";
+  EXPECT_EQ(std::search(sealed->begin(), sealed->end(), needle.begin(), needle.end()),
+            sealed->end());
+  auto opened = OpenSealed(sealed->data(), sealed->size(), 3, key, kMaxStepReplyBytes);
+  ASSERT_TRUE(opened) << opened.error().message;
+  EXPECT_EQ(opened->request_id, 17);
+  EXPECT_EQ(opened->inner, *inner);
+  // Another key, another session, or any flipped bit: it does not open.
+  EXPECT_EQ(OpenSealed(sealed->data(), sealed->size(), 3, NewSessionKey(), kMaxStepReplyBytes)
+                .error()
+                .code,
+            ErrorCode::kPermissionDenied);
+  EXPECT_FALSE(OpenSealed(sealed->data(), sealed->size(), 4, key, kMaxStepReplyBytes));
+  for (size_t i = 0; i < sealed->size(); i += 7) {
+    auto tampered = *sealed;
+    tampered[i] ^= 0x10;
+    EXPECT_FALSE(OpenSealed(tampered.data(), tampered.size(), 3, key, kMaxStepReplyBytes))
+        << "byte " << i;
+  }
+}
+
+TEST(SessionAuthTest, ASealedMessagesSequenceCannotBeChanged) {
+  const SessionKey key = NewSessionKey();
+  auto inner = EncodeMessage(testing::SampleError());
+  ASSERT_TRUE(inner);
+  auto sealed = SealEncoded(*inner, 3, 17, key);
+  ASSERT_TRUE(sealed);
+  auto message =
+      DecodeMessage<far_lcm::sealed_t>(sealed->data(), sealed->size(), kMaxControlMessageBytes);
+  ASSERT_TRUE(message);
+  message->request_id = 99;  // a replayed message given a fresh sequence number
+  auto forged = EncodeMessage(*message);
+  ASSERT_TRUE(forged);
+  EXPECT_FALSE(OpenSealed(forged->data(), forged->size(), 3, key, kMaxStepReplyBytes));
 }
 
 TEST(SessionAuthTest, SignedMessagesVerifyAndDecode) {

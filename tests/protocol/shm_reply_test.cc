@@ -3,6 +3,8 @@
 
 #include "far/protocol/shm_reply.h"
 
+#include <unistd.h>
+
 #include <cstring>
 #include <optional>
 
@@ -38,7 +40,7 @@ struct Session {
     auto created = ShmSegment::Create(3, {kMinRingCapacity, uint64_t{1} << 22});
     EXPECT_TRUE(created) << created.error().message;
     daemon = std::move(*created);
-    auto opened = ShmSegment::Open(daemon->name(), 3);
+    auto opened = ShmSegment::Open(dup(daemon->fd()), 3);
     EXPECT_TRUE(opened) << opened.error().message;
     client = std::move(*opened);
     daemon_replies.emplace(daemon->reply_ring());
@@ -48,6 +50,20 @@ struct Session {
   std::unique_ptr<ShmSegment> client;
   std::optional<RingWriter> daemon_replies;
   std::optional<RingReader> client_replies;
+  int64_t sequence = 0;
+
+  // The daemon's side: the sealed bytes it publishes for `full`.
+  Result<std::vector<uint8_t>> Send(const far_lcm::step_reply_t& full) {
+    return EncodeStepReplyForTransport(full, *daemon_replies, daemon->session_key(), ++sequence);
+  }
+  // The client's side: open the sealed message, then the reply (from the ring for a stub).
+  Result<far_lcm::step_reply_t> Receive(const std::vector<uint8_t>& bytes,
+                                        const SessionKey* key = nullptr) {
+    auto opened = OpenSealed(bytes.data(), bytes.size(), 3, key ? *key : client->session_key(),
+                             kMaxStepReplyBytes);
+    if (!opened) return opened.error();
+    return ReceiveStepReply(opened->inner, *client_replies);
+  }
 };
 
 TEST(ShmReplyTest, RepliesThatWouldNeedMoreThanOneDatagramGoThroughTheRing) {
@@ -56,18 +72,19 @@ TEST(ShmReplyTest, RepliesThatWouldNeedMoreThanOneDatagramGoThroughTheRing) {
   EXPECT_TRUE(ShouldUseShmReply(63 * 1024 + 1));
   // LCM udpm's single-datagram limit (channel + 1 + payload <= 65499) holds for every inline
   // reply on a session channel.
-  EXPECT_LE(kShmReplyThresholdBytes + SessionReplyChannel(INT64_MAX).size() + 1, 65499u);
+  // (sealing adds its header, nonce and tag: 64 bytes at most)
+  EXPECT_LE(kShmReplyThresholdBytes + 64 +
+                SessionReplyChannel("FAR_GPU_1234567890_", INT64_MAX).size() + 1,
+            65499u);
 }
 
 TEST(ShmReplyTest, SmallRepliesGoInline) {
   Session session;
   const auto full = FullReply(100, 1);
-  auto bytes =
-      EncodeStepReplyForTransport(full, *session.daemon_replies, session.daemon->session_key());
+  auto bytes = session.Send(full);
   ASSERT_TRUE(bytes) << bytes.error().message;
   EXPECT_EQ(session.daemon_replies->last_sequence(), 0u);  // nothing in the ring
-  auto received = ReceiveStepReply(bytes->data(), bytes->size(), session.client->session_key(),
-                                   *session.client_replies);
+  auto received = session.Receive(*bytes);
   ASSERT_TRUE(received) << received.error().message;
   EXPECT_FALSE(received->reply_in_shm);
   EXPECT_EQ(received->num_contacts, 100);
@@ -76,13 +93,11 @@ TEST(ShmReplyTest, SmallRepliesGoInline) {
 TEST(ShmReplyTest, LargeRepliesGoThroughTheRingWhole) {
   Session session;
   const auto full = FullReply(100000, 1);
-  auto bytes =
-      EncodeStepReplyForTransport(full, *session.daemon_replies, session.daemon->session_key());
+  auto bytes = session.Send(full);
   ASSERT_TRUE(bytes) << bytes.error().message;
-  EXPECT_LT(bytes->size(), 512u);  // only the stub travels over LCM
+  EXPECT_LT(bytes->size(), 640u);  // only the sealed stub travels over LCM
   EXPECT_EQ(session.daemon_replies->last_sequence(), 1u);
-  auto received = ReceiveStepReply(bytes->data(), bytes->size(), session.client->session_key(),
-                                   *session.client_replies);
+  auto received = session.Receive(*bytes);
   ASSERT_TRUE(received) << received.error().message;
   EXPECT_FALSE(received->reply_in_shm);
   auto result = ParseStepReply(*received);
@@ -93,42 +108,39 @@ TEST(ShmReplyTest, LargeRepliesGoThroughTheRingWhole) {
 
 TEST(ShmReplyTest, SkipsRepliesWhoseStubsWereLost) {
   Session session;
-  const SessionKey& key = session.daemon->session_key();
-  auto lost = EncodeStepReplyForTransport(FullReply(20000, 1), *session.daemon_replies, key);
-  auto kept = EncodeStepReplyForTransport(FullReply(30000, 2), *session.daemon_replies, key);
+  auto lost = session.Send(FullReply(20000, 1));
+  auto kept = session.Send(FullReply(30000, 2));
   ASSERT_TRUE(lost && kept);
-  auto received = ReceiveStepReply(kept->data(), kept->size(), key, *session.client_replies);
+  auto received = session.Receive(*kept);
   ASSERT_TRUE(received) << received.error().message;
   EXPECT_EQ(received->request_id, 2);
   EXPECT_EQ(received->num_contacts, 30000);
   // The lost one is gone for good: asking for it now is kNotFound.
-  auto late = ReceiveStepReply(lost->data(), lost->size(), key, *session.client_replies);
+  auto late = session.Receive(*lost);
   ASSERT_FALSE(late);
   EXPECT_EQ(late.error().code, ErrorCode::kNotFound);
 }
 
 TEST(ShmReplyTest, DetectsAPayloadChangedAfterItWasWritten) {
   Session session;
-  const SessionKey& key = session.daemon->session_key();
-  auto bytes = EncodeStepReplyForTransport(FullReply(20000, 1), *session.daemon_replies, key);
+  auto bytes = session.Send(FullReply(20000, 1));
   ASSERT_TRUE(bytes);
   // Somebody changes one byte of the payload in shared memory.
   RingRegion region = session.client->reply_ring();
   region.data[sizeof(StepReplyRecord) + 1000] ^= 0xFF;
-  auto received = ReceiveStepReply(bytes->data(), bytes->size(), key, *session.client_replies);
+  auto received = session.Receive(*bytes);
   ASSERT_FALSE(received);
   EXPECT_NE(received.error().message.find("the payload's hash differs from the stub's"),
             std::string::npos)
       << received.error().message;
 }
 
-TEST(ShmReplyTest, RejectsAStubWithABadTag) {
+TEST(ShmReplyTest, RejectsAStubSealedWithAnotherKey) {
   Session session;
-  auto bytes = EncodeStepReplyForTransport(FullReply(20000, 1), *session.daemon_replies,
-                                           session.daemon->session_key());
+  auto bytes = session.Send(FullReply(20000, 1));
   ASSERT_TRUE(bytes);
-  auto received =
-      ReceiveStepReply(bytes->data(), bytes->size(), NewSessionKey(), *session.client_replies);
+  const SessionKey other = NewSessionKey();
+  auto received = session.Receive(*bytes, &other);
   ASSERT_FALSE(received);
   EXPECT_EQ(received.error().code, ErrorCode::kPermissionDenied);
   EXPECT_EQ(session.client_replies->last_sequence(), 0u);  // the ring was not touched
@@ -136,19 +148,18 @@ TEST(ShmReplyTest, RejectsAStubWithABadTag) {
 
 TEST(ShmReplyTest, FullRingIsBusyUntilTheClientReads) {
   Session session;
-  const SessionKey& key = session.daemon->session_key();
   std::vector<std::vector<uint8_t>> stubs;
   // 70k contacts are ~1.7 MB (24 bytes each); the 4 MiB ring holds two.
   for (int i = 0; i < 2; ++i) {
-    auto bytes = EncodeStepReplyForTransport(FullReply(70000, i + 1), *session.daemon_replies, key);
+    auto bytes = session.Send(FullReply(70000, i + 1));
     ASSERT_TRUE(bytes) << bytes.error().message;
     stubs.push_back(*bytes);
   }
-  auto third = EncodeStepReplyForTransport(FullReply(70000, 3), *session.daemon_replies, key);
+  auto third = session.Send(FullReply(70000, 3));
   ASSERT_FALSE(third);
   EXPECT_EQ(third.error().code, ErrorCode::kBusy);
-  ASSERT_TRUE(ReceiveStepReply(stubs[0].data(), stubs[0].size(), key, *session.client_replies));
-  EXPECT_TRUE(EncodeStepReplyForTransport(FullReply(70000, 3), *session.daemon_replies, key));
+  ASSERT_TRUE(session.Receive(stubs[0]));
+  EXPECT_TRUE(session.Send(FullReply(70000, 3)));
 }
 
 // The whole path over LCM, in process: memq:// never touches the network. Subscribed through
@@ -170,11 +181,10 @@ TEST(ShmReplyTest, WorksOverLcmMemq) {
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
   RawReceiver receiver;
-  const std::string channel = SessionReplyChannel(3);
+  const std::string channel = SessionReplyChannel("FAR_", 3);
   lcm_subscribe(lcm.getUnderlyingLCM(), channel.c_str(), &RawReceiver::Handle, &receiver);
   for (int contacts : {10, 50000}) {
-    auto bytes = EncodeStepReplyForTransport(FullReply(contacts, contacts), *session.daemon_replies,
-                                             session.daemon->session_key());
+    auto bytes = session.Send(FullReply(contacts, contacts));
     ASSERT_TRUE(bytes);
     ASSERT_EQ(lcm.publish(channel, bytes->data(), static_cast<unsigned>(bytes->size())), 0);
     ASSERT_GT(lcm.handleTimeout(1000), 0);
@@ -184,9 +194,8 @@ TEST(ShmReplyTest, WorksOverLcmMemq) {
     const auto& message = receiver.messages[i];
     auto kind = IdentifyMessage(message.data(), message.size());
     ASSERT_TRUE(kind);
-    EXPECT_EQ(*kind, MessageType::kStepReply);
-    auto reply = ReceiveStepReply(message.data(), message.size(), session.client->session_key(),
-                                  *session.client_replies);
+    EXPECT_EQ(*kind, MessageType::kSealed);
+    auto reply = session.Receive(message);
     ASSERT_TRUE(reply) << reply.error().message;
     EXPECT_EQ(reply->num_contacts, i == 0 ? 10 : 50000);
   }

@@ -17,7 +17,6 @@ inline far_lcm::open_session_t SampleOpenSession() {
   m.protocol_version = kProtocolVersion;
   m.request_id = 11;
   m.client_name = "simulator-1";
-  m.reply_channel = "FAR_OPEN_REPLY_sim1";
   m.update_ring_bytes = 1 << 20;
   m.reply_ring_bytes = 0;
   return m;
@@ -31,38 +30,43 @@ inline far_lcm::open_session_reply_t SampleOpenSessionReply() {
   m.status_name = "ok";
   m.message = "fine";
   m.session_id = 3;
-  m.shm_name = "/far-1-3-0123456789abcdef0123456789abcdef";
   m.shm_bytes = 4096 + (2 << 20);
   m.ring_layout_version = 1;
   m.update_ring_bytes = 1 << 20;
   m.reply_ring_bytes = 1 << 20;
+  m.lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   m.request_channel = "FAR_S3_REQ";
   m.session_reply_channel = "FAR_S3_REPLY";
-  m.heartbeat_timeout_ms = 5000;
   m.max_objects = 1000;
   m.max_vertices_per_object = 1 << 22;
   m.max_triangles_per_object = 1 << 22;
+  m.max_reply_pairs = 1 << 20;
+  m.step_deadline_ms = 60000;
   return m;
 }
 
-inline far_lcm::close_session_t SampleCloseSession() {
-  far_lcm::close_session_t m{};
+inline far_lcm::sealed_t SampleSealed() {
+  far_lcm::sealed_t m{};
   m.protocol_version = kProtocolVersion;
   m.session_id = 3;
-  FillAuth(m.auth, 0);
-  m.request_id = 99;
+  m.request_id = 12;
+  std::memset(m.nonce, 7, sizeof(m.nonce));
+  m.box_bytes = 20;
+  m.box.assign(20, 0xab);
   return m;
 }
 
-inline far_lcm::heartbeat_t SampleHeartbeat() {
-  far_lcm::heartbeat_t m{};
+inline far_lcm::step_status_t SampleStepStatus() {
+  far_lcm::step_status_t m{};
   m.protocol_version = kProtocolVersion;
   m.session_id = 3;
   FillAuth(m.auth, 0);
-  m.request_id = 5;
-  m.sent_time_ns = 123456789;
-  m.last_applied_sequence = 0;
-  m.last_step_id = 0;
+  m.request_id = 7;
+  m.step_id = 42;
+  m.state = "stage";
+  m.queue_position = 0;
+  m.stage = "exact";
+  m.elapsed_ms = 12.5;
   return m;
 }
 
@@ -82,6 +86,7 @@ inline far_lcm::step_request_t SampleStepRequest() {
   m.subobject_size = 4;
   m.has_distance = true;
   m.distance = 0.25;
+  m.timeout_ms = 30000;
   return m;
 }
 
@@ -136,6 +141,22 @@ inline far_lcm::step_reply_t SampleStepReply() {
   m.pairs_tested = 3;
   m.object_radius = 0.01;
   m.primitive_radius = 0.001;
+  m.guaranteed = true;
+  m.guarantee_basis = "far: every level's offsets cover its pixel and depth steps";
+  m.num_levels = 2;
+  m.level_name = {"object", "sub-object"};
+  m.level_views = {3, 3};
+  m.level_resolution = {256, 1024};
+  m.level_offset_radius = {0.02, 0.004};
+  m.level_pixel_size = {0.01, 0.002};
+  m.level_depth_step = {1e-6, 1e-6};
+  m.level_rounding = {1e-7, 1e-7};
+  m.level_world_min_x = {-1, -0.5};
+  m.level_world_min_y = {-1, -0.5};
+  m.level_world_min_z = {-1, -0.5};
+  m.level_world_max_x = {1, 0.5};
+  m.level_world_max_y = {1, 0.5};
+  m.level_world_max_z = {1, 0.5};
   return m;
 }
 
@@ -164,22 +185,30 @@ inline far_lcm::status_reply_t SampleStatusReply() {
   m.protocol_version = kProtocolVersion;
   m.request_id = 1;
   m.daemon_version = "0.1.0";
+  m.daemon_name = "far";
   m.gl_renderer = "llvmpipe";
+  m.gl_device = "surfaceless";
+  m.lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  m.channel_prefix = "FAR_";
   m.uptime_ms = 1000;
   m.max_sessions = 16;
+  m.max_sessions_per_user = 4;
+  m.sessions_open = 3;
   m.steps_total = 5;
   m.errors_total = 1;
   m.rejected_messages_total = 2;
-  m.num_sessions = 2;
-  m.session_id = {3, 4};
-  m.session_client_name = {"a", "bb"};
-  m.session_steps = {5, 0};
-  m.session_objects = {10, 0};
   m.latency_p50_ms = 1.5;
   m.latency_p90_ms = 2.5;
   m.latency_p99_ms = 4.0;
   m.latency_max_ms = 9.0;
   m.latency_samples = 5;
+  m.num_sessions = 2;
+  m.session_id = {3, 4};
+  m.session_uid = {1000, 1000};
+  m.session_client_name = {"a", "bb"};
+  m.session_steps = {5, 0};
+  m.session_objects = {10, 0};
+  m.session_triangles = {1200, 0};
   m.session_latency_p50_ms = {1.5, 0.0};
   m.session_latency_p99_ms = {4.0, 0.0};
   m.num_error_kinds = 2;

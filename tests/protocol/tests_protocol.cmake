@@ -1,6 +1,6 @@
 # far_add_test(<name> <label> <sources...>) for the protocol area: LCM messages, validation,
 # session authentication, shared-memory segment and rings. Unit tests only: in-process, no
-# network (memq:// at most), shm segments in /dev/shm that each test removes.
+# network (memq:// at most), anonymous shm segments, local sockets in temporary directories.
 far_add_test(far_protocol_test unit
   protocol/ring_layout_test.cc
   protocol/ring_test.cc
@@ -9,7 +9,7 @@ far_add_test(far_protocol_test unit
   protocol/message_validate_test.cc
   protocol/session_auth_test.cc
   protocol/convert_test.cc
-  protocol/shm_segment_test.cc
+  protocol/shm_segment_test.cc protocol/local_socket_test.cc
   protocol/shm_reply_test.cc
   protocol/lcm_bus_test.cc)
 target_link_libraries(far_protocol_test PRIVATE far::protocol)

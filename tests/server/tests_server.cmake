@@ -1,2 +1,2 @@
-far_add_test(far_server_test unit server/fair_scheduler_test.cc server/daemon_config_test.cc)
+far_add_test(far_server_test unit server/rate_limiter_test.cc server/daemon_config_test.cc)
 target_link_libraries(far_server_test PRIVATE far_server_core)

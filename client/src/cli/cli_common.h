@@ -14,18 +14,19 @@ namespace far::cli {
 
 using Clock = std::chrono::steady_clock;
 
-/// Flags given before or after the command: how to reach the daemon and how long to wait.
+/// Flags given before or after the command: which daemon, and how long to look for it.
 struct GlobalFlags {
   client::ClientOptions options;
-  int timeout_ms = 5000;
+  std::string connect_timeout = "1s";
 
-  /// The client options with the timeout the user asked for (valid once parsed).
-  client::ClientOptions Options() const {
-    client::ClientOptions o = options;
-    o.timeout = std::chrono::milliseconds(timeout_ms);
-    return o;
-  }
+  /// The client options the user asked for (valid once parsed; commands that run steps set
+  /// their own step timeout).
+  Result<client::ClientOptions> Options() const;
 };
+
+/// Parses a duration: a number with a unit, "500ms", "60s", "2m" (a bare number is seconds).
+/// Errors: kInvalidArgument naming `flag`.
+Result<std::chrono::milliseconds> ParseDuration(const std::string& flag, const std::string& text);
 
 /// A registered subcommand and what running it does (its exit status).
 struct Command {

@@ -1,5 +1,6 @@
 // far-client load: N concurrent clients, each with its own session and scene; throughput,
 // latency percentiles and fairness per client and overall.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <iostream>
@@ -80,19 +81,35 @@ int RunLoad(const client::ClientOptions& base, const LoadFlags& flags, const Ste
       // Everyone starts together, once the main thread has set `start` and said go.
       while (!go) std::this_thread::sleep_for(std::chrono::milliseconds(1));
       const auto deadline = deadline_of(start);
+      // After an error the client backs off (doubling, up to a second) instead of spinning;
+      // a session the daemon ended is the end of this client.
+      auto backoff = std::chrono::milliseconds(0);
       for (int s = 0; (steps <= 0 || s < steps) && Clock::now() < deadline; ++s) {
+        if (backoff.count() > 0) std::this_thread::sleep_for(backoff);
         // Rigid objects drift a little every step, as a simulation would move them.
+        bool posed = true;
         for (auto& o : objects) {
           if (o.motion != far::Motion::kRigid) continue;
           o.X_WO.translation.x() += 0.002 * std::sin(0.1 * s + o.id);
-          if (auto ok = (*client)->SetPose(o.id, o.X_WO); !ok) fail(ok.error());
+          if (auto ok = (*client)->SetPose(o.id, o.X_WO); !ok) {
+            fail(ok.error());
+            posed = false;
+            break;
+          }
         }
         const auto t0 = Clock::now();
-        auto result = (*client)->Step(request);
+        auto result =
+            posed
+                ? (*client)->Step(request)
+                : far::Result<far::StepResult>(far::MakeError(far::ErrorCode::kBusy, "not posed"));
         if (!result) {
-          fail(result.error());
+          if (posed) fail(result.error());
+          if (result.error().code == far::ErrorCode::kUnavailable) break;
+          backoff = std::clamp(backoff * 2, std::chrono::milliseconds(10),
+                               std::chrono::milliseconds(1000));
           continue;
         }
+        backoff = std::chrono::milliseconds(0);
         mine.latency_ms.push_back(
             std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
       }
@@ -181,7 +198,11 @@ Command AddLoadCommand(CLI::App& app, const GlobalFlags& global) {
   command.run = [&global, flags] {
     auto request = flags->step.Request();
     if (!request) return Fail(request.error());
-    return RunLoad(global.Options(), *flags, *request);
+    auto base = global.Options();
+    if (!base) return Fail(base.error());
+    auto options = flags->step.Options(*base);
+    if (!options) return Fail(options.error());
+    return RunLoad(*options, *flags, *request);
   };
   return command;
 }

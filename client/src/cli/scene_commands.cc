@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "progress.h"
 #include "result_json.h"
 #include "step_flags.h"
 #include <nlohmann/json.hpp>
@@ -22,12 +23,15 @@ struct SceneFlags {
 
 // Reads the scene, opens a session named `client_name` and uploads the scene.
 Result<std::pair<Scene, std::unique_ptr<client::Client>>> OpenWithScene(
-    const GlobalFlags& global, const std::string& path, const std::string& client_name) {
-  auto scene = ReadScene(path);
+    const GlobalFlags& global, const SceneFlags& flags, const std::string& client_name) {
+  auto scene = ReadScene(flags.scene);
   if (!scene) return scene.error();
-  client::ClientOptions options = global.Options();
-  options.client_name = client_name;
-  auto client = client::Client::Connect(options);
+  auto base = global.Options();
+  if (!base) return base.error();
+  auto options = flags.step.Options(*base);
+  if (!options) return options.error();
+  options->client_name = client_name;
+  auto client = client::Client::Connect(*options);
   if (!client) return client.error();
   if (auto ok = (*client)->LoadScene(*scene); !ok) return ok.error();
   return std::pair{std::move(*scene), std::move(*client)};
@@ -36,9 +40,10 @@ Result<std::pair<Scene, std::unique_ptr<client::Client>>> OpenWithScene(
 int RunCollide(const GlobalFlags& global, const SceneFlags& flags) {
   auto request = flags.step.Request();
   if (!request) return Fail(request.error());
-  auto session = OpenWithScene(global, flags.scene, "far-client collide");
+  auto session = OpenWithScene(global, flags, "far-client collide");
   if (!session) return Fail(session.error());
-  auto result = session->second->Step(*request);
+  auto result = session->second->Step(*request, ProgressLine("step 0"));
+  EndProgress();
   if (!result) return Fail(result.error());
   std::cout << ResultJson(*result).dump() << "\n";
   return 0;
@@ -47,7 +52,7 @@ int RunCollide(const GlobalFlags& global, const SceneFlags& flags) {
 int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
   auto request = flags.step.Request();
   if (!request) return Fail(request.error());
-  auto session = OpenWithScene(global, flags.scene, "far-client play");
+  auto session = OpenWithScene(global, flags, "far-client play");
   if (!session) return Fail(session.error());
   const Scene& scene = session->first;
   client::Client& client = *session->second;
@@ -59,7 +64,8 @@ int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
         return Fail(ok.error());
     }
     const auto t0 = Clock::now();
-    auto result = client.Step(*request);
+    auto result = client.Step(*request, ProgressLine("step " + std::to_string(step)));
+    EndProgress();
     if (!result) return Fail(result.error());
     const double ms = MsSince(t0);
     if (flags.as_json) {

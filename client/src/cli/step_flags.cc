@@ -2,9 +2,16 @@
 
 #include <cmath>
 
+#include "cli_common.h"
+
 namespace far::cli {
 
 void StepFlags::Add(CLI::App* command) {
+  command
+      ->add_option("--timeout", timeout,
+                   "wait this long for each step's reply while the daemon works on it (500ms, "
+                   "60s, 2m); a daemon that stops ends the wait at once")
+      ->capture_default_str();
   command
       ->add_option("--method", method,
                    "auto (the fastest reliable method for the daemon's renderer and the scene), "
@@ -63,6 +70,14 @@ Result<StepRequest> StepFlags::Request() const {
     return far::MakeError(far::ErrorCode::kInvalidArgument, "--output: unknown '" + out + "'");
   request.output = *o;
   return request;
+}
+
+Result<client::ClientOptions> StepFlags::Options(const client::ClientOptions& base) const {
+  auto wait = ParseDuration("--timeout", timeout);
+  if (!wait) return wait.error();
+  client::ClientOptions options = base;
+  options.timeout = *wait;
+  return options;
 }
 
 }  // namespace far::cli

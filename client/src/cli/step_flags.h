@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "far/client/client.h"
 #include "far/model/result.h"
 #include "far/model/step_request.h"
 
@@ -11,6 +12,7 @@ namespace far::cli {
 
 struct StepFlags {
   std::string method = "auto", mechanism = "id-buffer", output, depth = "depth24";
+  std::string timeout = "60s";
   int resolution = 1024, subobject_size = 1;
   double distance = 0;
   CLI::Option* distance_option = nullptr;
@@ -19,6 +21,8 @@ struct StepFlags {
   void Add(CLI::App* command);
   /// The request the options describe, or an error naming the bad option.
   Result<StepRequest> Request() const;
+  /// The client options for these steps: `base` with --timeout.
+  Result<client::ClientOptions> Options(const client::ClientOptions& base) const;
 };
 
 }  // namespace far::cli

@@ -1,5 +1,7 @@
 #include "far/gpu/gl_context.h"
 
+#include <map>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -50,6 +52,26 @@ bool HasExtension(const char* list, const std::string& name) {
   return all.find(" " + name + " ") != std::string::npos;
 }
 
+// EGL displays are per process: every context of one device (a daemon makes one per session)
+// shares its display, and eglTerminate would end them all. Each context holds a reference;
+// the last one out terminates the display.
+std::mutex g_display_mutex;
+std::map<EGLDisplay, int> g_display_users;
+
+void AcquireDisplay(EGLDisplay display) {
+  std::lock_guard lock(g_display_mutex);
+  ++g_display_users[display];
+}
+
+void ReleaseDisplay(EGLDisplay display) {
+  std::lock_guard lock(g_display_mutex);
+  auto it = g_display_users.find(display);
+  if (it == g_display_users.end() || --it->second == 0) {
+    if (it != g_display_users.end()) g_display_users.erase(it);
+    eglTerminate(display);
+  }
+}
+
 // Initializes `display` and creates a current GL 4.5 core context on it (surfaceless: the
 // renderers draw into their own framebuffer objects). On failure says why in `why`.
 bool MakeContext(EGLDisplay display, EglState* impl, std::string* why) {
@@ -62,14 +84,15 @@ bool MakeContext(EGLDisplay display, EglState* impl, std::string* why) {
     *why = "eglInitialize failed (" + EglErrorName(eglGetError()) + ")";
     return false;
   }
+  AcquireDisplay(display);
   if (!HasExtension(eglQueryString(display, EGL_EXTENSIONS), "EGL_KHR_surfaceless_context")) {
     *why = "no EGL_KHR_surfaceless_context";
-    eglTerminate(display);
+    ReleaseDisplay(display);
     return false;
   }
   if (!eglBindAPI(EGL_OPENGL_API)) {
     *why = "eglBindAPI(EGL_OPENGL_API) failed (" + EglErrorName(eglGetError()) + ")";
-    eglTerminate(display);
+    ReleaseDisplay(display);
     return false;
   }
   const EGLint config_attributes[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
@@ -90,13 +113,13 @@ bool MakeContext(EGLDisplay display, EglState* impl, std::string* why) {
   EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attributes);
   if (context == EGL_NO_CONTEXT) {
     *why = "eglCreateContext(OpenGL 4.5 core) failed (" + EglErrorName(eglGetError()) + ")";
-    eglTerminate(display);
+    ReleaseDisplay(display);
     return false;
   }
   if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
     *why = "eglMakeCurrent failed (" + EglErrorName(eglGetError()) + ")";
     eglDestroyContext(display, context);
-    eglTerminate(display);
+    ReleaseDisplay(display);
     return false;
   }
   impl->display = display;
@@ -174,7 +197,7 @@ GlContext::GlContext(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 GlContext::~GlContext() {
   eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(impl_->display, impl_->context);
-  eglTerminate(impl_->display);
+  ReleaseDisplay(impl_->display);
 }
 
 const std::string& GlContext::renderer() const { return impl_->renderer; }

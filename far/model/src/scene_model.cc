@@ -1,5 +1,6 @@
 #include "far/model/scene_model.h"
 
+#include <algorithm>
 #include <string>
 
 namespace far {
@@ -130,7 +131,22 @@ Result<void> SceneModel::Batch::Check(const SceneUpdate& update) {
       update);
 }
 
-void SceneModel::Batch::Commit() {
+Result<void> SceneModel::Batch::Commit() {
+  // The shared budget first: growth is reserved before anything changes, shrinkage returned
+  // after.
+  const int64_t grow_vertices = vertices_ - model_->vertices_;
+  const int64_t grow_triangles = triangles_ - model_->triangles_;
+  if (model_->shared_ != nullptr && (grow_vertices > 0 || grow_triangles > 0)) {
+    if (auto ok = model_->shared_->Reserve(std::max<int64_t>(grow_vertices, 0),
+                                           std::max<int64_t>(grow_triangles, 0));
+        !ok) {
+      return ok;
+    }
+  }
+  if (model_->shared_ != nullptr && (grow_vertices < 0 || grow_triangles < 0)) {
+    model_->shared_->Release(std::max<int64_t>(-grow_vertices, 0),
+                             std::max<int64_t>(-grow_triangles, 0));
+  }
   for (const auto& [id, object] : changed_) {
     if (object) {
       model_->objects_[id] = *object;
@@ -141,6 +157,11 @@ void SceneModel::Batch::Commit() {
   model_->triangles_ = triangles_;
   model_->vertices_ = vertices_;
   changed_.clear();
+  return {};
+}
+
+SceneModel::~SceneModel() {
+  if (shared_ != nullptr) shared_->Release(vertices_, triangles_);
 }
 
 Result<void> SceneModel::Apply(std::span<const SceneUpdate> updates,
@@ -153,8 +174,7 @@ Result<void> SceneModel::Apply(std::span<const SceneUpdate> updates,
       return MakeError(ok.error().code, place + ok.error().message);
     }
   }
-  batch.Commit();
-  return {};
+  return batch.Commit();
 }
 
 const SceneModel::Object* SceneModel::Find(uint32_t id) const {

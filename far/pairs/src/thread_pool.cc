@@ -1,5 +1,7 @@
 #include "far/pairs/thread_pool.h"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 
 namespace far {
@@ -63,6 +65,7 @@ void ThreadPool::RunChunks() {
 
 void ThreadPool::WorkerLoop() {
   uint64_t seen = 0;
+  int applied_nice = 0;
   for (;;) {
     {
       std::unique_lock lock(mutex_);
@@ -70,8 +73,15 @@ void ThreadPool::WorkerLoop() {
       if (stopping_) return;
       seen = generation_;
     }
+    // On Linux, PRIO_PROCESS with who = 0 sets the calling thread's nice value only.
+    if (const int nice = nice_.load(); nice != applied_nice) {
+      setpriority(PRIO_PROCESS, 0, nice);
+      applied_nice = nice;
+    }
     RunChunks();
   }
 }
+
+void ThreadPool::SetNice(int nice) { nice_ = nice; }
 
 }  // namespace far

@@ -164,7 +164,7 @@ struct Pipeline::Impl {
   std::optional<internal::AutoSelector> selector;  // made on the first auto step
 
   explicit Impl(const PipelineOptions& o)
-      : options(o), pool(o.num_threads), model(o.scene_limits) {}
+      : options(o), pool(o.num_threads), model(o.scene_limits, o.shared_budget) {}
 
   Result<void> Apply(std::vector<SceneUpdate> updates,
                      const std::function<std::string(size_t)>& where);
@@ -505,10 +505,14 @@ Result<void> Pipeline::LoadScene(const Scene& scene) {
   return Apply(std::move(updates), [&](size_t i) { return "objects[" + std::to_string(i) + "]."; });
 }
 
+bool MeasureGpuCost() { return internal::ProbeGpuCost().has_value(); }
+
 Result<StepResult> Pipeline::Step(const StepRequest& request, const StepControl& control) {
   return impl_->Step(request, control);
 }
 int Pipeline::num_objects() const { return impl_->cache.size(); }
+int64_t Pipeline::num_triangles() const { return impl_->model.num_triangles(); }
+void Pipeline::SetCpuNice(int nice) { impl_->pool.SetNice(nice); }
 const SceneCounters& Pipeline::counters() const { return impl_->cache.counters(); }
 std::string Pipeline::gl_renderer() const { return impl_->renderer_name; }
 

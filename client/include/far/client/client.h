@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <future>
 #include <memory>
 #include <span>
@@ -19,48 +20,71 @@
 
 namespace far::client {
 
-/// The daemon's default LCM URL: host-local multicast with a 2 MiB receive buffer (the same as
-/// far::protocol::kDefaultLcmUrl, docs/protocol.md; checked at compile time in client.cc).
-inline constexpr std::string_view kDefaultLcmUrl =
-    "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152";
+/// The name of the daemon a client talks to when none is given (far-daemon --name).
+inline constexpr std::string_view kDefaultDaemonName = "far";
 
-/// How to reach the daemon and what to ask of it.
+/// How to reach a daemon and how long to wait for it.
 struct ClientOptions {
-  std::string lcm_url = std::string(kDefaultLcmUrl);
-  std::string client_name = "far-client";   ///< shown in the daemon's status and logs
-  std::chrono::milliseconds timeout{3000};  ///< for opening a session and for Step
-  bool heartbeat = true;  ///< send heartbeats from a background thread (else call Heartbeat)
+  /// The daemon's name: its socket is <dir>/<name>.sock, dir as far-daemon chooses it
+  /// (/run/far, else $XDG_RUNTIME_DIR/far, else /tmp/far-<uid>; docs/protocol.md).
+  std::string daemon = std::string(kDefaultDaemonName);
+  std::string socket_path;  ///< the daemon's socket, when not the default for `daemon`
+  /// The LCM URL of the session's channels; "" = the one the daemon names when it opens the
+  /// session (the usual case: clients need no LCM configuration).
+  std::string lcm_url;
+  std::string client_name = "far-client";  ///< shown in the daemon's status and logs
+  /// How long Connect and Status keep trying to reach a daemon that is not there (yet): the
+  /// answer "no daemon" comes after this; a daemon started at the same time is found.
+  std::chrono::milliseconds connect_timeout{1000};
+  /// The longest Step waits for its reply. It waits only while the daemon is alive: a daemon
+  /// that stops or restarts ends the wait at once.
+  std::chrono::milliseconds timeout{60000};
 };
 
-/// The daemon's status, as far-client status prints it.
+/// Where a step is while its reply has not come: the daemon's step_status_t.
+struct StepProgress {
+  std::string state;       ///< "queued", "started" or "stage"
+  int queue_position = 0;  ///< queued: this session's steps ahead of it
+  std::string stage;       ///< stage: its name ("update", "exact", ...)
+  double elapsed_ms = 0;   ///< since the daemon received the request
+};
+using ProgressCallback = std::function<void(const StepProgress&)>;
+
+/// The daemon's status, as far-client status prints it. Sessions are the asking user's own
+/// (every session for root).
 struct DaemonStatus {
-  std::string daemon_version, gl_renderer;
+  std::string daemon_version, daemon_name, gl_renderer, gl_device, lcm_url, channel_prefix;
+  std::string socket_path;
   int64_t uptime_ms = 0, steps_total = 0, errors_total = 0, rejected_messages_total = 0;
-  int max_sessions = 0;
+  int max_sessions = 0, max_sessions_per_user = 0, sessions_open = 0;
   double latency_p50_ms = 0, latency_p90_ms = 0, latency_p99_ms = 0, latency_max_ms = 0;
   int64_t latency_samples = 0;
   struct Session {
     int64_t id = 0;
+    int uid = 0;
     std::string client_name;
     int64_t steps = 0;
     int objects = 0;
+    int64_t triangles = 0;
     double latency_p50_ms = 0, latency_p99_ms = 0;
   };
   std::vector<Session> sessions;
   std::vector<std::pair<std::string, int64_t>> errors_by_kind;
 };
 
-/// One session with far-daemon: a shared-memory ring for mesh updates and LCM for control.
+/// One session with far-daemon: a connection to its local socket (the session lives as long as
+/// it does), a shared-memory ring for mesh updates, and LCM for step requests and replies.
 /// Updates (AddObject, ...) are written to the ring at once and take effect at the next Step.
 ///
 /// Thread safety: one thread at a time per Client (a background thread of its own receives
-/// replies and sends heartbeats). Errors are far::Error: kUnavailable "no far-daemon answered"
-/// when none runs, kTimeout when a reply does not come, the daemon's own error otherwise.
+/// replies and watches the daemon). Errors are far::Error: kUnavailable when no daemon runs or
+/// it went away, kTimeout when a reply does not come in time, the daemon's own error otherwise.
 class Client {
  public:
-  /// Opens a session. Errors: kUnavailable (LCM cannot start, or no daemon answered within
-  /// options.timeout), the daemon's refusal (kLimitExceeded when it has too many sessions),
-  /// kPermissionDenied/kVersionMismatch when the shared memory cannot be trusted.
+  /// Opens a session, retrying with backoff for options.connect_timeout while no daemon
+  /// answers (one may be starting). Errors: kUnavailable ("no far-daemon named ..."), the
+  /// daemon's refusal (kLimitExceeded when it has too many sessions, kBusy when this user opens
+  /// too fast), kPermissionDenied when its socket or segment cannot be trusted.
   static Result<std::unique_ptr<Client>> Connect(const ClientOptions& options = {});
   /// Closes the session (Close) if still open.
   ~Client();
@@ -76,21 +100,22 @@ class Client {
   /// Applies one animation frame: removals, additions, poses, vertices.
   Result<void> ApplyFrame(const FrameUpdate& frame);
 
-  /// Runs one step of this session's scene and waits for its reply (options.timeout).
-  Result<StepResult> Step(const StepRequest& request);
+  /// Runs one step of this session's scene and waits for its reply: up to options.timeout
+  /// while the daemon is alive, calling `on_progress` (on the receiving thread) as the daemon
+  /// reports the step queued, started and at each stage.
+  Result<StepResult> Step(const StepRequest& request, const ProgressCallback& on_progress = {});
   /// Sends a step and returns at once; the future holds the reply or the error.
-  std::future<Result<StepResult>> StepAsync(const StepRequest& request);
+  std::future<Result<StepResult>> StepAsync(const StepRequest& request,
+                                            ProgressCallback on_progress = {});
 
-  /// Sends a heartbeat (the background thread does this when options.heartbeat).
-  Result<void> Heartbeat();
   /// Ends the session; later calls fail with kUnavailable.
   Result<void> Close();
 
   int64_t session_id() const;
-  const std::string& shm_name() const;
 
-  /// Asks the daemon for its status. Errors: kUnavailable when no daemon answered in time.
-  static Result<DaemonStatus> Status(const std::string& lcm_url, std::chrono::milliseconds timeout);
+  /// Asks the daemon for its status (retrying for options.connect_timeout like Connect).
+  /// Errors: kUnavailable when no daemon answered.
+  static Result<DaemonStatus> Status(const ClientOptions& options = {});
 
  private:
   struct Impl;

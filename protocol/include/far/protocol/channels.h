@@ -1,13 +1,14 @@
 #pragma once
 
-// LCM channel names. One channel per purpose; per session one request and one reply channel.
-//   FAR_OPEN                  open_session_t             client -> daemon
-//   FAR_OPEN_REPLY_<suffix>   open_session_reply_t       daemon -> client (client picks suffix)
-//   FAR_S<id>_REQ             step_request_t, heartbeat_t, close_session_t   client -> daemon
-//   FAR_S<id>_REPLY           step_reply_t, heartbeat_t, error_t             daemon -> client
-//   FAR_STATUS                status_request_t           anyone -> daemon
-//   FAR_STATUS_REPLY          status_reply_t             daemon -> anyone
-// Several types share a session channel; receivers tell them apart with IdentifyMessage.
+// Where a daemon is reached. Each daemon has a name (default "far"); the name picks its local
+// socket and the prefix of its LCM channels, so several daemons can serve one machine (one per
+// GPU, say) and a client chooses one by name.
+//   <dir>/<name>.sock        local socket (SOCK_SEQPACKET): open a session, ask for status
+//   <prefix>S<id>_REQ        step_request_t                         client -> daemon (signed)
+//   <prefix>S<id>_REPLY      sealed_t (step_reply_t, step_status_t, error_t)  daemon -> client
+// <prefix> is "FAR_" for the daemon named "far", else "FAR_" + the name upper-cased with '-'
+// as '_' + "_" ("gpu-1" -> "FAR_GPU_1_"). Receivers tell message types apart with
+// IdentifyMessage.
 
 #include <cstdint>
 #include <optional>
@@ -21,22 +22,32 @@ namespace far::protocol {
 inline constexpr std::string_view kDefaultLcmUrl =
     "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152";
 
-inline constexpr std::string_view kOpenChannel = "FAR_OPEN";
-inline constexpr std::string_view kOpenReplyPrefix = "FAR_OPEN_REPLY_";
-inline constexpr std::string_view kStatusChannel = "FAR_STATUS";
-inline constexpr std::string_view kStatusReplyChannel = "FAR_STATUS_REPLY";
-/// A regular expression (LCM subscribe syntax) matching every session request channel.
-inline constexpr std::string_view kSessionRequestChannelPattern = "FAR_S[0-9]+_REQ";
+/// The name of a daemon started without --name.
+inline constexpr std::string_view kDefaultDaemonName = "far";
 
-/// Returns "FAR_S<session_id>_REQ".
-std::string SessionRequestChannel(int64_t session_id);
-/// Returns "FAR_S<session_id>_REPLY".
-std::string SessionReplyChannel(int64_t session_id);
-/// Returns the session id of a "FAR_S<id>_REQ" channel (id a decimal > 0 without leading
+/// True when `name` is 1..16 of [a-z0-9-] starting with a letter.
+bool IsValidDaemonName(std::string_view name);
+
+/// The LCM channel prefix of daemon `name` (@pre IsValidDaemonName).
+std::string ChannelPrefix(std::string_view name);
+
+/// Returns "<prefix>S<session_id>_REQ".
+std::string SessionRequestChannel(std::string_view prefix, int64_t session_id);
+/// Returns "<prefix>S<session_id>_REPLY".
+std::string SessionReplyChannel(std::string_view prefix, int64_t session_id);
+/// A regular expression (LCM subscribe syntax) matching every session request channel of the
+/// daemon with this prefix.
+std::string SessionRequestChannelPattern(std::string_view prefix);
+/// Returns the session id of a "<prefix>S<id>_REQ" channel (id a decimal > 0 without leading
 /// zeros, at most 18 digits), nullopt for any other name.
-std::optional<int64_t> ParseSessionRequestChannel(std::string_view channel);
-/// True when `channel` is kOpenReplyPrefix followed by 1..48 of [A-Za-z0-9_-]. The daemon
-/// only answers on such channels, so a client cannot make it publish on a session's channel.
-bool IsValidOpenReplyChannel(std::string_view channel);
+std::optional<int64_t> ParseSessionRequestChannel(std::string_view prefix,
+                                                  std::string_view channel);
+
+/// The directory of daemon sockets when none is given: /run/far when it exists (the system
+/// service's RuntimeDirectory), else $XDG_RUNTIME_DIR/far (a user's own daemon), else
+/// /tmp/far-<uid>.
+std::string DefaultSocketDirectory();
+/// DefaultSocketDirectory() + "/" + name + ".sock".
+std::string DefaultSocketPath(std::string_view name);
 
 }  // namespace far::protocol

@@ -22,9 +22,11 @@ int32_t ToWireStatus(ErrorCode code);
 /// Returns the ErrorCode of a non-zero wire status; unknown values map to kInternal.
 ErrorCode FromWireStatus(int32_t status);
 
-/// Builds a step request (auth zero: sign it with EncodeSigned).
+/// Builds a step request (auth zero: sign it with EncodeSigned); `timeout_ms` is how long the
+/// client will wait for the reply (0: the daemon's deadline).
 far_lcm::step_request_t MakeStepRequest(int64_t session_id, int64_t request_id, int64_t step_id,
-                                        uint64_t ring_commit_sequence, const StepRequest& request);
+                                        uint64_t ring_commit_sequence, const StepRequest& request,
+                                        int32_t timeout_ms = 0);
 
 /// The identifiers a step reply echoes.
 struct StepReplyIds {
@@ -43,6 +45,11 @@ Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output outp
 
 /// Builds the reply of a failed step: status and message from `error`, every array empty.
 far_lcm::step_reply_t MakeStepErrorReply(const StepReplyIds& ids, const Error& error);
+
+/// Builds a step_status_t (auth zero: it travels sealed).
+far_lcm::step_status_t MakeStepStatus(int64_t session_id, int64_t request_id, int64_t step_id,
+                                      std::string_view state, int32_t queue_position,
+                                      std::string_view stage, double elapsed_ms);
 
 /// Builds an error_t (auth zero).
 far_lcm::error_t MakeErrorMessage(int64_t session_id, int64_t request_id, const Error& error,

@@ -27,15 +27,15 @@
 #include <string_view>
 #include <vector>
 
-#include "far_lcm/close_session_t.hpp"
 #include "far_lcm/error_t.hpp"
-#include "far_lcm/heartbeat_t.hpp"
 #include "far_lcm/open_session_reply_t.hpp"
 #include "far_lcm/open_session_t.hpp"
+#include "far_lcm/sealed_t.hpp"
 #include "far_lcm/status_reply_t.hpp"
 #include "far_lcm/status_request_t.hpp"
 #include "far_lcm/step_reply_t.hpp"
 #include "far_lcm/step_request_t.hpp"
+#include "far_lcm/step_status_t.hpp"
 
 #include "far/model/result.h"
 #include "far/protocol/version.h"
@@ -46,8 +46,8 @@ namespace far::protocol {
 enum class MessageType {
   kOpenSession,
   kOpenSessionReply,
-  kCloseSession,
-  kHeartbeat,
+  kSealed,
+  kStepStatus,
   kStepRequest,
   kStepReply,
   kError,
@@ -76,12 +76,12 @@ struct MessageTypeOf<far_lcm::open_session_reply_t> {
   static constexpr MessageType value = MessageType::kOpenSessionReply;
 };
 template <>
-struct MessageTypeOf<far_lcm::close_session_t> {
-  static constexpr MessageType value = MessageType::kCloseSession;
+struct MessageTypeOf<far_lcm::sealed_t> {
+  static constexpr MessageType value = MessageType::kSealed;
 };
 template <>
-struct MessageTypeOf<far_lcm::heartbeat_t> {
-  static constexpr MessageType value = MessageType::kHeartbeat;
+struct MessageTypeOf<far_lcm::step_status_t> {
+  static constexpr MessageType value = MessageType::kStepStatus;
 };
 template <>
 struct MessageTypeOf<far_lcm::step_request_t> {

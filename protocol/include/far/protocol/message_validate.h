@@ -22,7 +22,6 @@ inline constexpr size_t kMaxClientNameLength = 64;
 struct OpenSessionParams {
   int64_t request_id = 0;
   std::string client_name;         ///< 1..64 printable ASCII characters
-  std::string reply_channel;       ///< IsValidOpenReplyChannel
   uint64_t update_ring_bytes = 0;  ///< 0 (daemon default) or a valid ring capacity
   uint64_t reply_ring_bytes = 0;   ///< 0 (daemon default) or a valid ring capacity
 };
@@ -36,6 +35,7 @@ struct StepCommand {
   int64_t request_id = 0;
   int64_t step_id = 0;
   uint64_t ring_commit_sequence = 0;  ///< drain the update ring up to this record sequence
+  int32_t timeout_ms = 0;             ///< how long the client waits (0: the daemon's deadline)
   StepRequest request;
 };
 

@@ -7,7 +7,7 @@
 // larger than the socket buffer never arrives (docs/protocol.md has the measurements). Above
 // kShmReplyThresholdBytes the daemon writes the full encoded step_reply_t into the reply ring
 // (a kStepReply record) and publishes a small stub on LCM that names the record (sequence,
-// index, size) and its BLAKE2b-256 hash; the stub is signed, so the hash binds the payload to
+// index, size) and its BLAKE2b-256 hash; the stub is sealed, so the hash binds the payload to
 // the session key. The client reads the record, checks it against the stub and decodes it.
 
 #include <array>
@@ -56,19 +56,20 @@ Result<std::vector<uint8_t>> ReadShmReply(RingReader& reply_ring, const ShmReply
 far_lcm::step_reply_t MakeShmReplyStub(const far_lcm::step_reply_t& full, const ShmReplyRef& ref);
 
 /// Daemon, one call per reply: encodes `full`; when ShouldUseShmReply, writes it into the
-/// reply ring and makes a stub; returns the signed bytes to publish on the session's reply
-/// channel. Errors: those of EncodeMessage and WriteShmReply (the caller then publishes
-/// MakeStepErrorReply with the error instead).
+/// reply ring and makes a stub; returns the sealed_t bytes (daemon -> client sequence
+/// `seal_sequence`) to publish on the session's reply channel. Errors: those of EncodeMessage,
+/// WriteShmReply and SealEncoded (the caller then publishes MakeStepErrorReply instead).
 Result<std::vector<uint8_t>> EncodeStepReplyForTransport(const far_lcm::step_reply_t& full,
                                                          RingWriter& reply_ring,
-                                                         const SessionKey& key);
+                                                         const SessionKey& key,
+                                                         int64_t seal_sequence);
 
-/// Client, one call per received step_reply_t message: decodes it (cap kMaxStepReplyBytes),
-/// verifies its tag, and when it is a stub reads, checks and decodes the full reply from the
-/// reply ring (its ids must match the stub's). Returns the full reply; its status may say the
-/// step failed (ParseStepReply turns it into a StepResult or an Error). Errors: those of
-/// DecodeMessage, VerifyEncoded and ReadShmReply.
-Result<far_lcm::step_reply_t> ReceiveStepReply(const void* data, size_t size, const SessionKey& key,
+/// Client, one call per step_reply_t taken out of a sealed_t (OpenSealed authenticated it):
+/// decodes it (cap kMaxStepReplyBytes), and when it is a stub reads, checks and decodes the
+/// full reply from the reply ring (its ids must match the stub's). Returns the full reply; its
+/// status may say the step failed (ParseStepReply turns it into a StepResult or an Error).
+/// Errors: those of DecodeMessage and ReadShmReply.
+Result<far_lcm::step_reply_t> ReceiveStepReply(std::span<const uint8_t> inner,
                                                RingReader& reply_ring);
 
 }  // namespace far::protocol

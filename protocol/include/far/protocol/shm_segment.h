@@ -1,16 +1,17 @@
 #pragma once
 
-// A session's shared-memory segment (layout in ring_layout.h), created by the daemon and
-// mapped by the client. POSIX shm (shm_open) with mode 0600: only processes of the daemon's
-// user can open it, so clients run as the daemon's user. The name carries 128 random bits
-// ("/far-<daemon pid>-<session id>-<32 hex digits>"), so no other process can pre-create
-// (squat) it or find it by guessing.
+// A session's shared-memory segment (layout in ring_layout.h): an anonymous memory file
+// (memfd_create) made by the daemon and handed to its client as a file descriptor over the
+// daemon's local socket (SCM_RIGHTS). It has no name: no other process can open it, whatever
+// its user, and nothing is left in /dev/shm when either side dies. Its pages are allocated
+// when it is made (fallocate), so a full memory budget is an error at open, never a SIGBUS
+// later; and it is sealed against resizing (F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL), so the
+// client cannot truncate it under the daemon.
 //
 // The daemon never trusts the segment's contents: it keeps the layout and the session key
 // privately and reads only the client-owned ring indices (checked on every load) and records
-// (copied out, then checked). A client that shrinks the segment (ftruncate) would make the
-// daemon's next access raise SIGBUS; every access runs under a guard that turns that into
-// faulted() == true and a kParseError from the ring (see src/shm_access.h).
+// (copied out, then checked). Every access still runs under a guard that turns a SIGBUS into
+// faulted() == true and a kParseError from the ring (see src/shm_access.h): defence in depth.
 
 #include <cstdint>
 #include <memory>
@@ -39,27 +40,31 @@ struct SegmentOptions {
 /// ring side from one thread.
 class ShmSegment {
  public:
-  /// Daemon: creates the segment (O_CREAT | O_EXCL, mode exactly 0600), sizes and maps it and
-  /// writes the header, with a fresh session key (NewSessionKey). The segment is unlinked when
-  /// this object is destroyed. Errors: kInvalidArgument (bad capacities, session_id 0),
-  /// kUnavailable (shm_open, ftruncate or mmap failed; the message has errno's text).
+  /// Daemon: creates the segment (memfd), allocates, seals and maps it and writes the header,
+  /// with a fresh session key (NewSessionKey). fd() is the descriptor to send to the client.
+  /// Errors: kInvalidArgument (bad capacities, session_id 0), kUnavailable (no memory for the
+  /// segment, or memfd_create/fallocate/mmap failed; the message has errno's text).
   static Result<std::unique_ptr<ShmSegment>> Create(uint64_t session_id,
                                                     const SegmentOptions& options = {});
 
-  /// Client: opens and maps an existing segment (read-write) and checks it: a regular file
-  /// owned by this user with mode 0600, a size within bounds, then the header: magic,
-  /// layout_version (kVersionMismatch), header_size, segment_size equal to the file size,
-  /// session_id equal to `session_id`, valid capacities and offsets. Errors: kInvalidArgument
-  /// (the name is not a far segment name), kNotFound, kPermissionDenied (owner or mode),
-  /// kParseError (header), kVersionMismatch, kUnavailable.
-  static Result<std::unique_ptr<ShmSegment>> Open(std::string_view name, uint64_t session_id);
+  /// Client: maps the segment behind `fd` (taking ownership of it: it is closed) and checks
+  /// it: a regular file sealed against shrinking and growing, a size within bounds, then the
+  /// header: magic, layout_version (kVersionMismatch), header_size, segment_size equal to the
+  /// file size, session_id equal to `session_id`, valid capacities and offsets. Errors:
+  /// kPermissionDenied (not sealed), kParseError (header), kVersionMismatch, kUnavailable.
+  static Result<std::unique_ptr<ShmSegment>> Open(int fd, uint64_t session_id);
 
   ~ShmSegment();
   ShmSegment(const ShmSegment&) = delete;
   ShmSegment& operator=(const ShmSegment&) = delete;
 
-  /// The POSIX shm name, starting with '/'.
+  /// A name for logs: "far-session-<id>" (the segment itself has none).
   const std::string& name() const { return name_; }
+  /// The daemon's descriptor of the segment, to send to the client; -1 once closed (and always
+  /// on the client).
+  int fd() const { return fd_; }
+  /// Closes the daemon's descriptor (the mapping stays valid).
+  void CloseFd();
   uint64_t session_id() const { return session_id_; }
   /// The MAC key of the session's LCM messages (private copy).
   const SessionKey& session_key() const { return key_; }
@@ -76,9 +81,6 @@ class ShmSegment {
   RingRegion update_ring() const;
   RingRegion reply_ring() const;
 
-  /// Removes the name (owner only; idempotent). Mappings stay valid.
-  void Unlink();
-
  private:
   ShmSegment() = default;
   // The ring at `offset` of this mapping with its two published indices.
@@ -90,16 +92,9 @@ class ShmSegment {
   SessionKey key_{};
   SegmentLayout layout_;
   bool owner_ = false;
-  bool unlinked_ = false;
+  int fd_ = -1;
   SegmentHeader* header_ = nullptr;
   std::unique_ptr<internal::MappedRange> mapping_;
 };
-
-/// True when `name` has the form "/far-<pid>-<session id>-<32 lower-case hex digits>".
-bool IsValidSegmentName(std::string_view name);
-
-/// Daemon start-up: removes segments "/far-<pid>-..." of this user whose daemon process
-/// <pid> no longer exists (left behind by a SIGKILLed daemon). Returns how many it removed.
-int RemoveStaleSegments();
 
 }  // namespace far::protocol

@@ -24,6 +24,7 @@
 #include "far/model/mesh.h"
 #include "far/model/pose.h"
 #include "far/model/result.h"
+#include "far/model/scene_budget.h"
 #include "far/model/scene_update.h"
 
 namespace far {
@@ -64,8 +65,10 @@ class SceneModel {
 
     /// The object as the batch leaves it; nullptr when not alive.
     const Object* Find(uint32_t id) const;
-    /// Applies every update checked so far to the model.
-    void Commit();
+    /// Applies every update checked so far to the model, after reserving what the scene grows
+    /// by from the model's shared budget. Errors: kLimitExceeded (the shared budget is spent;
+    /// nothing changed).
+    Result<void> Commit();
 
    private:
     friend class SceneModel;
@@ -77,7 +80,14 @@ class SceneModel {
     int64_t objects_, triangles_, vertices_;
   };
 
-  explicit SceneModel(SceneLimits limits = {}) : limits_(limits) {}
+  /// A model within `limits`, drawing its totals from `shared` too when given (which must
+  /// outlive it).
+  explicit SceneModel(SceneLimits limits = {}, SharedSceneBudget* shared = nullptr)
+      : limits_(limits), shared_(shared) {}
+  /// Gives its totals back to the shared budget.
+  ~SceneModel();
+  SceneModel(const SceneModel&) = delete;
+  SceneModel& operator=(const SceneModel&) = delete;
 
   /// Starts a batch of updates.
   Batch Begin() { return Batch(this); }
@@ -97,6 +107,7 @@ class SceneModel {
 
  private:
   SceneLimits limits_;
+  SharedSceneBudget* shared_ = nullptr;
   std::map<uint32_t, Object> objects_;
   int64_t triangles_ = 0;
   int64_t vertices_ = 0;

@@ -3,6 +3,7 @@
 // What one step answers and what it cost: the reply of far::Pipeline::Step, of the daemon and
 // of far::client::Client::Step alike.
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -16,6 +17,29 @@ namespace far {
 struct StageStats {
   std::string name;  ///< "update", "object_cull", "sweep_and_prune", "primitive_cull", "exact"
   double ms = 0;
+};
+
+/// The numbers one GPU culling level used, largest over its views: together they say why no
+/// primitive that could touch another was culled (docs/bounding-offsets.md). A primitive is
+/// fattened by offset_radius, which covers the pixel and depth steps of the view (pixel_size,
+/// depth_step) and the float32 rounding of the vertices the GPU draws (rounding, included in
+/// offset_radius), over the world bounds of the level's primitives.
+struct LevelCertificate {
+  std::string level;  ///< "object" or "sub-object"
+  int views = 0;      ///< orthographic views rendered
+  int resolution = 0;
+  double offset_radius = 0;
+  double pixel_size = 0;
+  double depth_step = 0;
+  double rounding = 0;
+  std::array<double, 3> world_min{}, world_max{};
+};
+
+/// Whether a step's answer is guaranteed to hold every contact (and distance pair), and why.
+struct Certificate {
+  bool guaranteed = false;
+  std::string basis;                     ///< why (or why not), in words
+  std::vector<LevelCertificate> levels;  ///< the GPU methods' culling levels; empty for CPU ones
 };
 
 /// What a step did and cost.
@@ -43,6 +67,7 @@ struct StepStats {
   int64_t pairs_tested = 0;
   double object_radius = 0;     ///< offset radius r of the last object-level view
   double primitive_radius = 0;  ///< offset radius r of the last sub-object view
+  Certificate certificate;
 };
 
 /// The answer of one step. Ids and triangle indices are as in the scene (docs/scene-format.md).

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
 #include <functional>
@@ -26,6 +27,11 @@ class ThreadPool {
   /// workers and the calling thread; returns when all chunks are done. `body` must not throw.
   void ParallelFor(size_t count, size_t grain, const std::function<void(size_t, size_t)>& body);
 
+  /// Runs the workers at this nice value (Linux; from their next loop on). A daemon lowers the
+  /// priority of a session whose steps are heavy, so that light sessions stay responsive.
+  /// An unprivileged process can raise a nice value but not lower it again.
+  void SetNice(int nice);
+
  private:
   void WorkerLoop();
   void RunChunks();
@@ -38,6 +44,7 @@ class ThreadPool {
   size_t count_ = 0, grain_ = 1, next_ = 0, active_ = 0;
   uint64_t generation_ = 0;
   bool stopping_ = false;
+  std::atomic<int> nice_{0};
 };
 
 }  // namespace far

@@ -32,6 +32,8 @@ struct PipelineOptions {
   bool use_current_context = false;
   /// Budgets of the scene (a daemon session's); updates that would exceed them are refused.
   SceneLimits scene_limits;
+  /// A budget shared with other pipelines (a daemon's sessions), or null; must outlive this.
+  SharedSceneBudget* shared_budget = nullptr;
 };
 
 /// Work the scene bookkeeping did since the pipeline was made: what "only what changed is
@@ -80,7 +82,11 @@ class Pipeline {
   /// kInternal.
   Result<StepResult> Step(const StepRequest& request, const StepControl& control = {});
 
+  /// Runs the pipeline's CPU pool at this nice value (see ThreadPool::SetNice).
+  void SetCpuNice(int nice);
+
   int num_objects() const;
+  int64_t num_triangles() const;
   const SceneCounters& counters() const;
   /// GL_RENDERER, or "none" without GL.
   std::string gl_renderer() const;
@@ -90,5 +96,11 @@ class Pipeline {
   explicit Pipeline(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
+
+/// Measures what a FAR step costs on the renderer of the GL context current on this thread
+/// (the cost model `auto` predicts GPU steps from: measured once per process and renderer, then
+/// cached). A daemon calls it at start-up so that no client's first auto step pays for it
+/// (seconds on a software rasterizer). False when no context is current or the probe failed.
+bool MeasureGpuCost();
 
 }  // namespace far

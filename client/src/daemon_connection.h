@@ -1,0 +1,41 @@
+#pragma once
+
+// far::client's way to the daemon: its local socket, found by name, tried with backoff while
+// the daemon may still be starting; the open handshake (the segment arrives as a descriptor);
+// the status request.
+
+#include <memory>
+#include <string>
+
+#include "far/client/client.h"
+#include "far/protocol/local_socket.h"
+#include "far/protocol/message.h"
+#include "far/protocol/shm_segment.h"
+
+namespace far::client::internal {
+
+/// The daemon's socket for these options: socket_path, else the default for the name.
+std::string SocketPath(const ClientOptions& options);
+
+/// Connects to the daemon's socket, retrying (10 ms, doubling to 200 ms) while there is none
+/// or it refuses, until options.connect_timeout. Errors: kUnavailable "no far-daemon named
+/// 'far' is running (...)", kPermissionDenied (the socket fails the trust check).
+Result<protocol::LocalConnection> ConnectToDaemon(const ClientOptions& options);
+
+/// An accepted session: the daemon's reply and the mapped, checked segment.
+struct OpenedSession {
+  far_lcm::open_session_reply_t reply;
+  std::unique_ptr<protocol::ShmSegment> segment;
+};
+
+/// Sends open_session_t on a fresh connection and waits for the reply and the segment while the
+/// daemon is alive (it may still be making its GL context). Errors: the daemon's refusal,
+/// kUnavailable (it went away), kTimeout, those of ShmSegment::Open.
+Result<OpenedSession> OpenSession(protocol::LocalConnection& connection,
+                                  const ClientOptions& options);
+
+/// Sends status_request_t and returns the reply.
+Result<DaemonStatus> RequestStatus(protocol::LocalConnection& connection,
+                                   const ClientOptions& options);
+
+}  // namespace far::client::internal

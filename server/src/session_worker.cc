@@ -1,0 +1,178 @@
+#include "session_worker.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <exception>
+
+#include <spdlog/spdlog.h>
+
+#include "far/protocol/convert.h"
+#include "far/protocol/shm_reply.h"
+
+namespace far::server {
+namespace {
+
+// The nice value of a session whose steps are heavy.
+constexpr int kHeavyNice = 10;
+// Bytes one contact or distance pair takes in an encoded reply (the larger, a distance pair).
+constexpr uint64_t kWireBytesPerPair = 32;
+
+class SessionWorker {
+ public:
+  SessionWorker(std::shared_ptr<Session> session, const WorkerContext& context)
+      : session_(std::move(session)), context_(context) {}
+
+  void Run() {
+    StepJob job;
+    while (NextJob(&job)) {
+      try {
+        RunStep(job);
+      } catch (const std::exception& e) {
+        // One catch per step: a stray exception is an error reply, not a dead daemon.
+        context_.replier.StepError(
+            *session_, job.command,
+            MakeError(ErrorCode::kInternal, std::string("step failed: ") + e.what()));
+      }
+    }
+    // The pipeline's GL objects and context belong to this thread: free them here.
+    session_->pipeline.reset();
+    session_->updates.reset();
+    session_->replies.reset();
+    session_->segment.reset();
+    session_->worker_done = true;
+  }
+
+ private:
+  // Waits for the next queued step; false once the session is closing.
+  bool NextJob(StepJob* job) {
+    std::unique_lock lock(session_->mutex);
+    session_->wake.wait(lock, [&] { return session_->closing || !session_->queue.empty(); });
+    if (session_->closing) return false;
+    *job = std::move(session_->queue.front());
+    session_->queue.pop_front();
+    return true;
+  }
+
+  Result<void> EnsurePipeline() {
+    if (session_->pipeline) return {};
+    PipelineOptions options;
+    options.use_gl = context_.use_gl;
+    options.platform = context_.config.gl_platform;
+    options.num_threads = context_.config.exact_threads;
+    options.scene_limits = SceneLimitsOf(context_.config);
+    options.shared_budget = &context_.budget;
+    auto pipeline = Pipeline::Create(options);
+    if (!pipeline && options.use_gl) {
+      // No GL context for this session (the driver's limit?): the CPU methods still work.
+      spdlog::warn("event=session_without_gl session={} reason=\"{}\"", session_->id,
+                   pipeline.error().message);
+      options.use_gl = false;
+      pipeline = Pipeline::Create(options);
+    }
+    if (!pipeline) return pipeline.error();
+    session_->pipeline = std::move(*pipeline);
+    if (session_->demoted) session_->pipeline->SetCpuNice(kHeavyNice);
+    return {};
+  }
+
+  // Drains the ring up to the step's commit sequence and applies the updates all or nothing:
+  // a bad update changes nothing, the scene stays as the previous step left it.
+  Result<void> Ingest(const protocol::StepCommand& command) {
+    auto drained = session_->updates->Drain(command.ring_commit_sequence);
+    if (!drained) return drained.error();
+    std::vector<SceneUpdate> updates;
+    std::vector<uint64_t> sequences;
+    updates.reserve(drained->size());
+    for (auto& [sequence, update] : *drained) {
+      updates.push_back(std::move(update));
+      sequences.push_back(sequence);
+    }
+    auto applied = session_->pipeline->Apply(std::move(updates), [&](size_t i) {
+      return "ring record " + std::to_string(sequences[i]) + " (" +
+             UpdateName((*drained)[i].update) + ") ";
+    });
+    if (!applied) return applied;
+    session_->applied_sequence = session_->updates->last_sequence();
+    session_->num_objects = session_->pipeline->num_objects();
+    session_->num_triangles = session_->pipeline->num_triangles();
+    return {};
+  }
+
+  StepControl ControlFor(const StepJob& job) {
+    StepControl control;
+    control.cancel = &session_->cancel;
+    control.deadline = job.deadline;
+    const uint64_t ring = session_->segment->layout().reply_ring_capacity;
+    control.max_pairs = static_cast<size_t>(std::min<uint64_t>(
+        static_cast<uint64_t>(context_.config.max_reply_pairs), (ring - 4096) / kWireBytesPerPair));
+    control.on_stage = [this, &job](std::string_view stage) {
+      context_.replier.StepStatus(*session_, job, "stage", 0, stage);
+    };
+    return control;
+  }
+
+  // A heavy session yields the CPU to light ones from now on (an unprivileged process cannot
+  // undo this; the session's next worker would start at the daemon's priority).
+  void Demote(double ms) {
+    session_->demoted = true;
+    setpriority(PRIO_PROCESS, 0, kHeavyNice);  // this thread (Linux)
+    if (session_->pipeline) session_->pipeline->SetCpuNice(kHeavyNice);
+    spdlog::info("event=session_demoted session={} step_ms={:.1f} nice={}", session_->id, ms,
+                 kHeavyNice);
+  }
+
+  void RunStep(const StepJob& job) {
+    const protocol::StepCommand& command = job.command;
+    Replier& replier = context_.replier;
+    if (Clock::now() >= job.deadline) {
+      return replier.StepError(
+          *session_, command,
+          MakeError(
+              ErrorCode::kTimeout,
+              "step " + std::to_string(command.step_id) + " waited " +
+                  std::to_string(static_cast<int64_t>(MsBetween(job.received, Clock::now()))) +
+                  " ms in the queue, past its deadline; it was not run"));
+    }
+    replier.StepStatus(*session_, job, "started", 0, "-");
+    if (auto ok = EnsurePipeline(); !ok) return replier.StepError(*session_, command, ok.error());
+    if (auto ingested = Ingest(command); !ingested) {
+      replier.StepError(*session_, command, ingested.error());
+      // A segment that faulted can never be read again: end the session now.
+      if (session_->segment->faulted())
+        context_.close_session(session_->id, "its shared-memory segment cannot be read");
+      return;
+    }
+    auto result = session_->pipeline->Step(command.request, ControlFor(job));
+    if (!result) return replier.StepError(*session_, command, result.error());
+    const protocol::StepReplyIds ids{session_->id, command.request_id, command.step_id,
+                                     session_->applied_sequence.load()};
+    auto reply = protocol::MakeStepReply(ids, command.request.output, *result);
+    if (!reply) return replier.StepError(*session_, command, reply.error());
+    if (auto sent = replier.StepReply(*session_, *reply); !sent)
+      return replier.StepError(*session_, command, sent.error());
+    // Latency: request received -> reply published.
+    const double ms = MsBetween(job.received, Clock::now());
+    context_.stats.CountStep(ms);
+    {
+      std::lock_guard lock(session_->latency_mutex);
+      session_->latency.Add(ms);
+    }
+    session_->steps++;
+    if (!session_->demoted && result->stats.total_ms > context_.config.heavy_step_ms)
+      Demote(result->stats.total_ms);
+    spdlog::debug("event=step session={} step={} method={} ms={:.3f} contacts={}", session_->id,
+                  command.step_id, result->stats.method, ms, result->contacts.size());
+  }
+
+  std::shared_ptr<Session> session_;
+  const WorkerContext& context_;
+};
+
+}  // namespace
+
+void StartSessionWorker(const std::shared_ptr<Session>& session, const WorkerContext& context) {
+  session->worker = std::thread([session, &context] { SessionWorker(session, context).Run(); });
+}
+
+}  // namespace far::server

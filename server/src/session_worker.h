@@ -1,0 +1,36 @@
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "daemon_config.h"
+#include "daemon_stats.h"
+#include "replier.h"
+#include "session.h"
+
+#include "far/model/scene_budget.h"
+
+namespace far::server {
+
+/// What every session worker shares.
+struct WorkerContext {
+  const DaemonConfig& config;
+  Replier& replier;
+  DaemonStats& stats;
+  SharedSceneBudget& budget;  ///< all sessions' vertices and triangles
+  bool use_gl = true;         ///< the daemon made a GL context at start-up
+  /// Ends a session from its worker (the segment became unreadable), telling its client.
+  std::function<void(int64_t session_id, const std::string& reason)> close_session;
+};
+
+/// Starts the thread that serves one session: it takes the session's queued steps one at a
+/// time, drains its update ring, applies the updates (all or nothing, within the session's and
+/// the daemon's budgets), runs the pipeline under the step's deadline and cancellation, and
+/// publishes statuses and the reply. The session's pipeline (with its own GL context, made on
+/// this thread) and segment live and die on this thread. A session whose steps take more than
+/// heavy_step_ms is moved to a lower CPU priority, so that it cannot starve light ones. The
+/// thread ends when the session is closed; SessionRegistry::ReapWorkers joins it.
+void StartSessionWorker(const std::shared_ptr<Session>& session, const WorkerContext& context);
+
+}  // namespace far::server

@@ -1,0 +1,31 @@
+#pragma once
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+#include "daemon_config.h"
+#include "daemon_stats.h"
+#include "far_lcm/status_reply_t.hpp"
+#include "session_registry.h"
+
+namespace far::server {
+
+/// What a status reply is made of.
+struct StatusSources {
+  const DaemonConfig& config;
+  const DaemonStats& stats;
+  const SessionRegistry& sessions;
+  std::string gl_renderer, gl_device;
+  std::chrono::steady_clock::time_point started;
+};
+
+/// The status for user `asker`: daemon-wide totals, and the sessions of that user only (every
+/// session, with its user id, for root): another user's client names and scene sizes are
+/// theirs.
+far_lcm::status_reply_t MakeStatusReply(const StatusSources& sources, uid_t asker,
+                                        int64_t request_id);
+
+}  // namespace far::server
