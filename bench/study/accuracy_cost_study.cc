@@ -912,7 +912,8 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", options.quick,
                "small scenes, 2 steps, resolutions 256 and 1024 (smoke test)");
   far::GlPlatform gl_platform = far::GlPlatform::kAuto;  // device: a GPU run must not fall back
-  app.add_option("--gl-platform", gl_platform, "EGL platform: auto, device or surfaceless")
+  app.add_option("--gl-platform", gl_platform,
+                 "EGL platform: auto, device (a GPU only: fails without one) or surfaceless")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, far::GlPlatform>{{"auto", far::GlPlatform::kAuto},
                                                  {"device", far::GlPlatform::kDevice},

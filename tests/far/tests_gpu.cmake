@@ -13,3 +13,10 @@ target_link_libraries(far_gpu_test PRIVATE far::pipeline far_test_scenes far_har
 add_test(NAME GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried
          COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gpu/no_driver_test.sh $<TARGET_FILE:far-daemon>)
 set_tests_properties(GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried PROPERTIES LABELS gpu)
+
+# --gl-platform device on a machine without a GPU: a clear error, never llvmpipe. Skipped (77)
+# where a hardware EGL device exists.
+add_test(NAME GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gpu/device_platform_test.sh $<TARGET_FILE:far-daemon>)
+set_tests_properties(GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe PROPERTIES
+                     LABELS gpu SKIP_RETURN_CODE 77)
