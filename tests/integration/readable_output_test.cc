@@ -117,9 +117,9 @@ TEST_F(ReadableOutputTest, PlayLinesReachAPipeAsTheyArePrinted) {
   const auto path = dir.path() / "demo" / "scene.json";
   ASSERT_EQ(RunFarClient({"make-scene", path.string(), "--leaves", "4", "--frames", "3"}).exit_code,
             0);
-  auto child = ChildProcess::Spawn({FAR_CLIENT_PATH, "--lcm-url", TestLcmUrl(), "--timeout-ms",
-                                    "60000", "play", path.string(), "--method", "far",
-                                    "--resolution", "1024"});
+  auto child =
+      ChildProcess::Spawn({FAR_CLIENT_PATH, "--lcm-url", TestLcmUrl(), "--timeout-ms", "60000",
+                           "play", path.string(), "--method", "far", "--resolution", "1024"});
   ASSERT_TRUE(child.ok()) << far::ToString(child.error());
   const std::optional<std::string> first = (*child)->ReadLine(std::chrono::seconds(30));
   ASSERT_TRUE(first.has_value());
