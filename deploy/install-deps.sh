@@ -14,8 +14,8 @@ packages=(
   # protocol and IPC. LCM's C library is built from source (protocol/third_party/lcm: patch,
   # glib; CMake downloads the tarball, ca-certificates for https); lcm-gen is liblcm-bin's.
   liblcm-bin libglib2.0-dev patch ca-certificates libboost-dev libsodium-dev
-  # files, command lines, logs
-  nlohmann-json3-dev libcli11-dev libspdlog-dev
+  # files (far-client snapshot writes PNG through libpng), command lines, logs
+  nlohmann-json3-dev libpng-dev libcli11-dev libspdlog-dev
   # tests, benchmarks, plots
   libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
   # private network namespaces for the LCM (udpm) tests

@@ -201,11 +201,26 @@ Result<void> Written(const Result<T>& written, const char* what) {
   }
   return error;
 }
+
+// The pose as it is sent: checked with the model's rule and normalized, so a quaternion written
+// with a few decimals is sent as the unit quaternion it stands for, and a bad one is refused
+// here, naming the call, instead of failing the next step.
+Result<Pose> UnitPose(const Pose& X_WO, const char* what, uint32_t id) {
+  Result<Pose> unit = CheckAndNormalizePose(X_WO);
+  if (!unit) {
+    return MakeError(unit.error().code, std::string(what) + ": object " + std::to_string(id) +
+                                            ": X_WO." + unit.error().message);
+  }
+  return unit;
+}
 }  // namespace
 
 Result<void> Client::AddObject(uint32_t id, const Mesh& mesh, Motion motion, const Pose& X_WO) {
   if (auto ok = impl_->CheckOpen(); !ok) return ok;
-  return Written(impl_->updates->AddObject(id, mesh, motion, X_WO, kRingWait), "add_object");
+  const Result<Pose> unit = UnitPose(X_WO, "add_object", id);
+  if (!unit) return unit.error();
+  return Written(impl_->updates->AddObject(id, mesh, motion, *unit, kRingWait),
+                 "add_object");
 }
 Result<void> Client::RemoveObject(uint32_t id) {
   if (auto ok = impl_->CheckOpen(); !ok) return ok;
@@ -213,7 +228,9 @@ Result<void> Client::RemoveObject(uint32_t id) {
 }
 Result<void> Client::SetPose(uint32_t id, const Pose& X_WO) {
   if (auto ok = impl_->CheckOpen(); !ok) return ok;
-  return Written(impl_->updates->SetPose(id, X_WO, kRingWait), "set_pose");
+  const Result<Pose> unit = UnitPose(X_WO, "set_pose", id);
+  if (!unit) return unit.error();
+  return Written(impl_->updates->SetPose(id, *unit, kRingWait), "set_pose");
 }
 Result<void> Client::SetVertices(uint32_t id, std::span<const Eigen::Vector3d> p_MV) {
   if (auto ok = impl_->CheckOpen(); !ok) return ok;

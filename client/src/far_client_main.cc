@@ -1,11 +1,16 @@
-// far-client: probe a running far-daemon, run scene files through it, and load-test it.
+// far-client: probe a running far-daemon, run scene files through it, load-test it, and draw
+// a step of a scene (snapshot, in process).
 // Usage and examples: far-client --help, far-client <command> --help, README.md.
 // Each command lives in its own file under cli/.
+#include <cstdio>
 #include <vector>
 
 #include "cli/cli_common.h"
 
 int main(int argc, char** argv) {
+  // Every line reaches a pipe as it is printed (deploy/run-demo.sh prefixes each client's lines
+  // as they come), not in one burst when the buffer fills or the command ends.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   CLI::App app{"far-client: probe a far-daemon, run scene files through it, load-test it"};
   app.require_subcommand(1);
   app.fallthrough();  // the global flags may also come after the command
@@ -25,6 +30,7 @@ int main(int argc, char** argv) {
       far::cli::AddPingCommand(app, global),    far::cli::AddStatusCommand(app, global),
       far::cli::AddCollideCommand(app, global), far::cli::AddPlayCommand(app, global),
       far::cli::AddLoadCommand(app, global),    far::cli::AddMakeSceneCommand(app),
+      far::cli::AddSnapshotCommand(app),
   };
   CLI11_PARSE(app, argc, argv);
   for (const far::cli::Command& command : commands) {

@@ -116,7 +116,9 @@ Result<Pose> LoadPose(const RecordErrors& errors, std::span<const uint8_t> bytes
   Pose pose;
   pose.translation = Eigen::Vector3d(v[0], v[1], v[2]);
   pose.rotation = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
-  // The unit-quaternion rule is the model's (far::CheckPose), as for every other pose.
+  // The unit-quaternion rule is the model's (far::CheckPose), as for every other pose. The pose
+  // is passed on bit for bit; the pipeline normalizes it where it places the object
+  // (scene_cache.cc), as it does for in-process callers, so normalizing happens once.
   if (auto ok = CheckPose(pose); !ok) return errors.Invalid("X_WO", ok.error().message);
   return pose;
 }

@@ -38,7 +38,9 @@ int main(int argc, char** argv) {
                              "implies --gl-platform device)");
   auto* url = app.add_option("--lcm-url", flags.lcm_url, "LCM URL")->capture_default_str();
   auto* platform =
-      app.add_option("--gl-platform", gl_platform, "auto (default), device or surfaceless");
+      app.add_option("--gl-platform", gl_platform,
+                     "auto (default: a GPU, else Mesa's software renderer), device (a GPU "
+                     "only: fails without one) or surfaceless");
   auto* sessions =
       app.add_option("--max-sessions", flags.max_sessions, "session limit")->capture_default_str();
   auto* triangles =

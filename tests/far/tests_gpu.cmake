@@ -4,8 +4,12 @@ target_include_directories(far_test_scenes PUBLIC support)
 target_link_libraries(far_test_scenes PUBLIC far::pairs far::scenes PRIVATE far_warnings)
 
 # GPU tests: headless GL (llvmpipe in CI). Label gpu.
-far_add_test(far_gpu_test gpu far/gpu/gl_context_test.cc far/pipeline/pipeline_culling_test.cc)
-target_link_libraries(far_gpu_test PRIVATE far::pipeline far_test_scenes far_hard_cases)
+far_add_test(far_gpu_test gpu far/gpu/gl_context_test.cc far/gpu/snapshot_test.cc
+             far/pipeline/pipeline_culling_test.cc)
+target_link_libraries(far_gpu_test PRIVATE far::pipeline far::io far_test_scenes far_hard_cases)
+# snapshot_test runs far-client snapshot (in process: GL, no daemon).
+target_compile_definitions(far_gpu_test PRIVATE FAR_CLIENT_PATH="$<TARGET_FILE:far-client>")
+add_dependencies(far_gpu_test far-client)
 
 
 # With no EGL driver at all (GLVND pointed at no vendor), far-daemon exits with one clear line
@@ -13,3 +17,10 @@ target_link_libraries(far_gpu_test PRIVATE far::pipeline far_test_scenes far_har
 add_test(NAME GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried
          COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gpu/no_driver_test.sh $<TARGET_FILE:far-daemon>)
 set_tests_properties(GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried PROPERTIES LABELS gpu)
+
+# --gl-platform device on a machine without a GPU: a clear error, never llvmpipe. Skipped (77)
+# where a hardware EGL device exists.
+add_test(NAME GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gpu/device_platform_test.sh $<TARGET_FILE:far-daemon>)
+set_tests_properties(GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe PROPERTIES
+                     LABELS gpu SKIP_RETURN_CODE 77)

@@ -2,6 +2,7 @@
 // brute-force reference's answers; concurrent sessions with the same ids and interpenetrating
 // geometry never see each other; far-client status reports what happened.
 #include <algorithm>
+#include <cmath>
 #include <future>
 
 #include "daemon_fixture.h"
@@ -162,6 +163,44 @@ TEST_F(EndToEndTest, LoadRunsEveryClientForItsStepsAndTime) {
   report = nlohmann::json::parse(load.out);
   for (const auto& client : report["per_client"])
     EXPECT_GT(client["steps"].get<int>(), 0) << client.dump();
+}
+
+// The client library sends quaternions written with four decimals as the unit quaternions they
+// stand for, and refuses one beyond the tolerance at once, naming it, instead of letting the
+// next step fail.
+TEST_F(EndToEndTest, ClientNormalizesNearlyUnitQuaternionsAndRefusesOthersAtOnce) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  std::vector<SceneObject> objects = ContactSoup(3);
+  auto client = client::Client::Connect(TestClientOptions("quaternions"));
+  ASSERT_TRUE(client.ok()) << far::ToString(client.error());
+  // Rotations rounded to four decimals, as people write them: no longer of unit norm, but
+  // within the tolerance.
+  int non_unit = 0;
+  for (SceneObject& object : objects) {
+    Eigen::Vector4d wxyz = object.X_WO.rotation.coeffs();
+    for (int i = 0; i < 4; ++i) wxyz[i] = std::round(wxyz[i] * 1e4) / 1e4;
+    object.X_WO.rotation.coeffs() = wxyz;
+    non_unit += object.X_WO.rotation.norm() != 1.0;
+    ASSERT_TRUE((*client)->AddObject(object.id, object.mesh, object.motion, object.X_WO).ok());
+  }
+  ASSERT_GT(non_unit, 0);
+  auto result = (*client)->Step(SmallRequest(Method::kExact));
+  ASSERT_TRUE(result.ok()) << far::ToString(result.error());
+  EXPECT_FALSE(result->contacts.empty());
+
+  Pose bad = objects[0].X_WO;
+  bad.rotation.coeffs() *= 1.5;
+  auto refused = (*client)->SetPose(objects[0].id, bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(refused.error().message.find("set_pose: object " + std::to_string(objects[0].id) +
+                                         ": X_WO.rotation_wxyz: not a unit quaternion (norm 1.5"),
+            std::string::npos)
+      << refused.error().message;
+  // Nothing was written: the session goes on.
+  auto again = (*client)->Step(SmallRequest(Method::kExact));
+  ASSERT_TRUE(again.ok()) << far::ToString(again.error());
+  EXPECT_EQ(again->contacts, result->contacts);
 }
 
 TEST_F(EndToEndTest, ConcurrentSessionsWithTheSameIdsNeverSeeEachOther) {

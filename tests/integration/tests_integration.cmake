@@ -16,6 +16,7 @@ add_executable(far_integration_test
   integration/raw_session.cc
   integration/integration_scenes.cc
   integration/end_to_end_test.cc
+  integration/readable_output_test.cc
   integration/bad_input_test.cc
   integration/lcm_receive_test.cc
   integration/session_lifetime_test.cc

@@ -415,10 +415,23 @@ TEST(ParseUpdateRecordTest, RejectsNonUnitQuaternions) {
                    "1.41421356)");
   ExpectParseError(ForgeSetPose(1, 5, {0, 0, 0, 0, 0, 0, 0}), ErrorCode::kInvalidArgument,
                    "not a unit quaternion (norm 0)");
-  ExpectParseError(ForgeSetPose(1, 5, {0, 0, 0, 1 + 2e-6, 0, 0, 0}), ErrorCode::kInvalidArgument,
-                   "not a unit quaternion (norm 1.000002)");
-  // Within the tolerance: accepted.
-  EXPECT_TRUE(ParseUpdateRecord(ForgeSetPose(1, 5, {0, 0, 0, 1 + 5e-7, 0, 0, 0}), RingLimits{}));
+  ExpectParseError(ForgeSetPose(1, 5, {0, 0, 0, 1 + 2e-3, 0, 0, 0}), ErrorCode::kInvalidArgument,
+                   "not a unit quaternion (norm 1.002): |norm - 1| must be at most 0.001");
+}
+
+// Within the tolerance (a quaternion written with four decimals): accepted as sent, bit for bit
+// (far::Pipeline normalizes where it places the object).
+TEST(ParseUpdateRecordTest, AcceptsNearlyUnitQuaternions) {
+  const auto parsed =
+      ParseUpdateRecord(ForgeSetPose(1, 5, {0, 0, 0, 0.7071, 0, 0, 0.7071}), RingLimits{});
+  ASSERT_TRUE(parsed) << ToString(parsed.error());
+  const auto* set_pose = std::get_if<SetPose>(&*parsed);
+  ASSERT_NE(set_pose, nullptr);
+  EXPECT_EQ(set_pose->X_WO.rotation.w(), 0.7071);
+  const auto added = ParseUpdateRecord(
+      ForgeAddObject(2, 5, 1, 3, 1, {0, 0, 0, 1.0009, 0, 0, 0}, kTriangle, {0, 1, 2}),
+      RingLimits{});
+  ASSERT_TRUE(added) << ToString(added.error());
 }
 
 TEST(ParseUpdateRecordTest, RejectsUnknownMotionAndReservedBitsAcceptsEveryId) {

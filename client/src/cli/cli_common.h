@@ -51,5 +51,6 @@ Command AddCollideCommand(CLI::App& app, const GlobalFlags& global);
 Command AddPlayCommand(CLI::App& app, const GlobalFlags& global);
 Command AddLoadCommand(CLI::App& app, const GlobalFlags& global);
 Command AddMakeSceneCommand(CLI::App& app);
+Command AddSnapshotCommand(CLI::App& app);
 
 }  // namespace far::cli

@@ -28,7 +28,7 @@ struct LoadStats {
 
 // The load command's own flags.
 struct LoadFlags {
-  int clients = 4, steps = 100;
+  int clients = 4, steps = 100;  // steps 0: no limit (with --seconds)
   double seconds = 0;
   std::string scene;
   bool as_json = false;
@@ -188,16 +188,28 @@ Command AddLoadCommand(CLI::App& app, const GlobalFlags& global) {
   CLI::App* load = command.app;
   load->add_option("--clients", flags->clients, "concurrent clients (threads)")
       ->capture_default_str();
-  load->add_option("--steps", flags->steps, "steps per client (0: until --seconds)")
-      ->capture_default_str();
-  load->add_option("--seconds", flags->seconds, "stop after this many seconds");
+  CLI::Option* steps =
+      load->add_option("--steps", flags->steps,
+                       "steps per client (default: 100, or no limit when --seconds is given; "
+                       "0: no limit, needs --seconds)")
+          ->check(CLI::NonNegativeNumber);
+  CLI::Option* seconds =
+      load->add_option("--seconds", flags->seconds,
+                       "stop after this many seconds (alone: run until then, however many steps)")
+          ->check(CLI::PositiveNumber);
   load->add_option("--scene", flags->scene,
                    "scene each client uploads (default: a random soup per client)");
   load->add_flag("--json", flags->as_json, "print JSON");
   flags->step.Add(load);
-  command.run = [&global, flags] {
+  command.run = [&global, flags, steps, seconds] {
     auto request = flags->step.Request();
     if (!request) return Fail(request.error());
+    // --seconds alone means "for this long": the step count's default must not cut it short.
+    if (seconds->count() > 0 && steps->count() == 0) flags->steps = 0;
+    if (flags->steps <= 0 && seconds->count() == 0) {
+      return Fail(MakeError(ErrorCode::kInvalidArgument,
+                            "--steps 0 (no limit) needs --seconds: the run would never end"));
+    }
     auto base = global.Options();
     if (!base) return Fail(base.error());
     auto options = flags->step.Options(*base);

@@ -3,6 +3,7 @@
 
 #include "cli_common.h"
 #include "progress.h"
+#include "object_listing.h"
 #include "result_json.h"
 #include "step_flags.h"
 #include <nlohmann/json.hpp>
@@ -18,6 +19,7 @@ struct SceneFlags {
   std::string scene;
   int steps = 0;  // play: 0 = 1 + number of frames
   bool as_json = false;
+  bool contacts = false;  // play: list each step's contacts by object pair
   StepFlags step;
 };
 
@@ -49,6 +51,40 @@ int RunCollide(const GlobalFlags& global, const SceneFlags& flags) {
   return 0;
 }
 
+// One JSON object per step; `objects` (when given) adds the contacts grouped by object pair.
+void PrintStepJson(int step, double ms, const StepResult& result, const FrameUpdate* frame,
+                   const SceneObjects* objects) {
+  json line = {{"step", step},
+               {"round_trip_ms", ms},
+               {"pcs_objects", result.pcs_objects.size()},
+               {"contacts", result.contacts.size()},
+               {"distance_pairs", result.distance_pairs.size()},
+               {"removed", json::array()},
+               {"added", json::array()},
+               {"stats", StatsJson(result.stats)}};
+  if (frame != nullptr) {
+    line["removed"] = frame->removals;
+    for (const SceneObject& object : frame->additions) line["added"].push_back(object.id);
+  }
+  if (objects != nullptr) {
+    line["object_contacts"] = json::array();
+    for (const ObjectContact& contact : GroupByObjectPair(result.contacts, *objects))
+      line["object_contacts"].push_back(ToJson(contact, *objects));
+  }
+  std::cout << line.dump() << "\n";
+}
+
+void PrintStepLine(int step, double ms, const StepResult& result) {
+  size_t pcs_triangles = 0;
+  for (const auto& [id, tris] : result.pcs_primitives) pcs_triangles += tris.size();
+  std::printf(
+      "step %3d  round trip %8.2f ms  pipeline %8.2f ms  pcs objects %4zu  pcs triangles %6zu  "
+      "object pairs %4lld  contacts %5zu  distance pairs %5zu\n",
+      step, ms, result.stats.total_ms, result.pcs_objects.size(), pcs_triangles,
+      static_cast<long long>(result.stats.object_pairs), result.contacts.size(),
+      result.distance_pairs.size());
+}
+
 int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
   auto request = flags.step.Request();
   if (!request) return Fail(request.error());
@@ -57,11 +93,17 @@ int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
   const Scene& scene = session->first;
   client::Client& client = *session->second;
   const int total = flags.steps > 0 ? flags.steps : static_cast<int>(scene.frames.size()) + 1;
+  SceneObjects objects(scene.objects);
   for (int step = 0; step < total; ++step) {
     // Step 0 is the scene as loaded; frame k is applied before step k + 1.
-    if (step > 0 && static_cast<size_t>(step - 1) < scene.frames.size()) {
-      if (auto ok = client.ApplyFrame(scene.frames[static_cast<size_t>(step - 1)]); !ok)
-        return Fail(ok.error());
+    const FrameUpdate* frame = step > 0 && static_cast<size_t>(step - 1) < scene.frames.size()
+                                   ? &scene.frames[static_cast<size_t>(step - 1)]
+                                   : nullptr;
+    std::vector<std::string> events;
+    if (frame != nullptr) {
+      events = DescribeRemovalsAndAdditions(*frame, objects);
+      objects.Apply(*frame);
+      if (auto ok = client.ApplyFrame(*frame); !ok) return Fail(ok.error());
     }
     const auto t0 = Clock::now();
     auto result = client.Step(*request, ProgressLine("step " + std::to_string(step)));
@@ -69,22 +111,14 @@ int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
     if (!result) return Fail(result.error());
     const double ms = MsSince(t0);
     if (flags.as_json) {
-      json line = {{"step", step},
-                   {"round_trip_ms", ms},
-                   {"pcs_objects", result->pcs_objects.size()},
-                   {"contacts", result->contacts.size()},
-                   {"distance_pairs", result->distance_pairs.size()},
-                   {"stats", StatsJson(result->stats)}};
-      std::cout << line.dump() << "\n";
+      PrintStepJson(step, ms, *result, frame, flags.contacts ? &objects : nullptr);
     } else {
-      size_t pcs_triangles = 0;
-      for (const auto& [id, tris] : result->pcs_primitives) pcs_triangles += tris.size();
-      std::printf(
-          "step %3d  round trip %8.2f ms  pipeline %8.2f ms  pcs objects %4zu  pcs triangles %6zu  "
-          "object pairs %4lld  contacts %5zu  distance pairs %5zu\n",
-          step, ms, result->stats.total_ms, result->pcs_objects.size(), pcs_triangles,
-          static_cast<long long>(result->stats.object_pairs), result->contacts.size(),
-          result->distance_pairs.size());
+      for (const std::string& event : events) std::printf("frame %3d: %s\n", step, event.c_str());
+      PrintStepLine(step, ms, *result);
+      if (flags.contacts) {
+        for (const ObjectContact& contact : GroupByObjectPair(result->contacts, objects))
+          std::printf("      %s\n", Describe(contact, objects).c_str());
+      }
     }
   }
   return 0;
@@ -113,12 +147,20 @@ Command AddPlayCommand(CLI::App& app, const GlobalFlags& global) {
   auto flags = std::make_shared<SceneFlags>();
   Command command;
   command.app = app.add_subcommand(
-      "play", "Run an animated scene (its frames) step by step; one stats line per step");
+      "play",
+      "Run an animated scene (its frames) step by step; one stats line per step. Step 0 is the\n"
+      "scene as loaded, step k follows frames[k-1]; a frame that removes or adds objects gets a\n"
+      "line first: 'frame   6: vase breaks into 4 fragments: vase-fragment-1, ...'");
   command.app->add_option("scene", flags->scene, "far-scene/1 JSON file with frames")
       ->required()
       ->check(CLI::ExistingFile);
   command.app->add_option("--steps", flags->steps, "steps to run (default: 1 + number of frames)");
-  command.app->add_flag("--json", flags->as_json, "print one JSON object per step");
+  command.app->add_flag("--json", flags->as_json,
+                        "print one JSON object per step (with the ids 'removed' and 'added' by "
+                        "the frame before it)");
+  command.app->add_flag("--contacts", flags->contacts,
+                        "after each step, its contacts by object pair, named as in the scene: "
+                        "'leaf-12 touches tree (37 triangle pairs)' (JSON: 'object_contacts')");
   flags->step.Add(command.app);
   command.run = [&global, flags] { return RunPlay(global, *flags); };
   return command;

@@ -129,6 +129,69 @@ bool MakeContext(EGLDisplay display, EglState* impl, std::string* why) {
   return true;
 }
 
+// Undoes a successful MakeContext.
+void ReleaseContext(EglState* state) {
+  eglMakeCurrent(state->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  eglDestroyContext(state->display, state->context);
+  eglTerminate(state->display);
+  *state = EglState{};
+}
+
+// Mesa's software rasterizers, by GL_RENDERER: a device that does not call itself software
+// (EGL_MESA_device_software) may still render with one, e.g. a DRM node without a 3D driver.
+bool IsSoftwareRenderer(const std::string& renderer) {
+  for (const char* name : {"llvmpipe", "softpipe", "swrast"}) {
+    if (renderer.find(name) != std::string::npos) return true;
+  }
+  return false;
+}
+
+// Makes a context on an EGL device: hardware devices first, software ones
+// (EGL_MESA_device_software) only after them, so llvmpipe never shadows a GPU, and not at all
+// when `hardware_only` (GlPlatform::kDevice means a GPU: software devices are listed as tried,
+// never used). True with `state` current; else every attempt is added to `attempts`.
+bool TryDevicePlatform(const char* client_extensions, bool hardware_only, EglState* state,
+                       std::vector<std::string>* attempts) {
+  if (!HasExtension(client_extensions, "EGL_EXT_platform_device") ||
+      !HasExtension(client_extensions, "EGL_EXT_device_enumeration")) {
+    attempts->push_back("EGL device platform: not offered by this EGL");
+    return false;
+  }
+  EGLint num_devices = 0;
+  eglQueryDevicesEXT(0, nullptr, &num_devices);
+  std::vector<EGLDeviceEXT> devices(static_cast<size_t>(std::max(num_devices, 0)));
+  eglQueryDevicesEXT(num_devices, devices.data(), &num_devices);
+  if (num_devices == 0) attempts->push_back("EGL device platform: no devices");
+  for (bool want_software : {false, true}) {
+    for (int i = 0; i < num_devices; ++i) {
+      const bool software = HasExtension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS),
+                                         "EGL_MESA_device_software");
+      if (software != want_software) continue;
+      const std::string name = "EGL device " + std::to_string(i) +
+                               (software ? " (EGL_MESA_device_software)" : " (hardware)");
+      if (software && hardware_only) {
+        attempts->push_back(name + ": a software renderer (Mesa's llvmpipe), not a GPU");
+        continue;
+      }
+      EGLDisplay display = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
+      std::string why;
+      if (!MakeContext(display, state, &why)) {
+        attempts->push_back(name + ": " + why);
+        continue;
+      }
+      if (hardware_only && IsSoftwareRenderer(state->renderer)) {
+        attempts->push_back(name + ": GL_RENDERER '" + state->renderer +
+                            "' is a software renderer, not a GPU");
+        ReleaseContext(state);
+        continue;
+      }
+      state->platform = name;
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 struct GlContext::Impl : EglState {};
@@ -138,36 +201,11 @@ Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform) {
   std::vector<std::string> attempts;
   const char* client_extensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
 
-  // 1. The EGL device platform: a real GPU with no X server. Hardware devices first; software
-  //    ones (EGL_MESA_device_software) only after them, so llvmpipe never shadows a GPU.
-  if (platform != GlPlatform::kSurfaceless) {
-    if (!HasExtension(client_extensions, "EGL_EXT_platform_device") ||
-        !HasExtension(client_extensions, "EGL_EXT_device_enumeration")) {
-      attempts.push_back("EGL device platform: not offered by this EGL");
-    } else {
-      EGLint num_devices = 0;
-      eglQueryDevicesEXT(0, nullptr, &num_devices);
-      std::vector<EGLDeviceEXT> devices(static_cast<size_t>(std::max(num_devices, 0)));
-      eglQueryDevicesEXT(num_devices, devices.data(), &num_devices);
-      if (num_devices == 0) attempts.push_back("EGL device platform: no devices");
-      for (bool want_software : {false, true}) {
-        for (int i = 0; i < num_devices; ++i) {
-          const bool software = HasExtension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS),
-                                             "EGL_MESA_device_software");
-          if (software != want_software) continue;
-          const std::string name = "EGL device " + std::to_string(i) +
-                                   (software ? " (EGL_MESA_device_software)" : " (hardware)");
-          EGLDisplay display =
-              eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
-          std::string why;
-          if (MakeContext(display, impl.get(), &why)) {
-            impl->platform = name;
-            return std::unique_ptr<GlContext>(new GlContext(std::move(impl)));
-          }
-          attempts.push_back(name + ": " + why);
-        }
-      }
-    }
+  // 1. The EGL device platform: a real GPU with no X server.
+  if (platform != GlPlatform::kSurfaceless &&
+      TryDevicePlatform(client_extensions, platform == GlPlatform::kDevice, impl.get(),
+                        &attempts)) {
+    return std::unique_ptr<GlContext>(new GlContext(std::move(impl)));
   }
 
   // 2. Mesa's surfaceless platform (llvmpipe on machines with no GPU).
@@ -186,9 +224,16 @@ Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform) {
     }
   }
 
-  std::string message = "no OpenGL 4.5 core context could be made; tried:";
+  std::string message =
+      platform == GlPlatform::kDevice
+          ? "no GPU found through the EGL device platform (platform 'device' uses hardware EGL "
+            "devices only and never falls back to software; 'auto' does); tried:"
+          : "no OpenGL 4.5 core context could be made; tried:";
   for (const auto& attempt : attempts) message += "\n  - " + attempt;
-  message += "\n(install libegl-mesa0 and libgl1-mesa-dri for the software renderer)";
+  message += platform == GlPlatform::kDevice
+                 ? "\n(a GPU needs its vendor's EGL driver, e.g. libEGL_nvidia.so.0 and its glvnd "
+                   "vendor file: docs/gpu.md)"
+                 : "\n(install libegl-mesa0 and libgl1-mesa-dri for the software renderer)";
   return MakeError(ErrorCode::kUnavailable, message);
 }
 

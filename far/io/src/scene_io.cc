@@ -3,15 +3,17 @@
 
 #include "far/io/scene_io.h"
 
+#include <array>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <map>
+#include <span>
 #include <string>
 #include <unordered_set>
 #include <vector>
 
 #include "io_util.h"
+#include "known_keys.h"
 #include <nlohmann/json.hpp>
 
 #include "far/io/mesh_io.h"
@@ -34,12 +36,6 @@ Error ValueError(const std::string& where, const std::string& what) {
 
 std::string Index(const std::string& where, size_t i) {
   return where + "[" + std::to_string(i) + "]";
-}
-
-std::string Short(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.9g", value);
-  return buffer;
 }
 
 // Parses JSON text; rejects syntax errors (with the byte offset) and duplicate keys.
@@ -99,6 +95,30 @@ Result<void> ExpectArray(const Json& json, const std::string& where) {
   return ShapeError(where, std::string("expected an array, got ") + json.type_name());
 }
 
+// The keys of each JSON object level of far-scene/1. Every level may carry a "comment" string.
+template <size_t N>
+using Keys = std::array<std::string_view, N>;
+constexpr Keys<4> kRootKeys = {"format", "objects", "frames", "comment"};
+constexpr Keys<6> kObjectKeys = {"id", "name", "mesh", "motion", "pose", "comment"};
+constexpr Keys<3> kPoseKeys = {"translation", "rotation_wxyz", "comment"};
+constexpr Keys<5> kFrameKeys = {"remove", "add", "poses", "vertices", "comment"};
+constexpr Keys<4> kFramePoseKeys = {"id", "translation", "rotation_wxyz", "comment"};
+constexpr Keys<3> kVertexKeys = {"id", "mesh", "comment"};
+
+// Checks the JSON object `json` at `where` (`what` names the level in messages): every key
+// known, and "comment", when present, a string.
+Result<void> CheckLevel(const Json& json, const std::string& where, const char* what,
+                        std::span<const std::string_view> known) {
+  if (Result<void> keys = internal::CheckKnownKeys(json, where, what, known); !keys.ok()) {
+    return keys;
+  }
+  if (const auto comment = json.find("comment"); comment != json.end() && !comment->is_string()) {
+    return ShapeError((where == "(root)" ? "" : where + ".") + "comment",
+                      std::string("expected a string, got ") + comment->type_name());
+  }
+  return {};
+}
+
 Result<uint32_t> ParseId(const Json& json, const std::string& where) {
   if (json.is_number_unsigned() && json.get<uint64_t>() <= std::numeric_limits<uint32_t>::max()) {
     return static_cast<uint32_t>(json.get<uint64_t>());
@@ -148,14 +168,13 @@ Result<Pose> ParsePose(const Json& json, const std::string& where) {
     const std::string where_rotation = where + ".rotation_wxyz";
     const Result<Eigen::Vector4d> wxyz = ParseVector<4>(*rotation, where_rotation);
     if (!wxyz.ok()) return wxyz.error();
-    const double norm = wxyz->norm();
-    if (std::abs(norm - 1.0) > 1e-6) {
-      return ValueError(where_rotation, "not a unit quaternion (norm " + Short(norm) + ")");
-    }
     pose.rotation = Eigen::Quaterniond((*wxyz)[0], (*wxyz)[1], (*wxyz)[2], (*wxyz)[3]);
-    pose.rotation.normalize();
   }
-  return pose;
+  // The model's rule (kQuaternionTolerance), then normalized: the daemon and the pipeline see
+  // the exact rotation the file's rounded numbers stand for.
+  Result<Pose> unit = CheckAndNormalizePose(pose);
+  if (!unit.ok()) return MakeError(unit.error().code, where + "." + unit.error().message);
+  return *unit;
 }
 
 // Builds a Scene from the JSON tree, loading mesh files relative to the scene's folder.
@@ -180,6 +199,10 @@ class SceneParser {
       }
       return ShapeError("format", "expected \"" + std::string(kFormat) + "\", got " +
                                       internal::Quote(format_text));
+    }
+    // The format is known now: every other key must be one of far-scene/1's.
+    if (Result<void> keys = CheckLevel(root, "(root)", "the top level", kRootKeys); !keys.ok()) {
+      return keys.error();
     }
     // Objects, then frames.
     Scene scene;
@@ -234,6 +257,9 @@ class SceneParser {
   // {"id": 7, "mesh": "leaf.obj", "motion": "rigid", "pose": {...}}
   Result<SceneObject> ParseObject(const Json& json, const std::string& where) {
     if (Result<void> status = ExpectObject(json, where); !status.ok()) return status.error();
+    if (Result<void> keys = CheckLevel(json, where, "an object", kObjectKeys); !keys.ok()) {
+      return keys.error();
+    }
     SceneObject object;
     // id, motion and pose first: cheap, and they name the object in mesh errors.
     const Result<const Json*> id = Require(json, "id", where + ".id");
@@ -254,9 +280,19 @@ class SceneParser {
                                                " (expected static, rigid or deformable)");
     }
     object.motion = *motion_value;
+    if (const Json* name = Find(json, "name")) {
+      if (!name->is_string()) {
+        return ShapeError(where + ".name",
+                          std::string("expected a string, got ") + name->type_name());
+      }
+      object.name = name->get<std::string>();  // its content is ValidateScene's to check
+    }
     if (const Json* pose = Find(json, "pose")) {
       if (Result<void> status = ExpectObject(*pose, where + ".pose"); !status.ok()) {
         return status.error();
+      }
+      if (Result<void> keys = CheckLevel(*pose, where + ".pose", "a pose", kPoseKeys); !keys.ok()) {
+        return keys.error();
       }
       Result<Pose> X_WO = ParsePose(*pose, where + ".pose");
       if (!X_WO.ok()) return X_WO.error();
@@ -274,6 +310,9 @@ class SceneParser {
   // ...}]}
   Result<FrameUpdate> ParseFrame(const Json& json, const std::string& where) {
     if (Result<void> status = ExpectObject(json, where); !status.ok()) return status.error();
+    if (Result<void> keys = CheckLevel(json, where, "a frame", kFrameKeys); !keys.ok()) {
+      return keys.error();
+    }
     FrameUpdate frame;
     if (const Json* remove = Find(json, "remove")) {
       if (Result<void> status = ExpectArray(*remove, where + ".remove"); !status.ok()) {
@@ -296,48 +335,68 @@ class SceneParser {
       }
     }
     if (const Json* poses = Find(json, "poses")) {
-      if (Result<void> status = ExpectArray(*poses, where + ".poses"); !status.ok()) {
+      if (Result<void> status = ParseFramePoses(*poses, where + ".poses", &frame); !status.ok()) {
         return status.error();
-      }
-      for (size_t j = 0; j < poses->size(); ++j) {
-        const std::string where_pose = Index(where + ".poses", j);
-        const Json& entry = (*poses)[j];
-        if (Result<void> status = ExpectObject(entry, where_pose); !status.ok()) {
-          return status.error();
-        }
-        const Result<const Json*> id = Require(entry, "id", where_pose + ".id");
-        if (!id.ok()) return id.error();
-        const Result<uint32_t> id_value = ParseId(**id, where_pose + ".id");
-        if (!id_value.ok()) return id_value.error();
-        Result<Pose> X_WO = ParsePose(entry, where_pose);
-        if (!X_WO.ok()) return X_WO.error();
-        frame.poses.emplace_back(*id_value, *X_WO);
       }
     }
     if (const Json* vertices = Find(json, "vertices")) {
-      if (Result<void> status = ExpectArray(*vertices, where + ".vertices"); !status.ok()) {
+      if (Result<void> status = ParseFrameVertices(*vertices, where + ".vertices", &frame);
+          !status.ok()) {
         return status.error();
-      }
-      for (size_t j = 0; j < vertices->size(); ++j) {
-        const std::string where_vertices = Index(where + ".vertices", j);
-        const Json& entry = (*vertices)[j];
-        if (Result<void> status = ExpectObject(entry, where_vertices); !status.ok()) {
-          return status.error();
-        }
-        const Result<const Json*> id = Require(entry, "id", where_vertices + ".id");
-        if (!id.ok()) return id.error();
-        const Result<uint32_t> id_value = ParseId(**id, where_vertices + ".id");
-        if (!id_value.ok()) return id_value.error();
-        const Result<const Json*> mesh = Require(entry, "mesh", where_vertices + ".mesh");
-        if (!mesh.ok()) return mesh.error();
-        std::string mesh_path;
-        Result<Mesh> mesh_value = LoadMesh(**mesh, where_vertices + ".mesh", *id_value, &mesh_path);
-        if (!mesh_value.ok()) return mesh_value.error();
-        frame.vertices.emplace_back(*id_value, std::move(*mesh_value));
-        frame.vertex_mesh_paths.push_back(std::move(mesh_path));
       }
     }
     return frame;
+  }
+
+  // [{"id": 3, "translation": [...], "rotation_wxyz": [...]}, ...] into frame->poses.
+  static Result<void> ParseFramePoses(const Json& poses, const std::string& where,
+                                      FrameUpdate* frame) {
+    if (Result<void> status = ExpectArray(poses, where); !status.ok()) return status;
+    for (size_t j = 0; j < poses.size(); ++j) {
+      const std::string where_pose = Index(where, j);
+      const Json& entry = poses[j];
+      if (Result<void> status = ExpectObject(entry, where_pose); !status.ok()) return status;
+      if (Result<void> keys = CheckLevel(entry, where_pose, "a frame's pose", kFramePoseKeys);
+          !keys.ok()) {
+        return keys;
+      }
+      const Result<const Json*> id = Require(entry, "id", where_pose + ".id");
+      if (!id.ok()) return id.error();
+      const Result<uint32_t> id_value = ParseId(**id, where_pose + ".id");
+      if (!id_value.ok()) return id_value.error();
+      Result<Pose> X_WO = ParsePose(entry, where_pose);
+      if (!X_WO.ok()) return X_WO.error();
+      frame->poses.emplace_back(*id_value, *X_WO);
+    }
+    return {};
+  }
+
+  // [{"id": 5, "mesh": "leaf_t1.obj"}, ...] into frame->vertices and frame->vertex_mesh_paths.
+  Result<void> ParseFrameVertices(const Json& vertices, const std::string& where,
+                                  FrameUpdate* frame) {
+    if (Result<void> status = ExpectArray(vertices, where); !status.ok()) return status;
+    for (size_t j = 0; j < vertices.size(); ++j) {
+      const std::string where_vertices = Index(where, j);
+      const Json& entry = vertices[j];
+      if (Result<void> status = ExpectObject(entry, where_vertices); !status.ok()) return status;
+      if (Result<void> keys =
+              CheckLevel(entry, where_vertices, "a frame's vertices entry", kVertexKeys);
+          !keys.ok()) {
+        return keys;
+      }
+      const Result<const Json*> id = Require(entry, "id", where_vertices + ".id");
+      if (!id.ok()) return id.error();
+      const Result<uint32_t> id_value = ParseId(**id, where_vertices + ".id");
+      if (!id_value.ok()) return id_value.error();
+      const Result<const Json*> mesh = Require(entry, "mesh", where_vertices + ".mesh");
+      if (!mesh.ok()) return mesh.error();
+      std::string mesh_path;
+      Result<Mesh> mesh_value = LoadMesh(**mesh, where_vertices + ".mesh", *id_value, &mesh_path);
+      if (!mesh_value.ok()) return mesh_value.error();
+      frame->vertices.emplace_back(*id_value, std::move(*mesh_value));
+      frame->vertex_mesh_paths.push_back(std::move(mesh_path));
+    }
+    return {};
   }
 
   std::filesystem::path base_dir_;
@@ -351,10 +410,12 @@ Json PoseToJson(const Pose& pose) {
 }
 
 Json ObjectToJson(const SceneObject& object) {
-  return Json{{"id", object.id},
-              {"mesh", object.mesh_path},
-              {"motion", ToString(object.motion)},
-              {"pose", PoseToJson(object.X_WO)}};
+  Json json = {{"id", object.id},
+               {"mesh", object.mesh_path},
+               {"motion", ToString(object.motion)},
+               {"pose", PoseToJson(object.X_WO)}};
+  if (!object.name.empty()) json["name"] = object.name;
+  return json;
 }
 
 bool SameMesh(const Mesh& a, const Mesh& b) {

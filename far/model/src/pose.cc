@@ -43,10 +43,12 @@ Result<void> CheckPose(const Pose& pose) {
     return MakeError(ErrorCode::kInvalidArgument, "rotation_wxyz: not finite");
   const double norm = pose.rotation.norm();
   if (!(std::abs(norm - 1.0) <= kQuaternionTolerance)) {
-    char value[32];
+    char value[32], tolerance[32];
     std::snprintf(value, sizeof(value), "%.9g", norm);
+    std::snprintf(tolerance, sizeof(tolerance), "%g", kQuaternionTolerance);
     return MakeError(ErrorCode::kInvalidArgument,
-                     std::string("rotation_wxyz: not a unit quaternion (norm ") + value + ")");
+                     std::string("rotation_wxyz: not a unit quaternion (norm ") + value +
+                         "): |norm - 1| must be at most " + tolerance);
   }
   return {};
 }
@@ -55,6 +57,11 @@ Pose NormalizedPose(const Pose& pose) {
   Pose normalized = pose;
   normalized.rotation.normalize();
   return normalized;
+}
+
+Result<Pose> CheckAndNormalizePose(const Pose& pose) {
+  if (auto ok = CheckPose(pose); !ok) return ok.error();
+  return NormalizedPose(pose);
 }
 
 }  // namespace far

@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "far/model/limits.h"
 #include "far/model/scene_model.h"
 
 namespace far {
@@ -48,6 +49,22 @@ Result<void> SameTriangles(const Mesh& file, const Mesh& object, uint32_t id) {
   return {};
 }
 
+// An object's optional name: a label for people, shown in contact listings and pictures.
+Result<void> CheckName(const std::string& name, const std::string& where) {
+  if (name.size() > kMaxObjectNameBytes) {
+    return Invalid(where + ".name", "longer than " + std::to_string(kMaxObjectNameBytes) +
+                                        " bytes (" + std::to_string(name.size()) + ")");
+  }
+  for (const char c : name) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x20 || byte == 0x7f) {
+      return Invalid(where + ".name", "control character (byte " + std::to_string(byte) +
+                                          "): names are printed on one line");
+    }
+  }
+  return {};
+}
+
 // Meshes of the objects alive at the current frame, by id: vertex files are compared with them.
 using MeshesById = std::unordered_map<uint32_t, const Mesh*>;
 
@@ -60,8 +77,10 @@ Result<void> CheckFrame(const FrameUpdate& frame, const std::string& where_frame
   }
   for (size_t j = 0; j < frame.additions.size(); ++j) {
     const SceneObject& object = frame.additions[j];
+    const std::string where = where_frame + ".add[" + std::to_string(j) + "]";
     if (auto ok = batch.Add(object.id, object.mesh, object.motion, object.X_WO); !ok)
-      return At(where_frame + ".add[" + std::to_string(j) + "]", ok.error());
+      return At(where, ok.error());
+    if (auto ok = CheckName(object.name, where); !ok) return ok;
     meshes[object.id] = &object.mesh;
   }
   std::unordered_set<uint32_t> posed;
@@ -97,8 +116,10 @@ Result<void> ValidateScene(const Scene& scene) {
   MeshesById meshes;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const SceneObject& object = scene.objects[i];
+    const std::string where = "objects[" + std::to_string(i) + "]";
     if (auto ok = batch.Add(object.id, object.mesh, object.motion, object.X_WO); !ok)
-      return At("objects[" + std::to_string(i) + "]", ok.error());
+      return At(where, ok.error());
+    if (auto ok = CheckName(object.name, where); !ok) return ok;
     meshes[object.id] = &object.mesh;
   }
   for (size_t f = 0; f < scene.frames.size(); ++f) {

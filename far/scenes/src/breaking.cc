@@ -54,6 +54,7 @@ Scene BreakingScene(uint64_t seed, int frames, int min_static_triangles, int min
                             Eigen::Vector2d(kHalfSide, kHalfSide), cells, cells, TerrainHeight);
   SceneObject ground;
   ground.id = 1;
+  ground.name = "terrain";
   ground.motion = Motion::kStatic;
   ground.mesh_path = "breaking_terrain.obj";
   ground.mesh = terrain.ToMesh();
@@ -68,6 +69,7 @@ Scene BreakingScene(uint64_t seed, int frames, int min_static_triangles, int min
   }
   SceneObject vase;
   vase.id = 2;
+  vase.name = "vase";
   vase.motion = Motion::kRigid;
   vase.mesh_path = "breaking_vase.obj";
   vase.mesh = internal::LatheMesh(outline, -kVaseHeight / 2, kVaseHeight / 2, 2 * rings);
@@ -134,6 +136,7 @@ Scene BreakingScene(uint64_t seed, int frames, int min_static_triangles, int min
       for (size_t k = 0; k < fragments.size(); ++k) {
         SceneObject piece;
         piece.id = vase_id + 1 + static_cast<uint32_t>(k);
+        piece.name = "vase-fragment-" + std::to_string(k + 1);
         piece.motion = Motion::kRigid;
         piece.mesh_path = "breaking_fragment_" + std::to_string(piece.id) + ".obj";
         piece.mesh = fragments[k].mesh;

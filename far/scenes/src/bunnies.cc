@@ -43,11 +43,13 @@ Scene BunniesScene(const Mesh& bunny, int subdivision, uint64_t seed, int frames
   const std::string mesh_path = "bunnies_bunny_n" + std::to_string(subdivision) + ".obj";
   SceneObject still;
   still.id = 1;
+  still.name = "bunny-still";
   still.motion = Motion::kStatic;
   still.mesh_path = mesh_path;
   still.mesh = mesh;
   SceneObject moving;
   moving.id = 2;
+  moving.name = "bunny-moving";
   moving.motion = Motion::kRigid;
   moving.mesh_path = mesh_path;  // the same mesh: written once
   moving.mesh = std::move(mesh);

@@ -124,6 +124,7 @@ Scene PaperLeavesScene(uint64_t seed, int frames, int num_leaves, int leaf_cells
   const TreeDetail detail(k);
   SceneObject tree;
   tree.id = 0;
+  tree.name = "tree";
   tree.motion = Motion::kStatic;
   tree.mesh_path = "leaves_tree.obj";
   AppendTube(&tree.mesh, {0, 0, 0}, {0, 0, 7.0}, 0.35, 0.18, detail.trunk_sides,
@@ -186,6 +187,7 @@ Scene PaperLeavesScene(uint64_t seed, int frames, int num_leaves, int leaf_cells
   for (int l = 0; l < num_leaves; ++l) {
     SceneObject object;
     object.id = static_cast<uint32_t>(l + 1);
+    object.name = "leaf-" + std::to_string(object.id);
     object.motion = Motion::kDeformable;
     object.mesh_path = "leaves_leaf_" + std::to_string(object.id) + ".obj";
     object.mesh.p_MV = LeafVertices(leaves[static_cast<size_t>(l)], leaf_cells, 0.0);

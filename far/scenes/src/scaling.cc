@@ -155,6 +155,7 @@ Scene ScalingScene(uint64_t seed, int target_triangles, int frames) {
   Scene scene;
   SceneObject ground;
   ground.id = 1;
+  ground.name = "ground";
   ground.motion = Motion::kStatic;
   ground.mesh_path = "scaling_ground.obj";
   ground.mesh = ground_field.ToMesh();
@@ -164,6 +165,7 @@ Scene ScalingScene(uint64_t seed, int target_triangles, int frames) {
     for (const bool rolling : {true, false}) {
       SceneObject ball;
       ball.id = rolling ? rolling_id(i) : falling_id(i);
+      ball.name = (rolling ? "rolling-sphere-" : "falling-sphere-") + std::to_string(i + 1);
       ball.motion = Motion::kRigid;
       ball.mesh_path = "scaling_sphere.obj";  // one mesh for all spheres
       ball.mesh = sphere;
@@ -175,6 +177,7 @@ Scene ScalingScene(uint64_t seed, int target_triangles, int frames) {
     const Tile& tile = layout[static_cast<size_t>(i)];
     SceneObject cloth;
     cloth.id = cloth_id(i);
+    cloth.name = "cloth-" + std::to_string(i + 1);
     cloth.motion = Motion::kDeformable;
     cloth.mesh_path = "scaling_cloth_" + std::to_string(cloth.id) + ".obj";
     cloth.mesh.p_MV = cloth_vertices(tile, rolling_pose(tile, 0.0), 0.0);

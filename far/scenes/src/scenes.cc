@@ -1,5 +1,6 @@
 #include "far/scenes/scenes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -16,6 +17,7 @@ std::vector<SceneObject> RandomSoup(uint64_t seed, int num_objects, int triangle
   for (int o = 0; o < num_objects; ++o) {
     SceneObject object;
     object.id = static_cast<uint32_t>(o * 3 + 1);  // ids need not be contiguous
+    object.name = "cluster-" + std::to_string(object.id);
     object.motion = Motion::kRigid;
     // Vertices in the object frame, around its origin; the pose places the cluster.
     const double cluster = triangle_size * std::cbrt(static_cast<double>(triangles_per_object));
@@ -68,28 +70,52 @@ Mesh SphereMesh(const Eigen::Vector3d& center, double radius, int stacks, int sl
 
 namespace {
 
-// A closed tube (open cylinder with capped ends) from a to b.
+// A closed tube (open cylinder with capped ends) from a to b, in `segments` rings' worth of
+// lengthwise pieces (1: one quad per side from end to end).
 void AppendTube(Mesh* mesh, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
-                int sides) {
+                int sides, int segments) {
   const Eigen::Vector3d axis = (b - a).normalized();
   const Eigen::Vector3d u = axis.unitOrthogonal(), v = axis.cross(u);
   const auto base = static_cast<uint32_t>(mesh->p_MV.size());
-  for (const Eigen::Vector3d& end : {a, b}) {
+  for (int k = 0; k <= segments; ++k) {
+    const Eigen::Vector3d center = a + (b - a) * (static_cast<double>(k) / segments);
     for (int s = 0; s < sides; ++s) {
       const double phi = 2 * std::numbers::pi * s / sides;
-      mesh->p_MV.push_back(end + radius * (std::cos(phi) * u + std::sin(phi) * v));
+      mesh->p_MV.push_back(center + radius * (std::cos(phi) * u + std::sin(phi) * v));
     }
   }
   const auto n = static_cast<uint32_t>(sides);
-  for (uint32_t s = 0; s < n; ++s) {
-    const uint32_t s1 = (s + 1) % n;
-    mesh->triangles.push_back({base + s, base + s1, base + n + s1});
-    mesh->triangles.push_back({base + s, base + n + s1, base + n + s});
+  for (uint32_t k = 0; k < static_cast<uint32_t>(segments); ++k) {
+    const uint32_t ring = base + k * n;
+    for (uint32_t s = 0; s < n; ++s) {
+      const uint32_t s1 = (s + 1) % n;
+      mesh->triangles.push_back({ring + s, ring + s1, ring + n + s1});
+      mesh->triangles.push_back({ring + s, ring + n + s1, ring + n + s});
+    }
   }
+  const uint32_t last = base + static_cast<uint32_t>(segments) * n;
   for (uint32_t s = 1; s + 1 < n; ++s) {
     mesh->triangles.push_back({base, base + s + 1, base + s});
-    mesh->triangles.push_back({base + n, base + n + s, base + n + s + 1});
+    mesh->triangles.push_back({last, last + s, last + s + 1});
   }
+}
+
+// The tree of LeavesScene: a trunk and 24 branches spiralling up, as closed tubes cut into
+// pieces of about `piece_length` along their length (0: each tube in one piece).
+Mesh TreeMesh(double piece_length) {
+  const auto segments = [piece_length](double length) {
+    return piece_length > 0 ? std::max(1, static_cast<int>(std::lround(length / piece_length))) : 1;
+  };
+  Mesh tree;
+  AppendTube(&tree, {0, 0, 0}, {0, 0, 6}, 0.3, 16, segments(6.0));
+  for (int b = 0; b < 24; ++b) {
+    const double height = 2.0 + 4.0 * b / 24.0, angle = 2.4 * b;
+    const Eigen::Vector3d start(0, 0, height);
+    const Eigen::Vector3d end =
+        start + Eigen::Vector3d(2.5 * std::cos(angle), 2.5 * std::sin(angle), 0.8);
+    AppendTube(&tree, start, end, 0.08, 8, segments((end - start).norm()));
+  }
+  return tree;
 }
 
 }  // namespace
@@ -101,15 +127,9 @@ std::vector<SceneObject> LeavesScene(uint64_t seed, int num_leaves, int leaf_cel
   // The tree: a trunk and branches spiralling up, as closed tubes; static.
   SceneObject tree;
   tree.id = 0;
+  tree.name = "tree";
   tree.motion = Motion::kStatic;
-  AppendTube(&tree.mesh, {0, 0, 0}, {0, 0, 6}, 0.3, 16);
-  for (int b = 0; b < 24; ++b) {
-    const double height = 2.0 + 4.0 * b / 24.0, angle = 2.4 * b;
-    const Eigen::Vector3d start(0, 0, height);
-    const Eigen::Vector3d end =
-        start + Eigen::Vector3d(2.5 * std::cos(angle), 2.5 * std::sin(angle), 0.8);
-    AppendTube(&tree.mesh, start, end, 0.08, 8);
-  }
+  tree.mesh = TreeMesh(0);
   tree.mesh_path = "tree.obj";
   objects.push_back(std::move(tree));
   // Leaves: bent grids of leaf_cells x leaf_cells quads, falling and swirling with time.
@@ -119,6 +139,7 @@ std::vector<SceneObject> LeavesScene(uint64_t seed, int num_leaves, int leaf_cel
     const double size = 0.25 + 0.1 * unit(rng);
     SceneObject leaf;
     leaf.id = static_cast<uint32_t>(l + 1);
+    leaf.name = "leaf-" + std::to_string(leaf.id);
     leaf.motion = Motion::kDeformable;
     leaf.mesh_path = "leaf_" + std::to_string(leaf.id) + ".obj";
     const double fall = std::fmod(height - 0.4 * time + 8.0, 8.0) - 0.5;
@@ -155,9 +176,13 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
   constexpr double kDt = 0.1;
   Scene scene;
   scene.objects = LeavesScene(seed, num_leaves, leaf_cells, 0.0);
+  // The same tree cut into short pieces along its tubes, so that the triangles a contact marks
+  // (far-client snapshot, play --contacts) are near the contact, not a whole trunk's length.
+  scene.objects[0].mesh = TreeMesh(0.3);
   const uint32_t vase_id = static_cast<uint32_t>(num_leaves + 1);
   SceneObject vase;
   vase.id = vase_id;
+  vase.name = "vase";
   vase.motion = Motion::kRigid;
   vase.mesh_path = "vase.obj";
   vase.mesh = SphereMesh(Eigen::Vector3d::Zero(), 0.5, 8, 16);
@@ -182,6 +207,7 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
       for (int k = 0; k < num_fragments; ++k) {
         SceneObject fragment;
         fragment.id = vase_id + 1 + static_cast<uint32_t>(k);
+        fragment.name = "vase-fragment-" + std::to_string(k + 1);
         fragment.motion = Motion::kRigid;
         fragment.mesh_path = "fragment.obj";
         fragment.mesh = SphereMesh(Eigen::Vector3d::Zero(), 0.22, 6, 10);

@@ -21,5 +21,34 @@ TEST(GlContextTest, SurfacelessPlatformWorksOnItsOwn) {
   EXPECT_EQ((*context)->platform_description(), "surfaceless");
 }
 
+// GlPlatform::kDevice means a GPU. Without one it fails and says what it tried (on Mesa, the
+// software EGL device is listed as not a GPU); it never hands out llvmpipe. With one, the
+// failure cannot be checked: the test checks the renderer is not a software one, then skips.
+TEST(GlContextTest, DevicePlatformGivesAGpuOrSaysNoneWasFound) {
+  auto context = GlContext::Create(GlPlatform::kDevice);
+  if (context.ok()) {
+    const std::string& renderer = (*context)->renderer();
+    for (const char* software : {"llvmpipe", "softpipe", "swrast"}) {
+      EXPECT_EQ(renderer.find(software), std::string::npos) << renderer;
+    }
+    EXPECT_NE((*context)->platform_description().find("(hardware)"), std::string::npos)
+        << (*context)->platform_description();
+    GTEST_SKIP() << "a hardware EGL device exists (" << renderer
+                 << "): the no-GPU error cannot be checked on this machine";
+  }
+  const Error& error = context.error();
+  EXPECT_EQ(error.code, ErrorCode::kUnavailable);
+  EXPECT_NE(error.message.find("no GPU found through the EGL device platform"), std::string::npos)
+      << error.message;
+  EXPECT_NE(error.message.find("tried:"), std::string::npos) << error.message;
+  if (error.message.find("EGL_MESA_device_software") != std::string::npos) {
+    EXPECT_NE(error.message.find("not a GPU"), std::string::npos) << error.message;
+  }
+  EXPECT_EQ(error.message.find("surfaceless"), std::string::npos)
+      << "the device platform must not try the surfaceless platform: " << error.message;
+  // The other platforms still give a context on the same machine.
+  EXPECT_TRUE(GlContext::Create(GlPlatform::kAuto).ok());
+}
+
 }  // namespace
 }  // namespace far

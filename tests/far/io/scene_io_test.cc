@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "far/io/mesh_io.h"
+#include "far/model/limits.h"
 
 namespace far {
 namespace {
@@ -105,14 +106,96 @@ TEST_F(SceneIoTest, ResolvesMeshPathsAgainstBaseDir) {
   EXPECT_EQ(nested->objects[0].mesh.num_vertices(), 3);
 }
 
-TEST_F(SceneIoTest, IgnoresUnknownKeys) {
+TEST_F(SceneIoTest, CommentsAreAllowedAtEveryLevel) {
   const Result<Scene> scene =
-      Parse(R"({"format": "far-scene/1", "comment": "hello", "units": "m", "objects": [)"
-            R"({"id": 1, "mesh": "tri.obj", "motion": "rigid", "color": [1, 0, 0],)"
-            R"( "pose": {"translation": [0, 0, 0], "scale": 2}}],)"
-            R"( "frames": [{"poses": [{"id": 1, "note": "x"}], "extra": true}]})");
+      Parse(R"({"format": "far-scene/1", "comment": "hello", "objects": [)"
+            R"({"id": 1, "mesh": "tri.obj", "motion": "deformable", "comment": "a",)"
+            R"( "pose": {"translation": [0, 0, 0], "comment": "b"}}],)"
+            R"( "frames": [{"comment": "c", "poses": [{"id": 1, "comment": "d"}],)"
+            R"( "vertices": [{"id": 1, "mesh": "tri_t1.obj", "comment": "e"}]}]})");
   ASSERT_TRUE(scene.ok()) << ToString(scene.error());
   EXPECT_EQ(scene->frames.size(), 1u);
+  EXPECT_TRUE(IsError(Parse(R"({"format": "far-scene/1", "comment": 3, "objects": []})"),
+                      ErrorCode::kParseError, "comment: expected a string, got number"));
+}
+
+// A misspelt key would otherwise be skipped and its value replaced by a default (a
+// "translaton" puts the object at the origin): every level names the key, its JSON path and
+// the key that was most likely meant.
+TEST_F(SceneIoTest, UnknownKeysAreErrorsNamingPathAndClosestKey) {
+  struct Case {
+    std::string json, message;
+  };
+  const std::string frame_objects = std::string(kRigid) + ", " + kDeformable;
+  const std::vector<Case> cases = {
+      {R"({"format": "far-scene/1", "objets": []})",
+       "objets: unknown key 'objets'; did you mean 'objects'? (keys of the top level: format, "
+       "objects, frames, comment)"},
+      {SceneJson(R"({"id": 1, "mesh": "tri.obj", "motion": "rigid", "pose": )"
+                 R"({"translaton": [0, 0, 5]}})"),
+       "objects[0].pose.translaton: unknown key 'translaton'; did you mean 'translation'?"},
+      {SceneJson(R"({"id": 1, "mesh": "tri.obj", "motion": "rigid", "pose": )"
+                 R"({"rotation": [1, 0, 0, 0]}})"),
+       "objects[0].pose.rotation: unknown key 'rotation'; did you mean 'rotation_wxyz'?"},
+      {SceneJson(R"({"id": 1, "mesh": "tri.obj", "motoin": "rigid"})"),
+       "objects[0].motoin: unknown key 'motoin'; did you mean 'motion'?"},
+      {SceneJson(R"({"id": 1, "mesh": "tri.obj", "motion": "rigid", "color": [1, 0, 0]})"),
+       "objects[0].color: unknown key 'color' (keys of an object: id, name, mesh, motion, pose, "
+       "comment)"},
+      {SceneJson(frame_objects, R"({"pose": [{"id": 1}]})"),
+       "frames[0].pose: unknown key 'pose'; did you mean 'poses'?"},
+      {SceneJson(frame_objects, R"({"add": [{"id": 5, "mesh": "tri.obj", "motion": "rigid",)"
+                                R"( "pose": {"translation": [0, 0, 1], "scael": 2}}]})"),
+       "frames[0].add[0].pose.scael: unknown key 'scael' (keys of a pose: translation, "
+       "rotation_wxyz, comment)"},
+      {SceneJson(frame_objects, R"({}, {"poses": [{"id": 1, "translatoin": [0, 0, 1]}]})"),
+       "frames[1].poses[0].translatoin: unknown key 'translatoin'; did you mean 'translation'?"},
+      {SceneJson(frame_objects, R"({"vertices": [{"id": 3, "mehs": "tri_t1.obj"}]})"),
+       "frames[0].vertices[0].mehs: unknown key 'mehs'; did you mean 'mesh'?"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.json);
+    EXPECT_TRUE(IsError(Parse(c.json), ErrorCode::kParseError, c.message));
+  }
+  // Unprintable keys are shown safely.
+  EXPECT_TRUE(IsError(Parse("{\"format\": \"far-scene/1\", \"objects\": [], \"\\u0001x\": 1}"),
+                      ErrorCode::kParseError, "?x: unknown key '?x'"));
+  // Another version's keys are not judged by this version's list: the version is the error.
+  EXPECT_TRUE(IsError(Parse(R"({"format": "far-scene/2", "objects": [], "lights": []})"),
+                      ErrorCode::kVersionMismatch, "unsupported version"));
+}
+
+TEST_F(SceneIoTest, NamesAreReadCheckedAndWrittenBack) {
+  const Result<Scene> scene = Parse(SceneJson(
+      R"({"id": 1, "name": "leaf-1", "mesh": "tri.obj", "motion": "rigid"}, )"
+      R"({"id": 2, "mesh": "quad.obj", "motion": "static"})",
+      R"({"add": [{"id": 3, "name": "Blatt \u00fcber", "mesh": "tri.obj", "motion": "rigid"}]})"));
+  ASSERT_TRUE(scene.ok()) << ToString(scene.error());
+  EXPECT_EQ(scene->objects[0].name, "leaf-1");
+  EXPECT_EQ(scene->objects[1].name, "");
+  EXPECT_EQ(scene->frames[0].additions[0].name,
+            "Blatt \xc3\xbc"
+            "ber");
+  TempDir out;
+  ASSERT_TRUE(WriteScene(*scene, out / "s.json").ok());
+  const Result<Scene> again = ReadScene(out / "s.json");
+  ASSERT_TRUE(again.ok()) << ToString(again.error());
+  EXPECT_EQ(again->objects[0].name, "leaf-1");
+  EXPECT_EQ(again->objects[1].name, "");
+  EXPECT_EQ(again->frames[0].additions[0].name, scene->frames[0].additions[0].name);
+  EXPECT_EQ(ReadFile(out / "s.json").find("\"name\": \"\""), std::string::npos)
+      << "an object without a name is written without the key";
+
+  EXPECT_TRUE(
+      IsError(Parse(SceneJson(R"({"id": 1, "name": 7, "mesh": "tri.obj", "motion": "rigid"})")),
+              ErrorCode::kParseError, "objects[0].name: expected a string, got number"));
+  EXPECT_TRUE(IsError(
+      Parse(SceneJson(R"({"id": 1, "name": "a\nb", "mesh": "tri.obj", "motion": "rigid"})")),
+      ErrorCode::kInvalidArgument, "objects[0].name: control character (byte 10)"));
+  const std::string long_name(kMaxObjectNameBytes + 1, 'x');
+  EXPECT_TRUE(IsError(Parse(SceneJson(R"({"id": 1, "name": ")" + long_name +
+                                      R"(", "mesh": "tri.obj", "motion": "rigid"})")),
+                      ErrorCode::kInvalidArgument, "objects[0].name: longer than 100 bytes"));
 }
 
 TEST_F(SceneIoTest, ParsesFrames) {
@@ -167,6 +250,8 @@ TEST(SceneDocsTest, ExampleSceneReads) {
   ASSERT_TRUE(scene.ok()) << ToString(scene.error());
   EXPECT_EQ(scene->objects.size(), 3u);
   EXPECT_EQ(scene->frames.size(), 2u);
+  EXPECT_EQ(scene->objects[1].name, "box");
+  EXPECT_EQ(scene->frames[1].additions[0].name, "chip");
 }
 
 // Round trips.
@@ -177,6 +262,7 @@ bool SamePose(const Pose& a, const Pose& b) {
 
 void ExpectSameObject(const SceneObject& a, const SceneObject& b) {
   EXPECT_EQ(a.id, b.id);
+  EXPECT_EQ(a.name, b.name);
   EXPECT_EQ(a.mesh_path, b.mesh_path);
   EXPECT_EQ(a.motion, b.motion);
   EXPECT_TRUE(SamePose(a.X_WO, b.X_WO));
@@ -298,9 +384,9 @@ TEST_F(SceneIoTest, RejectsNumbersBeyondDouble) {
 TEST_F(SceneIoTest, SurvivesDeeplyNestedJson) {
   const int depth = 100000;
   const std::string nested = std::string(depth, '[') + std::string(depth, ']');
-  const Result<Scene> scene =
-      Parse(R"({"format": "far-scene/1", "objects": [], "deep": )" + nested + "}");
-  EXPECT_TRUE(scene.ok()) << ToString(scene.error());
+  // Parsed (and freed) without overflowing the stack; then refused for its unknown key.
+  EXPECT_TRUE(IsError(Parse(R"({"format": "far-scene/1", "objects": [], "deep": )" + nested + "}"),
+                      ErrorCode::kParseError, "deep: unknown key 'deep'"));
   EXPECT_TRUE(IsError(Parse(R"({"format": "far-scene/1", "objects": )" + nested + "}"),
                       ErrorCode::kParseError, "objects[0]: expected a JSON object, got array"));
 }
@@ -405,8 +491,35 @@ TEST_F(SceneIoTest, RejectsNonUnitQuaternions) {
                                       R"( "pose": {"rotation_wxyz": [0, 0, 0, 0]}})")),
                       ErrorCode::kInvalidArgument, "not a unit quaternion (norm 0)"));
   EXPECT_TRUE(IsError(Parse(SceneJson(R"({"id": 1, "mesh": "tri.obj", "motion": "rigid",)"
-                                      R"( "pose": {"rotation_wxyz": [1.000002, 0, 0, 0]}})")),
-                      ErrorCode::kInvalidArgument, "not a unit quaternion (norm 1.000002)"));
+                                      R"( "pose": {"rotation_wxyz": [1.0011, 0, 0, 0]}})")),
+                      ErrorCode::kInvalidArgument,
+                      "not a unit quaternion (norm 1.0011): |norm - 1| must be at most 0.001"));
+}
+
+// Quaternions as people write them, with four decimals, are within kQuaternionTolerance and
+// are used as the unit quaternion they stand for; in frames too.
+TEST_F(SceneIoTest, AcceptsAndNormalizesQuaternionsWrittenWithFourDecimals) {
+  const Result<Scene> scene =
+      Parse(SceneJson(R"({"id": 1, "mesh": "tri.obj", "motion": "rigid",)"
+                      R"( "pose": {"rotation_wxyz": [0.7071, 0, 0, 0.7071]}})",
+                      R"({"poses": [{"id": 1, "rotation_wxyz": [0.9239, 0, 0.3827, 0]}]})"));
+  ASSERT_TRUE(scene.ok()) << ToString(scene.error());
+  const Eigen::Quaterniond& q = scene->objects[0].X_WO.rotation;
+  EXPECT_NEAR(q.norm(), 1.0, 1e-15);
+  EXPECT_NEAR(q.w(), std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(q.z(), std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(scene->frames[0].poses[0].second.rotation.norm(), 1.0, 1e-15);
+  // 0.999 and 1.001 are the edges; beyond them, refused.
+  for (const char* w : {"0.9991", "1.0009"}) {
+    EXPECT_TRUE(Parse(SceneJson(std::string(R"({"id": 1, "mesh": "tri.obj", "motion": "rigid",)"
+                                            R"( "pose": {"rotation_wxyz": [)") +
+                                w + ", 0, 0, 0]}}"))
+                    .ok())
+        << w;
+  }
+  EXPECT_TRUE(IsError(Parse(SceneJson(R"({"id": 1, "mesh": "tri.obj", "motion": "rigid",)"
+                                      R"( "pose": {"rotation_wxyz": [0.998, 0, 0, 0]}})")),
+                      ErrorCode::kInvalidArgument, "objects[0].pose.rotation_wxyz: not a unit"));
 }
 
 TEST_F(SceneIoTest, RejectsDuplicateIds) {

@@ -3,6 +3,8 @@
 
 #include "far/model/scene_model.h"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 namespace far {
@@ -19,7 +21,8 @@ Result<void> ApplyAll(SceneModel& model, const std::vector<SceneUpdate>& updates
   return model.Apply(updates);
 }
 
-::testing::AssertionResult IsError(const Result<void>& result, ErrorCode code,
+template <typename T>
+::testing::AssertionResult IsError(const Result<T>& result, ErrorCode code,
                                    const std::string& substring) {
   if (result.ok()) return ::testing::AssertionFailure() << "accepted; expected " << substring;
   if (result.error().code != code || result.error().message.find(substring) == std::string::npos) {
@@ -116,6 +119,19 @@ TEST(SceneModelTest, PosesAreCheckedWithTheSharedTolerance) {
   pose.rotation = Eigen::Quaterniond(1 + 5e-7, 0, 0, 0);
   EXPECT_TRUE(CheckPose(pose));
   EXPECT_DOUBLE_EQ(NormalizedPose(pose).rotation.norm(), 1.0);
+  // Four decimals, as people write them: |q| = 0.99999 ... accepted and normalized.
+  pose.rotation = Eigen::Quaterniond(0.7071, 0, 0, 0.7071);
+  const Result<Pose> unit = CheckAndNormalizePose(pose);
+  ASSERT_TRUE(unit);
+  EXPECT_NEAR(unit->rotation.norm(), 1.0, 1e-15);
+  EXPECT_NEAR(unit->rotation.z(), std::sqrt(0.5), 1e-15);
+  // Within kQuaternionTolerance = 1e-3 of 1, not beyond.
+  pose.rotation = Eigen::Quaterniond(1 - 0.9e-3, 0, 0, 0);
+  EXPECT_TRUE(CheckPose(pose));
+  pose.rotation = Eigen::Quaterniond(1 + 1.1e-3, 0, 0, 0);
+  EXPECT_TRUE(IsError(CheckAndNormalizePose(pose), ErrorCode::kInvalidArgument,
+                      "rotation_wxyz: not a unit quaternion (norm 1.0011): |norm - 1| must be at "
+                      "most 0.001"));
   pose.translation.x() = std::numeric_limits<double>::infinity();
   EXPECT_TRUE(IsError(CheckPose(pose), ErrorCode::kInvalidArgument, "translation: not finite"));
 }

@@ -349,3 +349,51 @@ TEST(PaperScenesTest, ScalingHasContactsAtEveryFrame) {
 
 }  // namespace
 }  // namespace far::scenes
+
+namespace far::scenes {
+namespace {
+
+// Names say what each object is (far-client play --contacts and snapshot show them): every
+// generated object has one, and a broken vase's pieces are named after it.
+TEST(SceneNamesTest, EveryGeneratedObjectIsNamed) {
+  std::vector<Scene> scenes = {AnimatedLeavesScene(7, 5, 2, 6), PaperLeavesScene(7, 3, 6, 2, 1000),
+                               BreakingScene(7, 4, 2000, 2000, 4),
+                               BunniesScene(ReadBunny(), 1, 7, 2), ScalingScene(7, 5000, 2)};
+  for (const Scene& scene : scenes) {
+    std::vector<const SceneObject*> objects;
+    for (const SceneObject& object : scene.objects) objects.push_back(&object);
+    for (const FrameUpdate& frame : scene.frames) {
+      for (const SceneObject& object : frame.additions) objects.push_back(&object);
+    }
+    for (const SceneObject* object : objects) {
+      EXPECT_FALSE(object->name.empty()) << "object " << object->id;
+    }
+  }
+  const Scene demo = AnimatedLeavesScene(7, 5, 2, 6);
+  EXPECT_EQ(demo.objects[0].name, "tree");
+  EXPECT_EQ(demo.objects[1].name, "leaf-1");
+  EXPECT_EQ(demo.objects.back().name, "vase");
+  ASSERT_EQ(demo.frames[1].additions.size(), 4u);  // breaks at frame 6 / 3 = 2
+  for (size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(demo.frames[1].additions[k].name, "vase-fragment-" + std::to_string(k + 1));
+  }
+}
+
+// The demo's tree is cut into short pieces (contacts mark triangles near them); the leaves
+// scene of the study keeps its tree as it was, so measured results stay comparable.
+TEST(SceneNamesTest, DemoTreeIsCutIntoPiecesStudyTreeIsNot) {
+  const std::vector<SceneObject> study = LeavesScene(7, 3, 2, 0.0);
+  EXPECT_EQ(study[0].mesh.num_triangles(), 732);
+  const Scene demo = AnimatedLeavesScene(7, 3, 2, 3);
+  EXPECT_EQ(demo.objects[0].mesh.num_triangles(), 4412);
+  EXPECT_TRUE(IsClosed(demo.objects[0].mesh));
+  EXPECT_TRUE(ValidateScene(demo).ok());
+  // The same surface: every vertex of the cut tree lies within the tubes' bounds.
+  Eigen::AlignedBox3d before, after;
+  for (const auto& p : study[0].mesh.p_MV) before.extend(p);
+  for (const auto& p : demo.objects[0].mesh.p_MV) after.extend(p);
+  EXPECT_TRUE(before.isApprox(after, 1e-12));
+}
+
+}  // namespace
+}  // namespace far::scenes

@@ -91,6 +91,10 @@ class Client {
   Client(const Client&) = delete;
   Client& operator=(const Client&) = delete;
 
+  /// AddObject and SetPose check X_WO with far::CheckPose (finite; quaternion norm within
+  /// kQuaternionTolerance of 1) and send it normalized; a pose beyond the tolerance is
+  /// kInvalidArgument at once ("set_pose: object 3: X_WO.rotation_wxyz: not a unit quaternion
+  /// (norm 1.7): ...") and nothing is written.
   Result<void> AddObject(uint32_t id, const Mesh& mesh, Motion motion, const Pose& X_WO = {});
   Result<void> RemoveObject(uint32_t id);
   Result<void> SetPose(uint32_t id, const Pose& X_WO);

@@ -52,10 +52,11 @@ struct SequencedUpdate {
 /// Parses and validates one record (a private copy: RawRecord::bytes; its header already
 /// framing-checked by RingReader). Checks: known update type, size equal to the size its
 /// counts imply (64-bit arithmetic), counts in [1, limit], reserved fields zero, every double
-/// finite and within max_abs_coordinate, poses by far::CheckPose (unit quaternions), motion
-/// known, every triangle index < vertex_count. Every uint32 is a valid object id. Errors (message
-/// names the record sequence, the field and the value): kInvalidArgument, kLimitExceeded for counts
-/// over limits.
+/// finite and within max_abs_coordinate, poses by far::CheckPose (quaternion norm within
+/// kQuaternionTolerance of 1; passed on as sent, far::Pipeline normalizes), motion known, every
+/// triangle index < vertex_count. Every uint32 is a valid object id. Errors (message names the
+/// record sequence, the field and the value): kInvalidArgument, kLimitExceeded for counts over
+/// limits.
 Result<RingUpdate> ParseUpdateRecord(std::span<const uint8_t> record, const RingLimits& limits);
 
 /// The client side of the update ring. Each call writes one record and publishes it; put

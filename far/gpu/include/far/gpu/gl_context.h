@@ -10,7 +10,7 @@ namespace far {
 /// Which EGL platform a context may come from.
 enum class GlPlatform {
   kAuto,         ///< EGL device platform (hardware first), then Mesa surfaceless
-  kDevice,       ///< EGL_EXT_platform_device only
+  kDevice,       ///< EGL_EXT_platform_device, hardware devices (GPUs) only: never software
   kSurfaceless,  ///< EGL_MESA_platform_surfaceless only (llvmpipe on machines with no GPU)
 };
 
@@ -24,7 +24,11 @@ class GlContext {
  public:
   /// Creates a context and makes it current on the calling thread. Tries, in order (kAuto): EGL
   /// devices that are not software renderers, then software devices, then the surfaceless
-  /// platform. Returns kUnavailable with every attempt and its EGL error listed when none works.
+  /// platform. kDevice tries the hardware devices only: a software device
+  /// (EGL_MESA_device_software) and a device whose GL_RENDERER is Mesa's llvmpipe, softpipe or
+  /// swrast are listed as tried, not used. Returns kUnavailable with every attempt and why it
+  /// failed listed when none works ("no GPU found through the EGL device platform ..." for
+  /// kDevice).
   static Result<std::unique_ptr<GlContext>> Create(GlPlatform platform = GlPlatform::kAuto);
 
   ~GlContext();

@@ -19,14 +19,19 @@ namespace far {
 Result<Scene> ReadScene(const std::filesystem::path& path);
 
 /// Parses scene JSON held in memory, loading mesh files relative to `base_dir`, then checks it
-/// with ValidateScene. Quaternions are normalized after the norm check. Errors name the JSON path
-/// of the bad value, e.g. "objects[2].pose.rotation_wxyz: not a unit quaternion (norm 1.7)":
-///  - kParseError: JSON syntax (with the byte offset), wrong types, missing fields, wrong format;
+/// with ValidateScene. Errors name the JSON path of the bad value, e.g.
+/// "objects[2].pose.rotation_wxyz: not a unit quaternion (norm 1.7): ...":
+///  - kParseError: JSON syntax (with the byte offset), wrong types, missing fields, unknown keys,
+///    wrong format;
 ///  - kVersionMismatch: a format string "far-scene/N" other than "far-scene/1";
 ///  - kInvalidArgument: bad values (ids, motion names, non-unit quaternions, duplicate ids, ...);
 ///  - kNotFound: frames naming ids that are not alive at that point;
 ///  - the mesh reader's code (kIoError, kParseError, ...) for mesh files, with the object named.
-/// Unknown keys are ignored; duplicate keys in one JSON object are an error.
+/// Every key is checked: an unknown key is a kParseError naming it, its JSON path and the
+/// closest known key ("objects[0].pose.translaton: unknown key 'translaton'; did you mean
+/// 'translation'? ..."); "comment" (a string) is allowed everywhere. Duplicate keys in one JSON
+/// object are an error. Quaternions within kQuaternionTolerance (1e-3) of unit norm are
+/// accepted and normalized.
 Result<Scene> ParseScene(std::string_view json, const std::filesystem::path& base_dir);
 
 /// Writes `scene` as `far-scene/1` JSON to `scene_path`. Each mesh is referenced by its

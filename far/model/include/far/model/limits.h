@@ -3,6 +3,7 @@
 // Every limit on what a client, a scene file or a caller may ask of far, named once. The
 // pipeline, the scene model, the protocol's validation and the daemon all check against these.
 
+#include <cstddef>
 #include <cstdint>
 
 namespace far {
@@ -28,7 +29,13 @@ inline constexpr double kMaxDistance = 1e12;
 /// on scenes with more pairs than this: about 10 s on two cores. 'bvh' gives the same answer.
 inline constexpr uint64_t kMaxBruteForcePairs = uint64_t{1} << 30;
 
-/// Poses: a rotation quaternion is accepted when | |q| - 1 | <= this, then normalized.
-inline constexpr double kQuaternionTolerance = 1e-6;
+/// Scene objects' optional names (labels for people): at most this many bytes, one line.
+inline constexpr size_t kMaxObjectNameBytes = 100;
+
+/// Poses: a rotation quaternion is accepted when | |q| - 1 | <= this, then normalized. Wide
+/// enough for quaternions written with four decimals ([0.7071, 0, 0, 0.7071] is off by 1e-5),
+/// narrow enough that a quaternion that is not a rotation at all (a typo, a missing component,
+/// Euler angles) is refused rather than silently turned into some rotation.
+inline constexpr double kQuaternionTolerance = 1e-3;
 
 }  // namespace far

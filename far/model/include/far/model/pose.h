@@ -35,10 +35,16 @@ struct Pose {
 
 /// Checks a pose: finite translation, finite rotation with | |q| - 1 | <= kQuaternionTolerance.
 /// Errors (kInvalidArgument) start with the field: "translation: not finite",
-/// "rotation_wxyz: not finite", "rotation_wxyz: not a unit quaternion (norm 1.7)".
+/// "rotation_wxyz: not finite",
+/// "rotation_wxyz: not a unit quaternion (norm 1.7): |norm - 1| must be at most 0.001".
 Result<void> CheckPose(const Pose& pose);
 
 /// Returns `pose` with its rotation normalized to unit length. @pre CheckPose(pose).ok()
 Pose NormalizedPose(const Pose& pose);
+
+/// CheckPose, then NormalizedPose: what every reader of a pose (scene files, the client
+/// library, the daemon's update ring) does, so that a quaternion written with a few decimals
+/// is accepted and used as the exact rotation it stands for.
+Result<Pose> CheckAndNormalizePose(const Pose& pose);
 
 }  // namespace far

@@ -22,6 +22,9 @@ struct SceneObject {
   Mesh mesh;              ///< vertex positions in the object frame O
   Motion motion = Motion::kStatic;
   Pose X_WO;  ///< pose of the object frame O in the world frame W
+  /// Optional label for people ("leaf-12", "tree"), shown where contacts are listed or drawn;
+  /// empty: none. Need not be unique; at most kMaxObjectNameBytes bytes, no control characters.
+  std::string name = {};  // (a default initializer: aggregates may leave it out)
 };
 
 /// One animation step, applied in this order: removals, additions, poses, vertices.
@@ -52,9 +55,16 @@ struct Scene {
 /// valid meshes, unique ids, valid poses (CheckPose), poses only for alive rigid or deformable
 /// objects, vertices only for alive deformable objects with the same vertex count; plus the
 /// file format's own rules: vertex files with the object's triangles, at most one pose and one
-/// vertex update per id and frame. Errors name the place as a JSON path, e.g.
+/// vertex update per id and frame, names of at most kMaxObjectNameBytes bytes without control
+/// characters. Errors name the place as a JSON path, e.g.
 /// "frames[1].poses[0].id: object 4 is static; static objects take no poses":
 /// kInvalidArgument for bad values, kNotFound for ids that are not alive.
 Result<void> ValidateScene(const Scene& scene);
+
+/// The objects alive at step `step` of a valid scene (ValidateScene), as `far-client play`
+/// numbers steps: step 0 is `objects`, step k is after frames[0..k-1] are applied (removals,
+/// additions, poses, vertices; additions go last, in frame order). Errors: kInvalidArgument
+/// when step > frames.size() ("step 9: the scene has steps 0..4").
+Result<std::vector<SceneObject>> ObjectsAtStep(const Scene& scene, size_t step);
 
 }  // namespace far
