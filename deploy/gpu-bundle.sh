@@ -48,7 +48,7 @@ mkdir -p "$out"/{bin,lib,lib-cxx,lib-x11,debs,glvnd,data}
 for b in "${binaries[@]}"; do
   strip --strip-unneeded -o "$out/bin/$(basename "$b")" "build/release/$b"
 done
-cp bench/data/bunny.obj bench/study/plot_study.gp "$out/data/"
+cp bench/data/bunny.obj bench/study/plot_study.gp bench/study/plot_scaling.gp "$out/data/"
 
 # Every library the dynamic loader resolves for the binaries (ldd lists the whole closure),
 # under its soname. libstdc++ and libgcc_s go apart: gpu-run.sh uses them only when the

@@ -112,6 +112,37 @@ bool ParseGpuList(const std::string& flag, const std::string& text,
   return true;
 }
 
+// The sizes of the scenes.
+void AddSceneOptions(CLI::App& app, far_study::SceneOptions& scene) {
+  app.add_option("--bunny", scene.bunny_path, "bunny mesh (OBJ/PLY/STL)")->capture_default_str();
+  app.add_option("--bunny-subdivisions", scene.bunny_subdivisions,
+                 "bunnies: midpoint subdivisions (x4 triangles each)")
+      ->capture_default_str();
+  app.add_option("--fine-subdivisions", scene.fine_extra_subdivisions,
+                 "bunnies-fine: subdivisions beyond --bunny-subdivisions")
+      ->capture_default_str();
+  app.add_option("--fine-steps", scene.fine_steps, "bunnies-fine: measured steps")
+      ->capture_default_str();
+  app.add_option("--paper-bunny-refinement", scene.paper_bunny_refinement,
+                 "paper-bunnies: RefineMesh n (n^2 x 3674 triangles per bunny)")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  app.add_option("--breaking-static-triangles", scene.breaking_static_triangles,
+                 "breaking: triangles of the terrain (at least)")
+      ->check(CLI::Range(100, 10000000))
+      ->capture_default_str();
+  app.add_option("--breaking-rigid-triangles", scene.breaking_rigid_triangles,
+                 "breaking: triangles of the vase (at least)")
+      ->check(CLI::Range(100, 10000000))
+      ->capture_default_str();
+  app.add_option("--soup-objects", scene.soup_objects)->capture_default_str();
+  app.add_option("--soup-triangles", scene.soup_triangles, "triangles per soup object")
+      ->capture_default_str();
+  app.add_option("--leaves", scene.leaves, "leaves: number of leaves")->capture_default_str();
+  app.add_option("--leaf-cells", scene.leaf_cells, "leaves: a leaf is cells x cells quads")
+      ->capture_default_str();
+}
+
 void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--scenes", o.scenes,
                  "comma-separated: soup, bunnies, leaves, bunnies-fine, paper-leaves, breaking, "
@@ -142,9 +173,14 @@ void AddOptions(CLI::App& app, Options& o) {
       ->check(CLI::IsMember({"none", "paper", "all"}))
       ->capture_default_str();
   app.add_option("--distance-fraction", o.run.distance_fraction,
-                 "D of the distance pass as a fraction of the scene's size (largest side of its "
-                 "world box at step 0)")
+                 "D of the distance pass as a fraction of the diagonal of the scene's world box "
+                 "at step 0")
       ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--reference-steps", o.run.reference_steps,
+                 "run the brute-force reference on N measured steps of each scene only, spread "
+                 "evenly (breaking: also the break and the step after it); 0: every step")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--oq-steps", o.run.oq_steps,
                  "run occlusion-query configurations on the first N measured steps only (0: all)")
@@ -156,24 +192,7 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--results", o.results_path, "replace the study section of this Markdown file");
   app.add_option("--plot-script", o.plot_script, "gnuplot script")->capture_default_str();
   app.add_option("--scaling-plot-script", o.scaling_plot_script)->capture_default_str();
-  app.add_option("--bunny", o.scene.bunny_path, "bunny mesh (OBJ/PLY/STL)")->capture_default_str();
-  app.add_option("--bunny-subdivisions", o.scene.bunny_subdivisions,
-                 "bunnies: midpoint subdivisions (x4 triangles each)")
-      ->capture_default_str();
-  app.add_option("--fine-subdivisions", o.scene.fine_extra_subdivisions,
-                 "bunnies-fine: subdivisions beyond --bunny-subdivisions")
-      ->capture_default_str();
-  app.add_option("--fine-steps", o.scene.fine_steps, "bunnies-fine: measured steps")
-      ->capture_default_str();
-  app.add_option("--paper-bunny-refinement", o.scene.paper_bunny_refinement,
-                 "paper-bunnies: RefineMesh n (n^2 x 3674 triangles per bunny)")
-      ->capture_default_str();
-  app.add_option("--soup-objects", o.scene.soup_objects)->capture_default_str();
-  app.add_option("--soup-triangles", o.scene.soup_triangles, "triangles per soup object")
-      ->capture_default_str();
-  app.add_option("--leaves", o.scene.leaves, "leaves: number of leaves")->capture_default_str();
-  app.add_option("--leaf-cells", o.scene.leaf_cells, "leaves: a leaf is cells x cells quads")
-      ->capture_default_str();
+  AddSceneOptions(app, o.scene);
   app.add_flag("--quick", o.quick,
                "smoke test: small scenes and scaling 2000,5000 (with the distance pass), 2 steps, "
                "resolutions 256,1024");
@@ -239,6 +258,17 @@ int Prepare(const CLI::App& app, Options& o, std::vector<std::string>& scenes) {
     o.png_path = std::filesystem::path(csv).replace_extension(".png").string();
   if (!o.csv_path.empty() && o.scaling_png_path.empty())
     o.scaling_png_path = (csv.parent_path() / (csv.stem().string() + "_scaling.png")).string();
+  // The outputs' folders now, not after a run of many minutes.
+  for (const std::string& path : {o.csv_path, o.png_path, o.scaling_png_path, o.results_path}) {
+    const auto folder = std::filesystem::path(path).parent_path();
+    std::error_code error;
+    if (path.empty() || folder.empty()) continue;
+    if (!std::filesystem::create_directories(folder, error) && error) {
+      std::fprintf(stderr, "far-study: cannot make the folder of %s: %s\n", path.c_str(),
+                   error.message().c_str());
+      return 2;
+    }
+  }
   return 0;
 }
 
@@ -317,10 +347,10 @@ std::string ResultsSection(const std::vector<SceneReport>& reports, const far_st
         "steps with the interquartile range; stage columns are medians of the pipeline's own "
         "stage timers. All configurations of a scene ran interleaved within each step, each with "
         "its own pipeline and the same updates. Counts are medians per step; contacts, missed and "
-        "false positives are totals over all steps against the brute-force reference (`exact`; "
-        "where the distance pass runs, one exact run with output distance answers both contacts "
-        "and distance pairs). \"tri pairs\" are the candidate triangle pairs that reach the "
-        "exact stage's prefilter (pairs_considered).\n\n"
+        "false positives are totals over the steps the brute-force reference (`exact`) checked, "
+        "named above each scene's table (where the distance pass runs, one exact run with output "
+        "distance answers both contacts and distance pairs). \"tri pairs\" are the candidate "
+        "triangle pairs that reach the exact stage's prefilter (pairs_considered).\n\n"
      << "### Bars\n\n"
      << bars.table << "\n";
   if (problems > 0) md << "**" << problems << " reliability problems: see the tables.**\n\n";
@@ -346,7 +376,7 @@ std::string ResultsSection(const std::vector<SceneReport>& reports, const far_st
     md << "#### " << report.name << ": " << report.description << "; " << report.steps
        << " measured steps"
        << (report.distance ? ", distance D = " + far_study::Fixed(*report.distance, 4) : "")
-       << "\n\n"
+       << "\n\nReference: " << report.ReferenceText() << ".\n\n"
        << far_study::SceneTable(report) << "\n";
   }
   return md.str();
@@ -381,7 +411,10 @@ bool WriteOutputs(const std::vector<SceneReport>& reports, const far_study::Bars
     o.png_path.clear();
     o.scaling_png_path.clear();
   } else {
-    far_study::WriteCsv(o.csv_path, reports);
+    if (!far_study::WriteCsv(o.csv_path, reports)) {
+      std::fprintf(stderr, "far-study: cannot write %s\n", o.csv_path.c_str());
+      return false;
+    }
     std::printf("wrote %s\n", o.csv_path.c_str());
     if (!o.png_path.empty() && !far_study::Plot(o.plot_script, o.csv_path, o.png_path))
       o.png_path.clear();
@@ -410,7 +443,12 @@ int main(int argc, char** argv) {
       "far-study: cost and accuracy of every culling configuration, and FCL, on animated "
       "scenes (see docs/study.md)"};
   AddOptions(app, o);
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help is a ParseError with exit code 0; every bad flag is exit status 2 (docs/study.md).
+    return app.exit(e) == 0 ? 0 : 2;
+  }
   std::vector<std::string> scenes;
   if (const int status = Prepare(app, o, scenes); status != 0) return status;
 
@@ -437,7 +475,8 @@ int main(int argc, char** argv) {
   const int problems = CountProblems(reports);
   const far_study::Bars bars = far_study::EvaluateBars(reports, o.run, info);
   for (const SceneReport& report : reports)
-    std::printf("\n### %s\n%s", report.name.c_str(), far_study::SceneTable(report).c_str());
+    std::printf("\n### %s\nReference: %s.\n%s", report.name.c_str(), report.ReferenceText().c_str(),
+                far_study::SceneTable(report).c_str());
   std::printf("\n%s", bars.summary.c_str());
   if (!WriteOutputs(reports, bars, info, o, problems)) return 1;
   return problems > 0 ? 3 : 0;

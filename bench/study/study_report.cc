@@ -31,7 +31,7 @@ void WriteCsvHeader(std::ofstream& out) {
          "subobject_input,contacts_total,reference_total,missed_total,false_positives_total,"
          "distance_pairs_total,distance_reference_total,distance_missed_total,"
          "distance_spurious_total,queries,draws,primitives_rendered,object_pairs_total,"
-         "pairs_considered_total,checked,method_run,method_reason\n";
+         "pairs_considered_total,checked,checked_steps,method_run,method_reason\n";
 }
 
 void WriteCsvRow(std::ofstream& out, const SceneReport& report, const Row& r) {
@@ -54,7 +54,14 @@ void WriteCsvRow(std::ofstream& out, const SceneReport& report, const Row& r) {
   }
   out << "," << r.queries << "," << r.draws << "," << r.primitives_rendered << ","
       << r.object_pairs_total << "," << r.pairs_considered_total << "," << (r.checked ? 1 : 0)
-      << "," << r.method_run << "," << CsvText(r.method_reason) << "\n";
+      << "," << r.checked_steps << "," << r.method_run << "," << CsvText(r.method_reason) << "\n";
+}
+
+// " (3 of 6 steps checked)" where the reference did not check every step the row ran.
+std::string PartlyChecked(const Row& row) {
+  if (!row.checked || row.checked_steps == row.samples) return "";
+  return " (" + std::to_string(row.checked_steps) + " of " + std::to_string(row.samples) +
+         " steps checked)";
 }
 
 std::string MethodCell(const Row& r) {
@@ -89,15 +96,23 @@ std::string Count(double value) {
 
 std::string Ratio(double value) { return Fixed(value, value < 10 ? 2 : 1) + "x"; }
 
+std::string CheckedSteps(const Row& row) {
+  if (!row.checked) return "none";
+  if (row.checked_steps == row.samples) return "all " + std::to_string(row.samples);
+  return std::to_string(row.checked_steps) + " of " + std::to_string(row.samples);
+}
+
 std::string Misses(const Row& row) {
   if (!row.checked) return "not checked";
-  return std::to_string(row.missed) + " / " + std::to_string(row.false_positives);
+  return std::to_string(row.missed) + " / " + std::to_string(row.false_positives) +
+         PartlyChecked(row);
 }
 
 std::string DistanceMisses(const Row& row) {
   if (!row.distance()) return "-";
   if (!row.checked) return "not checked";
-  return std::to_string(row.distance_missed) + " / " + std::to_string(row.distance_spurious);
+  return std::to_string(row.distance_missed) + " / " + std::to_string(row.distance_spurious) +
+         PartlyChecked(row);
 }
 
 std::string StageText(const Row& r) {
@@ -120,21 +135,24 @@ std::string RunsText(const Row& row) {
   return text.empty() ? "-" : text;
 }
 
-void WriteCsv(const std::string& path, const std::vector<SceneReport>& reports) {
+bool WriteCsv(const std::string& path, const std::vector<SceneReport>& reports) {
   std::ofstream out(path);
   WriteCsvHeader(out);
   for (const SceneReport& report : reports) {
     for (const Row& r : report.rows) WriteCsvRow(out, report, r);
   }
+  out.close();
+  return static_cast<bool>(out);
 }
 
 std::string SceneTable(const SceneReport& report) {
   std::ostringstream md;
   md << "| method | mechanism | res | output | ms/step median [p25-p75] | CPU ms | ingest | update "
         "| object cull | SAP | prim cull | exact | PCS obj | PCS prims | obj pairs | tri pairs | "
-        "contacts | missed | false pos | dist pairs | dist missed / spurious | queries | draws |\n"
+        "contacts | missed | false pos | checked steps | dist pairs | dist missed / spurious | "
+        "queries | draws |\n"
      << "|---|---|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
-        "--:|\n";
+        "--:|--:|\n";
   for (const Row& r : report.rows) {
     md << "| " << MethodCell(r) << " | " << r.mechanism << " | "
        << (r.resolution > 0 ? std::to_string(r.resolution) : "-") << " | " << r.output << " | "
@@ -145,8 +163,9 @@ std::string SceneTable(const SceneReport& report) {
        << Count(r.object_pairs) << " | " << Count(r.pairs_considered) << " | " << r.contacts
        << " | " << (r.checked ? std::to_string(r.missed) : "not checked") << " | "
        << (r.checked ? std::to_string(r.false_positives) : "not checked") << " | "
-       << (r.distance() ? std::to_string(r.distance_pairs) : "-") << " | " << DistanceMisses(r)
-       << " | " << Count(r.queries) << " | " << Count(r.draws) << " |\n";
+       << CheckedSteps(r) << " | " << (r.distance() ? std::to_string(r.distance_pairs) : "-")
+       << " | " << DistanceMisses(r) << " | " << Count(r.queries) << " | " << Count(r.draws)
+       << " |\n";
   }
   return md.str();
 }

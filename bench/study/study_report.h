@@ -26,16 +26,20 @@ std::string Fixed(double value, int digits);
 std::string Ms(double ms);  ///< about three significant digits
 std::string Count(double value);
 std::string Ratio(double value);
-/// "missed / spurious" of contacts, or "not checked" without a reference.
+/// "missed / spurious" of contacts, or "not checked" without a reference; "(3 of 6 steps
+/// checked)" after it where the reference ran on some of the row's steps only.
 std::string Misses(const Row& row);
-/// The same for distance pairs ("-" for a row without the distance pass).
+/// Steps of the row checked against the reference: "all 6", "3 of 6", "none".
+std::string CheckedSteps(const Row& row);
+/// The same as Misses for distance pairs ("-" for a row without the distance pass).
 std::string DistanceMisses(const Row& row);
 /// "ingest 0.01, update 0.03, ..." (stages of 5 us or more).
 std::string StageText(const Row& row);
 /// What a row ran, by measured steps: "bvh x3, aabb x1".
 std::string RunsText(const Row& row);
 
-void WriteCsv(const std::string& path, const std::vector<SceneReport>& reports);
+/// False when the file cannot be written.
+bool WriteCsv(const std::string& path, const std::vector<SceneReport>& reports);
 std::string SceneTable(const SceneReport& report);
 /// Triangles x configurations, median ms per step, over the scaling scenes ("" without any).
 std::string ScalingTable(const std::vector<SceneReport>& reports);

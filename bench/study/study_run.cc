@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <iterator>
 #include <memory>
+#include <numeric>
 #include <sstream>
 #include <utility>
 #include <variant>
@@ -275,6 +276,7 @@ far::Result<bool> RunOne(Live& config, const far::FrameUpdate* frame, bool run,
 
 // Misses and false positives of `config` against the reference's answer of the same step.
 void Compare(const Live& reference, const Live& config, Sample& sample) {
+  sample.checked = true;
   sample.reference = static_cast<int64_t>(reference.contacts.size());
   sample.missed = CountMissing(reference.contacts, config.contacts);
   sample.false_positives = CountMissing(config.contacts, reference.contacts);
@@ -344,7 +346,7 @@ void SummarizeCounts(const std::vector<Sample>& s, Row& row) {
   row.pairs_considered_total = SumOf(s, [](const Sample& x) { return x.pairs_considered; });
 }
 
-Row Summarize(const Live& config, bool checked) {
+Row Summarize(const Live& config) {
   Row row;
   row.spec = config.spec;
   row.config = config.spec.Name();
@@ -354,7 +356,8 @@ Row Summarize(const Live& config, bool checked) {
   row.resolution = config.spec.resolution;
   row.samples = static_cast<int>(config.samples.size());
   row.reference = config.reference;
-  row.checked = checked;
+  for (const Sample& x : config.samples) row.checked_steps += x.checked;
+  row.checked = row.checked_steps > 0;
   SummarizeTimes(config.samples, row);
   SummarizeCounts(config.samples, row);
   for (const Sample& x : config.samples) ++row.runs[x.method_run];
@@ -431,24 +434,32 @@ std::vector<ConfigSpec> ConfigsFor(const StudyScene& scene, const RunOptions& op
 
 namespace {
 
-// Runs every configuration once at step s (0: the warm-up, no frame), in an order that rotates
-// with s so that no configuration always runs right after the update, then compares each answer
-// with the reference's. Measured steps append a sample to each configuration that ran.
+// What every step of a scene shares: D of the distance pass and where the reference runs.
+struct StepPlan {
+  std::optional<double> distance;
+  bool has_reference = false;     // configs.back() is the reference
+  std::set<int> reference_steps;  // measured steps it runs on
+};
+
+// Runs every configuration once at step s (0: the warm-up, no frame, no reference: the brute
+// force has nothing to warm up), in StepOrder, then compares each answer with the reference's
+// where it ran. Measured steps append a sample to each configuration that ran.
 far::Result<void> RunStep(const StudyScene& scene, const RunOptions& options, int s,
-                          std::optional<double> distance, bool has_reference,
-                          std::map<uint32_t, int64_t>& triangles_of, std::vector<Live>& configs) {
+                          const StepPlan& plan, std::map<uint32_t, int64_t>& triangles_of,
+                          std::vector<Live>& configs) {
   const far::FrameUpdate* frame = s == 0 ? nullptr : &scene.scene.frames[s - 1];
   if (frame != nullptr) TrackTriangles(*frame, triangles_of);
-  const size_t offset = static_cast<size_t>(s) % configs.size();
+  const bool reference_runs = plan.has_reference && plan.reference_steps.count(s) > 0;
   std::vector<Sample> samples(configs.size());
   std::vector<bool> ran(configs.size(), false);
-  for (size_t n = 0; n < configs.size(); ++n) {
-    const size_t i = (n + offset) % configs.size();
-    // Occlusion queries may be limited to the first oq_steps measured steps; their pipelines
-    // still get every update (untimed) so that they stay on the same scene.
+  for (size_t i : StepOrder(configs.size(), s)) {
+    // Occlusion queries may be limited to the first oq_steps measured steps, the reference to
+    // its steps; their pipelines still get every update (untimed) so that they stay on the
+    // same scene.
     const bool oq = configs[i].spec.mechanism == far::QueryMechanism::kOcclusionQuery;
-    const bool run = !oq || options.oq_steps <= 0 || s <= options.oq_steps;
-    auto done = RunOne(configs[i], frame, run, distance, triangles_of, samples[i]);
+    const bool run = configs[i].reference ? reference_runs
+                                          : !oq || options.oq_steps <= 0 || s <= options.oq_steps;
+    auto done = RunOne(configs[i], frame, run, plan.distance, triangles_of, samples[i]);
     if (!done.ok()) {
       return far::MakeError(done.error().code, configs[i].spec.Name() + " at step " +
                                                    std::to_string(s) + ": " + done.error().message);
@@ -458,14 +469,14 @@ far::Result<void> RunStep(const StudyScene& scene, const RunOptions& options, in
   if (s == 0) return {};
   for (size_t i = 0; i < configs.size(); ++i) {
     if (!ran[i]) continue;
-    if (has_reference) Compare(configs.back(), configs[i], samples[i]);
+    if (reference_runs) Compare(configs.back(), configs[i], samples[i]);
     configs[i].samples.push_back(std::move(samples[i]));
   }
   return {};
 }
 
 SceneReport MakeReport(const StudyScene& scene, const std::vector<Live>& configs,
-                       std::optional<double> distance, bool has_reference) {
+                       const StepPlan& plan) {
   SceneReport report;
   report.name = scene.name;
   report.description = scene.description;
@@ -475,42 +486,103 @@ SceneReport MakeReport(const StudyScene& scene, const std::vector<Live>& configs
   report.triangles = scene.triangles;
   report.objects = static_cast<int>(scene.scene.objects.size());
   report.steps = static_cast<int>(scene.scene.frames.size());
-  report.distance = distance;
-  report.checked = has_reference;
-  for (const Live& config : configs) report.rows.push_back(Summarize(config, has_reference));
+  report.distance = plan.distance;
+  report.checked = plan.has_reference;
+  if (plan.has_reference)
+    report.reference_steps.assign(plan.reference_steps.begin(), plan.reference_steps.end());
+  for (const Live& config : configs) report.rows.push_back(Summarize(config));
   return report;
+}
+
+std::string StepList(const std::vector<int>& steps) {
+  std::string text;
+  for (int s : steps) text += (text.empty() ? "" : ", ") + std::to_string(s);
+  return text;
 }
 
 }  // namespace
 
+std::vector<int> ReferenceSteps(int steps, int count, const std::vector<int>& key_steps) {
+  std::set<int> chosen;
+  if (count <= 0 || count >= steps) {
+    for (int s = 1; s <= steps; ++s) chosen.insert(s);
+  } else {
+    for (int i = 0; i < count; ++i) {
+      const double at = count == 1 ? 0.0 : static_cast<double>(i) * (steps - 1) / (count - 1);
+      chosen.insert(1 + static_cast<int>(at + 0.5));
+    }
+    for (int s : key_steps) {
+      if (s >= 1 && s <= steps) chosen.insert(s);
+    }
+  }
+  return {chosen.begin(), chosen.end()};
+}
+
+std::vector<size_t> StepOrder(size_t count, int s) {
+  if (count == 0) return {};
+  std::vector<size_t> strides;
+  for (size_t k = 1; k < std::max<size_t>(count, 2); ++k) {
+    if (std::gcd(k, count) == 1) strides.push_back(k);
+  }
+  // Stride k + 1 with offset k at step k + 1 would keep the last configuration last whenever
+  // count is prime (offset - stride = count - 1); stride k pairs with offset k instead.
+  const size_t step = static_cast<size_t>(std::max(s, 1));
+  const size_t stride = strides[(step - 1) % strides.size()];
+  const size_t offset = static_cast<size_t>(std::max(s, 0)) % count;
+  std::vector<size_t> order;
+  for (size_t n = 0; n < count; ++n) order.push_back((offset + n * stride) % count);
+  return order;
+}
+
+std::string SceneReport::ReferenceText() const {
+  if (!checked) {
+    return "no reference (above --scaling-reference-max): missed and false positives not "
+           "checked";
+  }
+  if (static_cast<int>(reference_steps.size()) == steps)
+    return "the brute force (`exact`) on every measured step (" + std::to_string(steps) + ")";
+  return "the brute force (`exact`) on measured steps " + StepList(reference_steps) + " of " +
+         std::to_string(steps) + " (--reference-steps" +
+         (break_note.empty() ? "" : "; the break and the step after it always") +
+         "): missed and false positives count those steps only";
+}
+
 far::Result<SceneReport> RunScene(const StudyScene& scene, const RunOptions& options) {
   const auto scene_start = Clock::now();
-  bool has_reference = false;
-  const std::vector<ConfigSpec> specs = ConfigsFor(scene, options, &has_reference);
-  auto made = MakePipelines(scene, specs, has_reference);
+  StepPlan plan;
+  const std::vector<ConfigSpec> specs = ConfigsFor(scene, options, &plan.has_reference);
+  auto made = MakePipelines(scene, specs, plan.has_reference);
   if (!made.ok()) return made.error();
   std::vector<Live>& configs = *made;
-  std::optional<double> distance;
-  if (RunsDistance(scene, options)) distance = options.distance_fraction * scene.size;
+  if (RunsDistance(scene, options)) plan.distance = options.distance_fraction * scene.diagonal;
+  const int steps = static_cast<int>(scene.scene.frames.size());
+  if (plan.has_reference) {
+    for (int s : ReferenceSteps(steps, options.reference_steps, scene.key_steps))
+      plan.reference_steps.insert(s);
+  }
   std::map<uint32_t, int64_t> triangles_of;
   for (const auto& object : scene.scene.objects)
     triangles_of[object.id] = object.mesh.num_triangles();
-  const int steps = static_cast<int>(scene.scene.frames.size());
-  if (configs.empty()) return MakeReport(scene, configs, distance, has_reference);  // --methods
+  if (configs.empty()) return MakeReport(scene, configs, plan);  // --methods
   // Step 0 (not measured) warms up: renderers, shaders, first piece builds and hierarchies, FCL
   // models, auto's GPU probe.
   for (int s = 0; s <= steps; ++s) {
     const auto step_start = Clock::now();
-    auto ok = RunStep(scene, options, s, distance, has_reference, triangles_of, configs);
+    auto ok = RunStep(scene, options, s, plan, triangles_of, configs);
     if (!ok.ok()) return ok.error();
     if (s == 0) continue;
     std::printf("  %s step %d/%d: %.1f s", scene.name.c_str(), s, steps,
                 MillisecondsSince(step_start) / 1000);
-    if (has_reference) std::printf(", %zu reference contacts", configs.back().contacts.size());
+    if (plan.has_reference && plan.reference_steps.count(s) > 0) {
+      std::printf(", %zu reference contacts", configs.back().contacts.size());
+      if (plan.distance) std::printf(", %zu distance pairs", configs.back().distance_pairs.size());
+    } else {
+      std::printf(", not checked");
+    }
     std::printf("\n");
     std::fflush(stdout);
   }
-  SceneReport report = MakeReport(scene, configs, distance, has_reference);
+  SceneReport report = MakeReport(scene, configs, plan);
   report.seconds = MillisecondsSince(scene_start) / 1000;
   return report;
 }

@@ -45,7 +45,11 @@ struct RunOptions {
   std::set<std::string> methods;  ///< method names to run (empty: all); the reference always
   bool distance_on_paper = true;  ///< the distance pass on the paper-scale scenes
   bool distance_on_scaling = false;
-  double distance_fraction = 0.01;  ///< D of the distance pass, as a fraction of the scene size
+  /// D of the distance pass, as a fraction of the diagonal of the scene's world box at step 0.
+  double distance_fraction = 0.001;
+  /// The reference on this many measured steps of each scene, spread evenly (and the scene's
+  /// key_steps); 0: on every measured step.
+  int reference_steps = 0;
 
   /// The resolution the small-scene bars compare at: 1024 when run, else the largest.
   int PrimaryResolution() const;
@@ -65,6 +69,7 @@ struct Sample {
   int64_t pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
   int64_t contacts = 0, reference = 0, missed = 0, false_positives = 0;
   int64_t distance_pairs = 0, distance_reference = 0, distance_missed = 0, distance_spurious = 0;
+  bool checked = false;  ///< the reference ran at this step: the four counts above are known
   std::string method_run, method_reason;  ///< StepStats::method and method_reason
 };
 
@@ -75,7 +80,8 @@ struct Row {
   int resolution = 0;
   int samples = 0;
   bool reference = false;  ///< this row is the scene's reference (exact)
-  bool checked = false;    ///< the scene had a reference: missed / false positives are known
+  bool checked = false;    ///< some measured step was checked: missed / false positives known
+  int checked_steps = 0;   ///< samples checked against the reference (the totals count these)
   double ms_median = 0, ms_p25 = 0, ms_p75 = 0, ms_min = 0, ms_max = 0, cpu_ms = 0;
   double ingest_ms = 0, cull_ms = 0;
   std::array<double, kStages.size()> stage_ms{};
@@ -98,10 +104,15 @@ struct SceneReport {
   Kind kind = Kind::kRigid;
   int64_t triangles = 0;
   int objects = 0, steps = 0;
-  std::optional<double> distance;  ///< D of the distance pass, when it ran
-  bool checked = false;            ///< a reference ran
+  std::optional<double> distance;    ///< D of the distance pass, when it ran
+  bool checked = false;              ///< a reference ran
+  std::vector<int> reference_steps;  ///< the measured steps it ran on
   double seconds = 0;
   std::vector<Row> rows;
+
+  /// Which reference checked the rows, on which steps: "the brute force (`exact`) on measured
+  /// steps 1, 3, 4, 6 of 6", or that there was none.
+  std::string ReferenceText() const;
 };
 
 /// The configurations of `scene`, the reference (exact) last, or none when the scene is past
@@ -109,6 +120,16 @@ struct SceneReport {
 /// (it answers contacts too, so one brute force serves both).
 std::vector<ConfigSpec> ConfigsFor(const StudyScene& scene, const RunOptions& options,
                                    bool* has_reference);
+
+/// The measured steps (1..steps) the reference runs on: all when `count` is 0 or at least
+/// `steps`; else `count` steps spread evenly, the first and the last included (one: the first),
+/// and every key step.
+std::vector<int> ReferenceSteps(int steps, int count, const std::vector<int>& key_steps);
+
+/// The order in which the configurations run at step s: (offset + n * stride) mod count for
+/// n = 0 .. count - 1, the offset rotating by one per step and the stride cycling through the
+/// numbers coprime to count, so that no configuration always follows the same one.
+std::vector<size_t> StepOrder(size_t count, int s);
 
 /// Runs every configuration of `scene` over its frames (an unmeasured warm-up step 0, then
 /// one measured step per frame). Errors: a pipeline cannot be made, an update or step failed.

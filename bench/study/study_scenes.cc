@@ -33,13 +33,13 @@ int64_t CountTriangles(const std::vector<far::SceneObject>& objects) {
   return total;
 }
 
-double WorldSize(const std::vector<far::SceneObject>& objects) {
+double WorldDiagonal(const std::vector<far::SceneObject>& objects) {
   Eigen::AlignedBox3d box;
   for (const auto& object : objects) {
     const Eigen::Isometry3d X_WO = object.X_WO.ToIsometry();
     for (const auto& p : object.mesh.p_MV) box.extend(X_WO * p);
   }
-  return box.isEmpty() ? 0.0 : box.sizes().maxCoeff();
+  return box.isEmpty() ? 0.0 : box.diagonal().norm();
 }
 
 // Random soup: clusters drifting and tumbling rigidly, each along its own random path.
@@ -191,10 +191,13 @@ far::Result<StudyScene> MakePaperScene(const std::string& name, const SceneOptio
     // The break sits at the middle of the measured steps, with steps before and after it.
     const int steps = std::max(2, options.steps);
     const int frames = steps + 1;
+    const int break_step = std::max(1, frames / 2);  // frame k is applied before step k
     study.kind = Kind::kBreaking;
-    study.scene = far::scenes::BreakingScene(kPaperSeed, frames);
-    study.break_note = "the vase breaks at measured step " +
-                       std::to_string(std::max(1, frames / 2)) + " of " + std::to_string(steps);
+    study.scene = far::scenes::BreakingScene(kPaperSeed, frames, options.breaking_static_triangles,
+                                             options.breaking_rigid_triangles);
+    study.key_steps = {break_step, break_step + 1};
+    study.break_note = "the vase breaks at measured step " + std::to_string(break_step) + " of " +
+                       std::to_string(steps);
     text << "BreakingScene: a static terrain (" << study.scene.objects[0].mesh.num_triangles()
          << " triangles) and a rigid vase (" << study.scene.objects[1].mesh.num_triangles()
          << ") rolling into a rock; " << study.break_note
@@ -298,7 +301,7 @@ far::Result<StudyScene> MakeStudyScene(const std::string& name, const SceneOptio
   if (!made.ok()) return made;
   made->triangles = CountTriangles(made->scene.objects);
   if (made->nominal_triangles == 0) made->nominal_triangles = made->triangles;
-  made->size = WorldSize(made->scene.objects);
+  made->diagonal = WorldDiagonal(made->scene.objects);
   return made;
 }
 

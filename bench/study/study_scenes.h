@@ -36,9 +36,12 @@ struct StudyScene {
   /// The size asked for: scaling's target (its scene is within 2% of it), else `triangles`.
   /// The scaling limits (--scaling-gpu-max, --scaling-reference-max) compare against it.
   int64_t nominal_triangles = 0;
-  double size = 0;         ///< largest side of the world box at step 0 (distance D is 1% of it)
+  double diagonal = 0;     ///< of the world bounding box at step 0 (D is a fraction of it)
   bool far_only = false;   ///< bunnies-fine: FAR at the primary resolution only
   std::string break_note;  ///< breaking: at which measured step the break happens
+  /// Measured steps the reference must check even when it runs on a few steps only
+  /// (--reference-steps): breaking's break and the step after it.
+  std::vector<int> key_steps;
 };
 
 /// Sizes and steps of the scenes.
@@ -46,9 +49,11 @@ struct SceneOptions {
   int steps = 4;  ///< measured steps of every scene but bunnies-fine
   int fine_steps = 2;
   std::string bunny_path;
-  int bunny_subdivisions = 0;       ///< soup-era bunnies: midpoint subdivisions
-  int fine_extra_subdivisions = 1;  ///< bunnies-fine: beyond bunny_subdivisions
-  int paper_bunny_refinement = 5;   ///< paper-bunnies: RefineMesh n (91,850 triangles for 5)
+  int bunny_subdivisions = 0;              ///< soup-era bunnies: midpoint subdivisions
+  int fine_extra_subdivisions = 1;         ///< bunnies-fine: beyond bunny_subdivisions
+  int paper_bunny_refinement = 5;          ///< paper-bunnies: RefineMesh n (91,850 triangles for 5)
+  int breaking_static_triangles = 100000;  ///< breaking: the terrain (at least)
+  int breaking_rigid_triangles = 35000;    ///< breaking: the vase (at least)
   int soup_objects = 32, soup_triangles = 48;
   int leaves = 60, leaf_cells = 6;
 };
