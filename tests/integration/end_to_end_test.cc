@@ -65,6 +65,21 @@ TEST_F(EndToEndTest, CollideGivesTheBruteForceContactsForEveryMethod) {
     const auto contacts = PairsFromJson(out.at("contacts"));
     EXPECT_EQ(contacts, expected) << "got " << ToString(contacts) << "\nexpected "
                                   << ToString(expected);
+    // The certificate travels with the answer: why nothing was missed, and for the GPU
+    // methods each level's numbers, which must cover what they claim.
+    const json& certificate = out.at("stats").at("certificate");
+    EXPECT_TRUE(certificate.at("guaranteed").get<bool>()) << certificate.dump();
+    EXPECT_EQ(certificate.at("basis").get<std::string>().rfind("guaranteed: ", 0), 0u);
+    const bool gpu = std::string(method).rfind("far", 0) == 0;
+    ASSERT_EQ(certificate.at("levels").size(), gpu ? 2u : 0u) << certificate.dump();
+    for (const json& level : certificate.at("levels")) {
+      EXPECT_EQ(level.at("resolution").get<int>(), 256);
+      const double covered = std::sqrt(3.0) * std::max(level.at("pixel_size").get<double>(),
+                                                       level.at("depth_step").get<double>()) +
+                             level.at("rounding").get<double>();
+      EXPECT_GE(level.at("offset_radius").get<double>(), covered) << level.dump();
+      EXPECT_GT(level.at("pixel_size").get<double>(), 0) << level.dump();
+    }
   }
 }
 

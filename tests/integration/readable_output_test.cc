@@ -50,7 +50,8 @@ TEST_F(ReadableOutputTest, PlayContactsNamesEveryObjectPairWithItsTrianglePairCo
       RunFarClient({"play", path.string(), "--method", "exact", "--contacts"});
   ASSERT_EQ(played.exit_code, 0) << played.err;
   const std::vector<std::string> lines = Lines(played.out);
-  ASSERT_EQ(lines.size(), 1 + counts.size()) << played.out;
+  // The step line, a line per touching object pair, the certificate (exact: one line).
+  ASSERT_EQ(lines.size(), 1 + counts.size() + 1) << played.out;
   for (const auto& [pair, count] : counts) {
     const std::string expected = "      " + label(pair.first) + " touches " + label(pair.second) +
                                  " (" + std::to_string(count) + " triangle pair" +
@@ -105,6 +106,32 @@ TEST_F(ReadableOutputTest, PlaySaysWhenTheDemoVaseBreaks) {
                     [](const std::string& l) { return l.find("breaks") != std::string::npos; }),
       1)
       << played.out;
+}
+
+// play prints the certificate when the configuration changes, and every step with
+// --certificate: the method's guarantee, then one line per GPU level.
+TEST_F(ReadableOutputTest, PlayPrintsTheCertificateOfItsAnswers) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  TempDir dir;
+  const auto path = dir.path() / "demo" / "scene.json";
+  ASSERT_EQ(RunFarClient({"make-scene", path.string(), "--leaves", "4", "--frames", "3"}).exit_code,
+            0);
+  auto count = [](const std::string& out, const std::string& text) {
+    const std::vector<std::string> lines = Lines(out);
+    return std::count_if(lines.begin(), lines.end(), [&](const std::string& line) {
+      return line.find(text) != std::string::npos;
+    });
+  };
+  const ProcessResult once =
+      RunFarClient({"play", path.string(), "--method", "far", "--resolution", "128"});
+  ASSERT_EQ(once.exit_code, 0) << once.err;
+  EXPECT_EQ(count(once.out, "certificate: guaranteed: "), 1) << once.out;
+  EXPECT_EQ(count(once.out, "  object     3 views at 128 px: r "), 1) << once.out;
+  const ProcessResult every = RunFarClient(
+      {"play", path.string(), "--method", "cullide", "--resolution", "128", "--certificate"});
+  ASSERT_EQ(every.exit_code, 0) << every.err;
+  EXPECT_EQ(count(every.out, "certificate: not guaranteed: "), 3) << every.out;
+  EXPECT_GE(count(every.out, "no offset (r 0)"), 3) << every.out;
 }
 
 // Each line reaches a pipe when it is printed (deploy/run-demo.sh shows several clients' lines

@@ -1,8 +1,50 @@
 #include "result_json.h"
 
+#include <cstdio>
+
 namespace far::cli {
 
 using nlohmann::json;
+
+json CertificateJson(const Certificate& certificate) {
+  json levels = json::array();
+  for (const LevelCertificate& level : certificate.levels) {
+    levels.push_back({{"level", level.level},
+                      {"views", level.views},
+                      {"resolution", level.resolution},
+                      {"offset_radius", level.offset_radius},
+                      {"pixel_size", level.pixel_size},
+                      {"depth_step", level.depth_step},
+                      {"rounding", level.rounding},
+                      {"world_min", level.world_min},
+                      {"world_max", level.world_max}});
+  }
+  return {{"guaranteed", certificate.guaranteed}, {"basis", certificate.basis}, {"levels", levels}};
+}
+
+std::string CertificateText(const Certificate& certificate) {
+  std::string text = "certificate: " + certificate.basis + "\n";
+  char line[512];
+  for (const LevelCertificate& level : certificate.levels) {
+    std::snprintf(line, sizeof line, "  %-10s %d views at %d px: ", level.level.c_str(),
+                  level.views, level.resolution);
+    text += line;
+    if (level.offset_radius > 0) {
+      std::snprintf(line, sizeof line,
+                    "r %.6g covers D/2 + sqrt(3) max(pixel %.6g, depth step %.6g) + rounding %.3g",
+                    level.offset_radius, level.pixel_size, level.depth_step, level.rounding);
+    } else {
+      std::snprintf(line, sizeof line, "no offset (r 0), pixel %.6g, depth step %.6g",
+                    level.pixel_size, level.depth_step);
+    }
+    text += line;
+    std::snprintf(line, sizeof line, "; world [%.6g %.6g %.6g] - [%.6g %.6g %.6g]\n",
+                  level.world_min[0], level.world_min[1], level.world_min[2], level.world_max[0],
+                  level.world_max[1], level.world_max[2]);
+    text += line;
+  }
+  return text;
+}
 
 json StatsJson(const StepStats& stats) {
   json stages = json::object();
@@ -19,7 +61,8 @@ json StatsJson(const StepStats& stats) {
           {"pairs_considered", stats.pairs_considered},
           {"pairs_tested", stats.pairs_tested},
           {"object_radius", stats.object_radius},
-          {"primitive_radius", stats.primitive_radius}};
+          {"primitive_radius", stats.primitive_radius},
+          {"certificate", CertificateJson(stats.certificate)}};
 }
 
 json ResultJson(const StepResult& result) {

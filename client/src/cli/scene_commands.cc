@@ -2,8 +2,8 @@
 #include <iostream>
 
 #include "cli_common.h"
-#include "progress.h"
 #include "object_listing.h"
+#include "progress.h"
 #include "result_json.h"
 #include "step_flags.h"
 #include <nlohmann/json.hpp>
@@ -19,7 +19,8 @@ struct SceneFlags {
   std::string scene;
   int steps = 0;  // play: 0 = 1 + number of frames
   bool as_json = false;
-  bool contacts = false;  // play: list each step's contacts by object pair
+  bool contacts = false;     // play: list each step's contacts by object pair
+  bool certificate = false;  // play: print every step's certificate, not only on a change
   StepFlags step;
 };
 
@@ -94,6 +95,7 @@ int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
   client::Client& client = *session->second;
   const int total = flags.steps > 0 ? flags.steps : static_cast<int>(scene.frames.size()) + 1;
   SceneObjects objects(scene.objects);
+  std::string last_configuration;
   for (int step = 0; step < total; ++step) {
     // Step 0 is the scene as loaded; frame k is applied before step k + 1.
     const FrameUpdate* frame = step > 0 && static_cast<size_t>(step - 1) < scene.frames.size()
@@ -119,6 +121,11 @@ int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
         for (const ObjectContact& contact : GroupByObjectPair(result->contacts, objects))
           std::printf("      %s\n", Describe(contact, objects).c_str());
       }
+      // The certificate depends on the configuration and the scene's extent: shown when the
+      // configuration changes (under auto too), every step on request.
+      if (flags.certificate || result->stats.method != last_configuration)
+        std::printf("%s", CertificateText(result->stats.certificate).c_str());
+      last_configuration = result->stats.method;
     }
   }
   return 0;
@@ -161,6 +168,11 @@ Command AddPlayCommand(CLI::App& app, const GlobalFlags& global) {
   command.app->add_flag("--contacts", flags->contacts,
                         "after each step, its contacts by object pair, named as in the scene: "
                         "'leaf-12 touches tree (37 triangle pairs)' (JSON: 'object_contacts')");
+  command.app->add_flag("--certificate", flags->certificate,
+                        "print each step's certificate (why nothing was missed: the method's "
+                        "guarantee and each GPU level's offset radius, pixel size, depth step, "
+                        "rounding bound and world bounds); by default only when the "
+                        "configuration changes. JSON lines always carry it in stats");
   flags->step.Add(command.app);
   command.run = [&global, flags] { return RunPlay(global, *flags); };
   return command;

@@ -101,10 +101,16 @@ Projection BuildProjection(const Eigen::AlignedBox3d& rect_bounds_W, double r, d
   return projection;
 }
 
-// Returns the radius the projection needs (steps 2 and 4), from its bounds as computed.
-double RequiredRadius(const Projection& projection, double res, double distance, double phi) {
+// Fills in the pixel size, depth step and rounding bound of the projection as computed (steps
+// 2 and 4) and returns the radius they need.
+double RequiredRadius(Projection& projection, const RasterFormat& raster, double distance,
+                      double phi) {
   const double extent = projection.bounds_W.sizes().maxCoeff();
-  return 0.5 * distance + kSqrt3 * extent / res + kSqrt3 * phi * (0.5 * extent + projection.radius);
+  projection.pixel_size = extent / std::min(raster.width, raster.height);
+  projection.depth_step = extent / DepthResolution(raster.depth);
+  projection.rounding = kSqrt3 * phi * (0.5 * extent + projection.radius);
+  return 0.5 * distance + kSqrt3 * std::max(projection.pixel_size, projection.depth_step) +
+         projection.rounding;
 }
 
 }  // namespace
@@ -154,7 +160,7 @@ Projection ComputeProjection(const Eigen::AlignedBox3d& rect_bounds_W, const Ras
   // Check the rounded result the way a caller would, and raise r where rounding fell short.
   for (int round = 0;; ++round) {
     Projection projection = BuildProjection(rect_bounds_W, r, eps0, eps1, psi);
-    const double required = RequiredRadius(projection, res, distance, phi);
+    const double required = RequiredRadius(projection, raster, distance, phi);
     if (r >= required) return projection;
     Demand(round < 8, "radius did not converge (r " + std::to_string(r) + ", required " +
                           std::to_string(required) + ")");

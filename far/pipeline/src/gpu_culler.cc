@@ -85,6 +85,33 @@ uint32_t PrimitivesOf(const ViewObject& object, int k) {
                : 1;
 }
 
+// Folds one view's projection into its level's certificate: the largest of each number over
+// the level's views, the union of the bounds of the primitives they drew. Unfattened
+// primitives (CULLIDE) are drawn with no offset: radius 0, which is why CULLIDE can miss.
+void AddView(const Projection& projection, const Eigen::AlignedBox3d& primitive_bounds_W,
+             int resolution, bool fattened, LevelCertificate& level) {
+  level.views++;
+  level.resolution = resolution;
+  level.offset_radius = std::max(level.offset_radius, fattened ? projection.radius : 0.0);
+  level.pixel_size = std::max(level.pixel_size, projection.pixel_size);
+  level.depth_step = std::max(level.depth_step, projection.depth_step);
+  level.rounding = std::max(level.rounding, projection.rounding);
+  for (int i = 0; i < 3; ++i) {
+    const bool first = level.views == 1;
+    level.world_min[i] = first ? primitive_bounds_W.min()[i]
+                               : std::min(level.world_min[i], primitive_bounds_W.min()[i]);
+    level.world_max[i] = first ? primitive_bounds_W.max()[i]
+                               : std::max(level.world_max[i], primitive_bounds_W.max()[i]);
+  }
+}
+
+// The level's certificate goes with the step's stats when a view was rendered (with fewer than
+// two groups left nothing needs drawing: nothing can touch).
+void RecordLevel(const LevelCertificate& level, StepStats& stats, double& radius) {
+  radius = level.offset_radius;
+  if (level.views > 0) stats.certificate.levels.push_back(level);
+}
+
 }  // namespace
 
 Result<GpuCuller::RendererEntry*> GpuCuller::RendererFor(const StepRequest& request) {
@@ -137,8 +164,10 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
                                   std::span<const PieceSet> sets,
                                   std::span<const ViewObject> view_objects, int k,
                                   std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
-                                  std::vector<uint8_t>& alive, StepStats& stats, double* radius) {
+                                  std::vector<uint8_t>& alive, StepStats& stats,
+                                  LevelCertificate& level) {
   const bool proxies = !sets.empty() && sets[0] == PieceSet::kProxyBoxes;
+  const bool fattened = sets.empty() || sets[0] != PieceSet::kTriangles;
   for (int axis = 0; axis < 3; ++axis) {
     // A primitive can only be kept by another group: stop when one group or none is left.
     std::set<uint32_t> groups;
@@ -174,7 +203,7 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
     stats.draws += counters.draws;
     stats.queries += counters.queries;
     stats.bytes_uploaded += counters.bytes_uploaded;
-    *radius = view.projection.radius;
+    AddView(view.projection, bounds, request.resolution, fattened, level);
   }
   return {};
 }
@@ -195,11 +224,12 @@ Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
     boxes.push_back(TransformBox(objects[i]->X_WM, objects[i]->rect_box_M));
   }
   std::vector<uint8_t> alive(objects.size(), 1);
-  if (auto ok = CullLevel(**entry, request, sets, view_objects, 0, boxes, alive, stats,
-                          &stats.object_radius);
+  LevelCertificate level{.level = "object"};
+  if (auto ok = CullLevel(**entry, request, sets, view_objects, 0, boxes, alive, stats, level);
       !ok.ok()) {
     return ok.error();
   }
+  RecordLevel(level, stats, stats.object_radius);
   return alive;
 }
 
@@ -234,11 +264,12 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
       for (uint32_t t : candidates[view.group]) alive[view.first_primitive + t / k] = 1;
     }
   }
-  if (auto ok = CullLevel(**entry, request, sets, view_objects, k, boxes, alive, stats,
-                          &stats.primitive_radius);
+  LevelCertificate level{.level = "sub-object"};
+  if (auto ok = CullLevel(**entry, request, sets, view_objects, k, boxes, alive, stats, level);
       !ok.ok()) {
     return ok.error();
   }
+  RecordLevel(level, stats, stats.primitive_radius);
   // Surviving sub-objects back to triangle indices (the candidate ones), per object.
   std::vector<std::vector<uint32_t>> subsets(objects.size());
   for (const ViewObject& view : view_objects) {

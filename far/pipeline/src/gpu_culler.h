@@ -59,7 +59,7 @@ class GpuCuller {
   Result<void> CullLevel(RendererEntry& entry, const StepRequest& request,
                          std::span<const PieceSet> sets, std::span<const ViewObject> view_objects,
                          int k, std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
-                         std::vector<uint8_t>& alive, StepStats& stats, double* radius);
+                         std::vector<uint8_t>& alive, StepStats& stats, LevelCertificate& level);
 
   SceneCounters& counters_;
   std::map<std::tuple<int, int, int>, RendererEntry> renderers_;

@@ -9,6 +9,7 @@
 
 #include "fcl_collider.h"
 #include "gpu_culler.h"
+#include "guarantee.h"
 #include "gpu_probe.h"
 #include "scene_cache.h"
 
@@ -411,6 +412,8 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request, const StepCo
   StageTimer timer(state.result.stats);
   if (auto ran = RunStages(state, timer); !ran) return ran.error();
   timer.Finish();
+  state.result.stats.certificate.guaranteed = IsReliable(request.method);
+  state.result.stats.certificate.basis = internal::GuaranteeBasis(request);
   return std::move(state.result);
 }
 

@@ -96,6 +96,17 @@ int CheckProjection(const Scene& scene, const RasterFormat& raster, double dista
   const double float_term = kSqrt3 * 18 * 0x1p-24 * (0.5 * extent + r);
   if (!(r >= theorem + float_term)) fail("r lacks the float32 term");
 
+  // What the projection reports it covers (a reply's certificate shows it) is what it covers.
+  if (projection.pixel_size != extent / std::min(raster.width, raster.height))
+    fail("pixel_size is not the largest pixel side");
+  if (projection.depth_step != extent / DepthResolution(raster.depth))
+    fail("depth_step is not the largest depth step");
+  if (!(projection.rounding >= float_term)) fail("rounding is below the float32 term");
+  const double covered = 0.5 * distance +
+                         kSqrt3 * std::max(projection.pixel_size, projection.depth_step) +
+                         projection.rounding;
+  if (!(r >= covered)) fail("r is below what the projection says it covers");
+
   // Strict containment in double, and of the float32 local coordinates the GPU sees.
   const Eigen::Vector3d lo = bounds.min() - projection.center_W;
   const Eigen::Vector3d hi = bounds.max() - projection.center_W;

@@ -26,6 +26,11 @@ struct Projection {
   Eigen::AlignedBox3d bounds_W;  ///< contains every fattened primitive, strictly
   Eigen::Vector3d center_W;      ///< bounds_W's center: subtracted in double before float32
   double radius = 0;             ///< bounding offset radius r (world units), > 0
+  /// What r covers, so that a reply can show it (far::LevelCertificate): with D the distance
+  /// query, r >= D/2 + sqrt(3) max(pixel_size, depth_step) + rounding.
+  double pixel_size = 0;  ///< the largest pixel side over the three views, world units
+  double depth_step = 0;  ///< the largest step between depth values, world units
+  double rounding = 0;    ///< bound on the float32 rounding of what the GPU draws, world units
 };
 
 /// Computes the offset radius r and the projection bounds for primitives whose unfattened
