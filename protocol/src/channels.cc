@@ -62,6 +62,7 @@ std::optional<int64_t> ParseSessionRequestChannel(std::string_view prefix,
 }
 
 std::string DefaultSocketDirectory() {
+  if (const char* dir = std::getenv("FAR_SOCKET_DIR"); dir != nullptr && *dir == '/') return dir;
   struct stat info {};
   if (stat("/run/far", &info) == 0 && S_ISDIR(info.st_mode)) return "/run/far";
   if (const char* runtime = std::getenv("XDG_RUNTIME_DIR"); runtime != nullptr && *runtime == '/')

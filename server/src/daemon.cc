@@ -105,7 +105,7 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   // GL must work before anyone is served: each session makes its own context later.
   std::string device;
   {
-    auto context = GlContext::Create(d.config.gl_platform);
+    auto context = GlContext::Create(d.config.gl_platform, d.config.gpu);
     if (!context) return context.error();
     std::lock_guard lock(d.renderer_mutex);
     d.renderer = (*context)->renderer();

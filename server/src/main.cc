@@ -34,8 +34,11 @@ int main(int argc, char** argv) {
                                 "exists, else $XDG_RUNTIME_DIR/far/<name>.sock, else "
                                 "/tmp/far-<uid>/<name>.sock)");
   auto* gpu = app.add_option("--gpu", flags.gpu,
-                             "EGL device index of the GPU to use (see far-client status; "
-                             "implies --gl-platform device)");
+                             "EGL device index of the GPU to use, as --list-gpus numbers them "
+                             "(that device and no other; a second GPU gets a second daemon "
+                             "with its own --name)");
+  bool list_gpus = false;
+  app.add_flag("--list-gpus", list_gpus, "list the EGL devices with their index, and exit");
   auto* url = app.add_option("--lcm-url", flags.lcm_url, "LCM URL")->capture_default_str();
   auto* platform =
       app.add_option("--gl-platform", gl_platform,
@@ -73,6 +76,12 @@ int main(int argc, char** argv) {
   auto* level = app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
                     ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  if (list_gpus) {
+    const std::vector<std::string> devices = far::GlContext::ListDevices();
+    if (devices.empty()) std::printf("no EGL devices (the EGL device platform is not offered)\n");
+    for (const std::string& device : devices) std::printf("%s\n", device.c_str());
+    return 0;
+  }
 
   // The file first, then every flag given on the command line on top of it.
   DaemonConfig config;
@@ -86,10 +95,7 @@ int main(int argc, char** argv) {
   }
   if (*name) config.name = flags.name;
   if (*socket) config.socket_path = flags.socket_path;
-  if (*gpu) {
-    config.gpu = flags.gpu;
-    config.gl_platform = far::GlPlatform::kDevice;
-  }
+  if (*gpu) config.gpu = flags.gpu;
   if (*url) config.lcm_url = flags.lcm_url;
   if (*platform) {
     if (gl_platform == "auto")

@@ -59,6 +59,7 @@ class SessionWorker {
     PipelineOptions options;
     options.use_gl = context_.use_gl;
     options.platform = context_.config.gl_platform;
+    options.gpu_device = context_.config.gpu;
     options.num_threads = context_.config.exact_threads;
     options.scene_limits = SceneLimitsOf(context_.config);
     options.shared_budget = &context_.budget;

@@ -86,6 +86,9 @@ TempDir::~TempDir() {
 DaemonProcess::DaemonProcess(std::vector<std::string> args) : args_(std::move(args)) {
   log_path_ = dir_.path() / "far-daemon.log";
   socket_path_ = FlagValue(args_, "--socket");
+  // Given a name and no socket, the daemon picks its socket by name, as clients find it.
+  if (socket_path_.empty() && HasFlag(args_, "--name"))
+    socket_path_ = protocol::DefaultSocketPath(FlagValue(args_, "--name"));
   if (socket_path_.empty()) socket_path_ = (dir_.path() / "far.sock").string();
 }
 
@@ -99,7 +102,8 @@ Result<void> DaemonProcess::Start(std::chrono::milliseconds ready_timeout) {
   std::vector<std::string> args = {FAR_DAEMON_PATH};
   if (!HasFlag(args_, "--lcm-url")) args.insert(args.end(), {"--lcm-url", TestLcmUrl()});
   if (!HasFlag(args_, "--log-level")) args.insert(args.end(), {"--log-level", "info"});
-  if (!HasFlag(args_, "--socket")) args.insert(args.end(), {"--socket", socket_path_});
+  if (!HasFlag(args_, "--socket") && !HasFlag(args_, "--name"))
+    args.insert(args.end(), {"--socket", socket_path_});
   args.insert(args.end(), args_.begin(), args_.end());
   std::vector<char*> argv = CArgs(args);
   // Everything the child needs is prepared before fork: it only dup2s and execs.

@@ -17,6 +17,7 @@ add_executable(far_integration_test
   integration/integration_scenes.cc
   integration/end_to_end_test.cc
   integration/readable_output_test.cc
+  integration/two_daemons_test.cc
   integration/bad_input_test.cc
   integration/lcm_receive_test.cc
   integration/session_lifetime_test.cc

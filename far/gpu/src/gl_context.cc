@@ -133,7 +133,7 @@ bool MakeContext(EGLDisplay display, EglState* impl, std::string* why) {
 void ReleaseContext(EglState* state) {
   eglMakeCurrent(state->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(state->display, state->context);
-  eglTerminate(state->display);
+  ReleaseDisplay(state->display);
   *state = EglState{};
 }
 
@@ -144,6 +144,59 @@ bool IsSoftwareRenderer(const std::string& renderer) {
     if (renderer.find(name) != std::string::npos) return true;
   }
   return false;
+}
+
+// The EGL devices, in EGL's order (the index far-daemon --gpu takes); empty when the device
+// platform is not offered.
+std::vector<EGLDeviceEXT> QueryDevices(const char* client_extensions) {
+  if (!HasExtension(client_extensions, "EGL_EXT_platform_device") ||
+      !HasExtension(client_extensions, "EGL_EXT_device_enumeration")) {
+    return {};
+  }
+  EGLint num_devices = 0;
+  eglQueryDevicesEXT(0, nullptr, &num_devices);
+  std::vector<EGLDeviceEXT> devices(static_cast<size_t>(std::max(num_devices, 0)));
+  eglQueryDevicesEXT(num_devices, devices.data(), &num_devices);
+  devices.resize(static_cast<size_t>(std::max(num_devices, 0)));
+  return devices;
+}
+
+bool IsSoftwareDevice(EGLDeviceEXT device) {
+  return HasExtension(eglQueryDeviceStringEXT(device, EGL_EXTENSIONS), "EGL_MESA_device_software");
+}
+
+// "EGL device 1 (hardware, /dev/dri/card1)": how a device is named in logs, errors and status.
+std::string DeviceName(EGLDeviceEXT device, int index) {
+  std::string name = "EGL device " + std::to_string(index) +
+                     (IsSoftwareDevice(device) ? " (EGL_MESA_device_software" : " (hardware");
+  if (HasExtension(eglQueryDeviceStringEXT(device, EGL_EXTENSIONS), "EGL_EXT_device_drm")) {
+    const char* file = eglQueryDeviceStringEXT(device, EGL_DRM_DEVICE_FILE_EXT);
+    if (file != nullptr) name += std::string(", ") + file;
+  }
+  return name + ")";
+}
+
+// Makes a context on EGL device `index` and nothing else (far-daemon --gpu N): the user named
+// it, so a software device is used too (its name says so in the log and in status).
+bool TryOneDevice(const char* client_extensions, int index, EglState* state,
+                  std::vector<std::string>* attempts) {
+  const std::vector<EGLDeviceEXT> devices = QueryDevices(client_extensions);
+  if (index >= static_cast<int>(devices.size())) {
+    attempts->push_back("EGL device " + std::to_string(index) + ": there are " +
+                        std::to_string(devices.size()) +
+                        " EGL devices (far-daemon --list-gpus lists them)");
+    return false;
+  }
+  const std::string name = DeviceName(devices[static_cast<size_t>(index)], index);
+  EGLDisplay display = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT,
+                                                devices[static_cast<size_t>(index)], nullptr);
+  std::string why;
+  if (!MakeContext(display, state, &why)) {
+    attempts->push_back(name + ": " + why);
+    return false;
+  }
+  state->platform = name;
+  return true;
 }
 
 // Makes a context on an EGL device: hardware devices first, software ones
@@ -157,18 +210,14 @@ bool TryDevicePlatform(const char* client_extensions, bool hardware_only, EglSta
     attempts->push_back("EGL device platform: not offered by this EGL");
     return false;
   }
-  EGLint num_devices = 0;
-  eglQueryDevicesEXT(0, nullptr, &num_devices);
-  std::vector<EGLDeviceEXT> devices(static_cast<size_t>(std::max(num_devices, 0)));
-  eglQueryDevicesEXT(num_devices, devices.data(), &num_devices);
+  const std::vector<EGLDeviceEXT> devices = QueryDevices(client_extensions);
+  const int num_devices = static_cast<int>(devices.size());
   if (num_devices == 0) attempts->push_back("EGL device platform: no devices");
   for (bool want_software : {false, true}) {
     for (int i = 0; i < num_devices; ++i) {
-      const bool software = HasExtension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS),
-                                         "EGL_MESA_device_software");
+      const bool software = IsSoftwareDevice(devices[i]);
       if (software != want_software) continue;
-      const std::string name = "EGL device " + std::to_string(i) +
-                               (software ? " (EGL_MESA_device_software)" : " (hardware)");
+      const std::string name = DeviceName(devices[i], i);
       if (software && hardware_only) {
         attempts->push_back(name + ": a software renderer (Mesa's llvmpipe), not a GPU");
         continue;
@@ -196,10 +245,26 @@ bool TryDevicePlatform(const char* client_extensions, bool hardware_only, EglSta
 
 struct GlContext::Impl : EglState {};
 
-Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform) {
+std::vector<std::string> GlContext::ListDevices() {
+  const std::vector<EGLDeviceEXT> devices =
+      QueryDevices(eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS));
+  std::vector<std::string> names;
+  for (size_t i = 0; i < devices.size(); ++i)
+    names.push_back(DeviceName(devices[i], static_cast<int>(i)));
+  return names;
+}
+
+Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform, int device) {
   auto impl = std::make_unique<Impl>();
   std::vector<std::string> attempts;
   const char* client_extensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+  if (device >= 0) {
+    if (TryOneDevice(client_extensions, device, impl.get(), &attempts))
+      return std::unique_ptr<GlContext>(new GlContext(std::move(impl)));
+    return MakeError(ErrorCode::kUnavailable,
+                     "EGL device " + std::to_string(device) +
+                         " (far-daemon --gpu) is not usable: " + attempts.front());
+  }
 
   // 1. The EGL device platform: a real GPU with no X server.
   if (platform != GlPlatform::kSurfaceless &&

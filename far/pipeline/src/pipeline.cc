@@ -462,7 +462,7 @@ Pipeline::~Pipeline() = default;
 Result<std::unique_ptr<Pipeline>> Pipeline::Create(const PipelineOptions& options) {
   auto impl = std::make_unique<Impl>(options);
   if (options.use_gl && !options.use_current_context) {
-    auto gl = GlContext::Create(options.platform);
+    auto gl = GlContext::Create(options.platform, options.gpu_device);
     if (!gl.ok()) return gl.error();
     impl->gl = std::move(*gl);
     impl->renderer_name = impl->gl->renderer();

@@ -43,9 +43,9 @@ std::string SessionRequestChannelPattern(std::string_view prefix);
 std::optional<int64_t> ParseSessionRequestChannel(std::string_view prefix,
                                                   std::string_view channel);
 
-/// The directory of daemon sockets when none is given: /run/far when it exists (the system
-/// service's RuntimeDirectory), else $XDG_RUNTIME_DIR/far (a user's own daemon), else
-/// /tmp/far-<uid>.
+/// The directory of daemon sockets when none is given: $FAR_SOCKET_DIR when set (an absolute
+/// path), else /run/far when it exists (the system service's RuntimeDirectory), else
+/// $XDG_RUNTIME_DIR/far (a user's own daemon), else /tmp/far-<uid>.
 std::string DefaultSocketDirectory();
 /// DefaultSocketDirectory() + "/" + name + ".sock".
 std::string DefaultSocketPath(std::string_view name);

@@ -2,6 +2,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "far/model/result.h"
 
@@ -29,7 +30,14 @@ class GlContext {
   /// swrast are listed as tried, not used. Returns kUnavailable with every attempt and why it
   /// failed listed when none works ("no GPU found through the EGL device platform ..." for
   /// kDevice).
-  static Result<std::unique_ptr<GlContext>> Create(GlPlatform platform = GlPlatform::kAuto);
+  /// With `device` >= 0, uses EGL device `device` (in ListDevices' order) and nothing else,
+  /// whatever `platform` says; kUnavailable when it does not exist or makes no context.
+  static Result<std::unique_ptr<GlContext>> Create(GlPlatform platform = GlPlatform::kAuto,
+                                                   int device = -1);
+
+  /// The EGL devices in EGL's order, one line each: "EGL device 0 (hardware, /dev/dri/card0)",
+  /// "EGL device 1 (EGL_MESA_device_software)". Empty without the EGL device platform.
+  static std::vector<std::string> ListDevices();
 
   ~GlContext();
   GlContext(const GlContext&) = delete;

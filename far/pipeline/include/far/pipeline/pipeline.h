@@ -24,6 +24,7 @@ namespace far {
 /// How a Pipeline is made.
 struct PipelineOptions {
   GlPlatform platform = GlPlatform::kAuto;
+  int gpu_device = -1;  ///< EGL device index to use (GlContext::Create); -1: by `platform`
   int num_threads = 0;  ///< CPU pool for exact tests (0: hardware concurrency)
   bool use_gl = true;   ///< false: only the CPU methods (aabb, fcl, exact) are available
   /// Use the GL context already current on this thread (owned by the caller, who keeps it
