@@ -29,10 +29,11 @@ int main(int argc, char** argv) {
                               "this daemon's name: its socket <dir>/<name>.sock and LCM channel "
                               "prefix; clients choose a daemon by name (far-client --daemon)")
                    ->capture_default_str();
-  auto* socket = app.add_option("--socket", flags.socket_path,
-                                "socket path (default: /run/far/<name>.sock when /run/far "
-                                "exists, else $XDG_RUNTIME_DIR/far/<name>.sock, else "
-                                "/tmp/far-<uid>/<name>.sock)");
+  auto* socket =
+      app.add_option("--socket", flags.socket_path,
+                     "socket path (default: $FAR_SOCKET_DIR/<name>.sock when set, "
+                     "else /run/far/<name>.sock when /run/far exists, else "
+                     "$XDG_RUNTIME_DIR/far/<name>.sock, else /tmp/far-<uid>/<name>.sock)");
   auto* gpu = app.add_option("--gpu", flags.gpu,
                              "EGL device index of the GPU to use, as --list-gpus numbers them "
                              "(that device and no other; a second GPU gets a second daemon "
