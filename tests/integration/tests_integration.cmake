@@ -18,6 +18,7 @@ add_executable(far_integration_test
   integration/end_to_end_test.cc
   integration/readable_output_test.cc
   integration/two_daemons_test.cc
+  integration/privacy_test.cc
   integration/bad_input_test.cc
   integration/lcm_receive_test.cc
   integration/session_lifetime_test.cc
