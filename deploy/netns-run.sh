@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs a command in a private network namespace whose loopback carries multicast, so that LCM
-# over UDP multicast (udpm) works and never reaches a real interface (DESIGN.md).
+# over UDP multicast (udpm) works and never reaches a real interface (README.md, "Running the
+# daemon by hand").
 #   deploy/netns-run.sh far-daemon ...
 set -euo pipefail
 if [ "${FAR_IN_NETNS:-}" = 1 ]; then exec "$@"; fi

@@ -1,4 +1,4 @@
-// The two ways to ask the GPU "is this primitive fully visible" (DESIGN.md), on fixed scenes:
+// The two ways to ask the GPU "is this primitive fully visible" (docs/culling.md), on fixed scenes:
 // per-primitive occlusion queries (the paper) against the ID buffer (a fixed number of draws per
 // axis). Backs far-study's first bar ("ID buffer at least 4x faster than occlusion queries at
 // 20k+ primitives") with a kernel-level ratio: both benchmarks run FAR (UOBB offsets) up to the

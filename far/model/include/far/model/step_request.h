@@ -27,7 +27,7 @@ enum class Method {
 /// How the GPU answers "is this primitive fully visible against the other objects".
 enum class QueryMechanism {
   kOcclusionQuery,  ///< per-primitive occlusion queries, two passes (the paper)
-  kIdBuffer,        ///< a fixed number of draws per axis with an object-id buffer (DESIGN.md)
+  kIdBuffer,        ///< a fixed number of draws per axis with an object-id buffer (docs/culling.md)
 };
 
 /// The deepest output a step computes; later stages do not run.
