@@ -110,6 +110,7 @@ int RunRecord(const GlobalFlags& global, const RecordFlags& flags) {
     return Fail(MakeError(ErrorCode::kIoError,
                           "record: cannot replace " + flags.file + ": " + removed.message()));
   }
+  const auto started = std::filesystem::file_time_type::clock::now();
   auto code = Run(argv, ChildEnvironment(flags.file));
   if (!code) return Fail(code.error());
   if (!std::filesystem::exists(flags.file)) {
@@ -118,7 +119,17 @@ int RunRecord(const GlobalFlags& global, const RecordFlags& flags) {
                  flags.file.c_str(), argv[0].c_str());
     return *code != 0 ? *code : 1;
   }
-  const bool usable = Describe(flags.file);
+  bool usable = Describe(flags.file);
+  // Further sessions of the command recorded to FILE's numbered siblings.
+  for (int n = 2;; ++n) {
+    const std::filesystem::path p(flags.file);
+    const auto sibling =
+        p.parent_path() / (p.stem().string() + "." + std::to_string(n) + p.extension().string());
+    std::error_code error;
+    const auto written = std::filesystem::last_write_time(sibling, error);
+    if (error || written < started) break;
+    usable = Describe(sibling.string()) && usable;
+  }
   if (*code != 0) return *code;
   return usable ? 0 : 1;
 }
