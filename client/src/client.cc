@@ -2,12 +2,15 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <cstdlib>
 #include <map>
 #include <mutex>
 #include <optional>
 #include <thread>
 
+#include "client_access.h"
 #include "daemon_connection.h"
+#include "session_recorder.h"
 
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
@@ -62,18 +65,33 @@ struct Client::Impl {
 
   std::thread receiver;
   std::atomic<bool> stopping{false};
+  std::unique_ptr<internal::SessionRecorder> recorder;  // null: not recording
+
+  int64_t NextStepId() {
+    std::lock_guard lock(send_mutex);
+    return next_step_id;
+  }
+
+  // Records how a pending step ended without a reply of its own (call with `mutex` held).
+  void RecordError(int64_t step_id, const Pending& p, const Error& error) {
+    if (recorder) recorder->ErrorReply({session_id, p.request_id, step_id, 0}, error);
+  }
 
   void Fail(int64_t step_id, const Error& error) {
     std::lock_guard lock(mutex);
     auto it = pending.find(step_id);
     if (it == pending.end()) return;
+    RecordError(step_id, it->second, error);
     it->second.promise.set_value(error);
     pending.erase(it);
   }
 
   void FailAll(const Error& error) {
     std::lock_guard lock(mutex);
-    for (auto& [id, p] : pending) p.promise.set_value(error);
+    for (auto& [id, p] : pending) {
+      RecordError(id, p, error);
+      p.promise.set_value(error);
+    }
     pending.clear();
     if (!closed) closed = error;
   }
@@ -85,6 +103,14 @@ struct Client::Impl {
     std::lock_guard lock(mutex);
     auto it = pending.find(full->step_id);
     if (it == pending.end()) return;  // a step we gave up on (timeout)
+    if (recorder) {
+      // A reply that does not parse is recorded as the error the caller got.
+      if (result || full->status != protocol::kWireOk) {
+        recorder->Reply(*full);
+      } else {
+        RecordError(full->step_id, it->second, result.error());
+      }
+    }
     if (result) {
       it->second.promise.set_value(std::move(*result));
     } else {
@@ -116,6 +142,7 @@ struct Client::Impl {
     std::lock_guard lock(mutex);
     for (auto it = pending.begin(); it != pending.end(); ++it) {
       if (it->second.request_id == error->request_id) {
+        RecordError(it->first, it->second, e);
         it->second.promise.set_value(e);
         pending.erase(it);
         break;
@@ -179,6 +206,9 @@ Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
                                                      c.segment->layout().reply_ring_capacity);
   c.request_channel = reply.request_channel;
   c.reply_channel = reply.session_reply_channel;
+  auto recorder = internal::StartRecording(options, c.session_id);
+  if (!recorder) return recorder.error();
+  c.recorder = std::move(*recorder);
   // The session's channels are where the daemon says, unless the caller insists.
   auto bus = protocol::LcmBus::Create(options.lcm_url.empty() ? reply.lcm_url : options.lcm_url);
   if (!bus) return bus.error();
@@ -216,25 +246,40 @@ Result<Pose> UnitPose(const Pose& X_WO, const char* what, uint32_t id) {
 }  // namespace
 
 Result<void> Client::AddObject(uint32_t id, const Mesh& mesh, Motion motion, const Pose& X_WO) {
-  if (auto ok = impl_->CheckOpen(); !ok) return ok;
+  Impl& c = *impl_;
+  if (auto ok = c.CheckOpen(); !ok) return ok;
   const Result<Pose> unit = UnitPose(X_WO, "add_object", id);
   if (!unit) return unit.error();
-  return Written(impl_->updates->AddObject(id, mesh, motion, *unit, kRingWait),
-                 "add_object");
+  auto written = c.updates->AddObject(id, mesh, motion, *unit, kRingWait);
+  if (written && c.recorder) {
+    c.recorder->AddObject(written->sequence, c.NextStepId(), id, mesh, motion, *unit);
+  }
+  return Written(written, "add_object");
 }
 Result<void> Client::RemoveObject(uint32_t id) {
-  if (auto ok = impl_->CheckOpen(); !ok) return ok;
-  return Written(impl_->updates->RemoveObject(id, kRingWait), "remove_object");
+  Impl& c = *impl_;
+  if (auto ok = c.CheckOpen(); !ok) return ok;
+  auto written = c.updates->RemoveObject(id, kRingWait);
+  if (written && c.recorder) c.recorder->RemoveObject(written->sequence, c.NextStepId(), id);
+  return Written(written, "remove_object");
 }
 Result<void> Client::SetPose(uint32_t id, const Pose& X_WO) {
-  if (auto ok = impl_->CheckOpen(); !ok) return ok;
+  Impl& c = *impl_;
+  if (auto ok = c.CheckOpen(); !ok) return ok;
   const Result<Pose> unit = UnitPose(X_WO, "set_pose", id);
   if (!unit) return unit.error();
-  return Written(impl_->updates->SetPose(id, *unit, kRingWait), "set_pose");
+  auto written = c.updates->SetPose(id, *unit, kRingWait);
+  if (written && c.recorder) c.recorder->SetPose(written->sequence, c.NextStepId(), id, *unit);
+  return Written(written, "set_pose");
 }
 Result<void> Client::SetVertices(uint32_t id, std::span<const Eigen::Vector3d> p_MV) {
-  if (auto ok = impl_->CheckOpen(); !ok) return ok;
-  return Written(impl_->updates->SetVertices(id, p_MV, kRingWait), "set_vertices");
+  Impl& c = *impl_;
+  if (auto ok = c.CheckOpen(); !ok) return ok;
+  auto written = c.updates->SetVertices(id, p_MV, kRingWait);
+  if (written && c.recorder) {
+    c.recorder->SetVertices(written->sequence, c.NextStepId(), id, p_MV);
+  }
+  return Written(written, "set_vertices");
 }
 
 Result<void> Client::LoadScene(const Scene& scene) {
@@ -280,6 +325,8 @@ std::future<Result<StepResult>> Client::StepAsync(const StepRequest& request,
       std::min<int64_t>(c.options.timeout.count(), std::numeric_limits<int32_t>::max()));
   auto message = protocol::MakeStepRequest(c.session_id, request_id, step_id,
                                            c.updates->last_sequence(), request, timeout_ms);
+  // Recorded before it is sent, so that the request comes before its reply in the file.
+  if (c.recorder) c.recorder->Request(message);
   auto bytes = protocol::EncodeSigned(message, c.key);
   Result<void> sent =
       bytes ? c.bus->Publish(c.request_channel, *bytes) : Result<void>(bytes.error());
@@ -315,6 +362,35 @@ Result<void> Client::Close() {
 }
 
 int64_t Client::session_id() const { return impl_->session_id; }
+
+std::string Client::recording_path() const {
+  return impl_->recorder ? impl_->recorder->path() : std::string();
+}
+
+namespace internal {
+
+protocol::UpdateWriter& ClientAccess::Updates(Client& client) { return *client.impl_->updates; }
+
+Result<std::unique_ptr<SessionRecorder>> StartRecording(const ClientOptions& options,
+                                                        int64_t session_id) {
+  std::string path;
+  if (options.record_path) {
+    path = *options.record_path;
+  } else if (const char* env = std::getenv("FAR_RECORD"); env != nullptr) {
+    path = env;
+  }
+  if (path.empty()) return std::unique_ptr<SessionRecorder>();
+  SessionRecorder::Info info{options.client_name, "", "", session_id};
+  // The daemon's name and renderer tell replay whether GPU answers may differ; a daemon that
+  // does not answer leaves them unknown.
+  if (auto status = Client::Status(options); status) {
+    info.daemon_name = status->daemon_name;
+    info.gl_renderer = status->gl_renderer;
+  }
+  return SessionRecorder::Create(path, info);
+}
+
+}  // namespace internal
 
 Result<DaemonStatus> Client::Status(const ClientOptions& options) {
   auto connection = internal::ConnectToDaemon(options);

@@ -208,6 +208,25 @@ constexpr std::array kStatusReply{
     Array("error_count", 8, 29),             // 31
 };
 
+constexpr std::array kRecordingHeader{
+    Scalar("protocol_version", 4), Scalar("format_version", 4), String("far_version"),
+    String("client_name"),         String("daemon_name"),       String("gl_renderer"),
+    Scalar("session_id", 8),       Scalar("start_time_us", 8),
+};
+constexpr std::array kRingRecord{
+    Scalar("protocol_version", 4),  // 0
+    Scalar("sequence", 8),          // 1
+    Scalar("step_id", 8),           // 2
+    Scalar("type", 4),              // 3
+    Scalar("object_id", 8),         // 4
+    Scalar("motion", 4),            // 5
+    Scalar("X_WO", 56),             // 6
+    Count("num_coordinates"),       // 7
+    Array("p_MV", 8, 7),            // 8
+    Count("num_indices"),           // 9
+    Array("triangles", 4, 9),       // 10
+};
+
 struct TypeInfo {
   MessageType type;
   std::string_view name;
@@ -215,8 +234,8 @@ struct TypeInfo {
   std::span<const FieldSpec> schema;
 };
 
-const std::array<TypeInfo, 9>& Types() {
-  static const std::array<TypeInfo, 9> types{{
+const std::array<TypeInfo, 11>& Types() {
+  static const std::array<TypeInfo, 11> types{{
       {MessageType::kOpenSession, "open_session_t", &far_lcm::open_session_t::getHash,
        kOpenSession},
       {MessageType::kOpenSessionReply, "open_session_reply_t",
@@ -231,6 +250,9 @@ const std::array<TypeInfo, 9>& Types() {
        kStatusRequest},
       {MessageType::kStatusReply, "status_reply_t", &far_lcm::status_reply_t::getHash,
        kStatusReply},
+      {MessageType::kRecordingHeader, "recording_header_t", &far_lcm::recording_header_t::getHash,
+       kRecordingHeader},
+      {MessageType::kRingRecord, "ring_record_t", &far_lcm::ring_record_t::getHash, kRingRecord},
   }};
   return types;
 }

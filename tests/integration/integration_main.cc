@@ -2,7 +2,8 @@
 // client: `far_integration_test --far-half-writer <mode> <socket>` opens a session, prints
 // "<session id> <segment name> <key hex>" on stdout, then writes part of an update and dies
 // (tests/integration/session_lifetime_test.cc starts it with fork/exec: a forked copy of a
-// multi-threaded test process must not go on to use LCM or malloc-heavy code).
+// multi-threaded test process must not go on to use LCM or malloc-heavy code), and
+// `--far-simulator` is a well-behaved simulator (below).
 #include <signal.h>
 #include <unistd.h>
 
@@ -82,6 +83,41 @@ int HalfWriterMain(const std::string& mode, const std::string& socket) {
   return 2;
 }
 
+// `far_integration_test --far-simulator <socket> <steps>`: a simulator that uses far::client
+// as any program would (default options but the socket, no recording asked for in code), so
+// that FAR_RECORD alone decides whether it is recorded (record_replay_test.cc).
+int SimulatorMain(const std::string& socket, int steps) {
+  client::ClientOptions options;
+  options.socket_path = socket;
+  options.client_name = "test-simulator";
+  auto client = client::Client::Connect(options);
+  if (!client) {
+    std::fprintf(stderr, "simulator: %s\n", far::ToString(client.error()).c_str());
+    return 2;
+  }
+  const std::vector<SceneObject> objects = ContactSoup(kHealthySeed);
+  for (const SceneObject& o : objects) {
+    if (auto ok = (*client)->AddObject(o.id, o.mesh, o.motion, o.X_WO); !ok) return 3;
+  }
+  StepRequest request;
+  request.method = Method::kBvh;
+  request.distance = 0.5;  // many distance pairs: replies large enough for the reply ring
+  request.output = Output::kDistancePairs;
+  Pose moving = objects.front().X_WO;
+  for (int step = 0; step < steps; ++step) {
+    moving.translation.x() += 0.05;
+    if (auto ok = (*client)->SetPose(objects.front().id, moving); !ok) return 4;
+    auto result = (*client)->Step(request);
+    if (!result) {
+      std::fprintf(stderr, "simulator: %s\n", far::ToString(result.error()).c_str());
+      return 5;
+    }
+    std::printf("step %d: %zu contacts, %zu distance pairs\n", step, result->contacts.size(),
+                result->distance_pairs.size());
+  }
+  return 0;
+}
+
 }  // namespace
 }  // namespace far::integration
 
@@ -103,6 +139,9 @@ int main(int argc, char** argv) {
   }
   if (argc == 4 && std::strcmp(argv[1], "--far-half-writer") == 0) {
     return far::integration::HalfWriterMain(argv[2], argv[3]);
+  }
+  if (argc == 4 && std::strcmp(argv[1], "--far-simulator") == 0) {
+    return far::integration::SimulatorMain(argv[2], std::atoi(argv[3]));
   }
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

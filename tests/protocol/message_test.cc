@@ -73,6 +73,8 @@ TEST(MessageTest, EveryTypeRoundTripsThroughThePreScan) {
   ExpectRoundTrip(SampleError(), MessageType::kError);
   ExpectRoundTrip(SampleStatusRequest(), MessageType::kStatusRequest);
   ExpectRoundTrip(SampleStatusReply(), MessageType::kStatusReply);
+  ExpectRoundTrip(testing::SampleRecordingHeader(), MessageType::kRecordingHeader);
+  ExpectRoundTrip(testing::SampleRingRecord(), MessageType::kRingRecord);
 }
 
 TEST(MessageTest, FingerprintsArePinned) {

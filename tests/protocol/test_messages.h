@@ -217,4 +217,33 @@ inline far_lcm::status_reply_t SampleStatusReply() {
   return m;
 }
 
+inline far_lcm::recording_header_t SampleRecordingHeader() {
+  far_lcm::recording_header_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.format_version = 1;
+  m.far_version = "0.1.0";
+  m.client_name = "sim";
+  m.daemon_name = "far";
+  m.gl_renderer = "llvmpipe (LLVM 15.0.6, 256 bits)";
+  m.session_id = 12;
+  m.start_time_us = 1700000000000000;
+  return m;
+}
+
+inline far_lcm::ring_record_t SampleRingRecord() {
+  far_lcm::ring_record_t m{};
+  m.protocol_version = kProtocolVersion;
+  m.sequence = 1;
+  m.step_id = 0;
+  m.type = 1;
+  m.object_id = 4;
+  m.motion = 1;
+  m.X_WO[3] = 1;
+  m.num_coordinates = 9;
+  m.p_MV = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  m.num_indices = 3;
+  m.triangles = {0, 1, 2};
+  return m;
+}
+
 }  // namespace far::protocol::testing

@@ -11,5 +11,8 @@ far_add_test(far_protocol_test unit
   protocol/convert_test.cc
   protocol/shm_segment_test.cc protocol/local_socket_test.cc
   protocol/shm_reply_test.cc
-  protocol/lcm_bus_test.cc)
-target_link_libraries(far_protocol_test PRIVATE far::protocol)
+  protocol/lcm_bus_test.cc
+  protocol/lcm_log_test.cc
+  protocol/recording_test.cc)
+# far_lcm_eventlog: LCM's own log reader and writer, to check far's log files against them.
+target_link_libraries(far_protocol_test PRIVATE far::protocol far_lcm_eventlog)

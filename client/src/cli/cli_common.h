@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -52,5 +53,13 @@ Command AddPlayCommand(CLI::App& app, const GlobalFlags& global);
 Command AddLoadCommand(CLI::App& app, const GlobalFlags& global);
 Command AddMakeSceneCommand(CLI::App& app);
 Command AddSnapshotCommand(CLI::App& app);
+/// far-client record FILE COMMAND...: COMMAND's words are not far-client's to parse. Returns
+/// argv without them (for CLI11) and puts them, without a leading "--", in `command_words`
+/// (empty unless the command is record).
+std::vector<std::string> SplitRecordCommand(int argc, char** argv,
+                                            std::vector<std::string>& command_words);
+Command AddRecordCommand(CLI::App& app, const GlobalFlags& global,
+                         const std::vector<std::string>* command_words);
+Command AddReplayCommand(CLI::App& app, const GlobalFlags& global);
 
 }  // namespace far::cli

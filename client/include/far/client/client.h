@@ -5,6 +5,7 @@
 #include <functional>
 #include <future>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -19,6 +20,10 @@
 #include "far/model/step_result.h"
 
 namespace far::client {
+
+namespace internal {
+struct ClientAccess;
+}  // namespace internal
 
 /// The name of the daemon a client talks to when none is given (far-daemon --name).
 inline constexpr std::string_view kDefaultDaemonName = "far";
@@ -39,6 +44,13 @@ struct ClientOptions {
   /// The longest Step waits for its reply. It waits only while the daemon is alive: a daemon
   /// that stops or restarts ends the wait at once.
   std::chrono::milliseconds timeout{60000};
+  /// Records the session into a far recording, an LCM log file that `far-client replay` runs
+  /// again against any daemon and compares (docs/record-replay.md): every ring record, step
+  /// request and step reply; never the session key. nullopt (the default): the environment
+  /// variable FAR_RECORD names the file, so that any simulator can be recorded unchanged; ""
+  /// records nothing whatever FAR_RECORD says. An existing file is never overwritten: the
+  /// session records to "<stem>.2<ext>", "<stem>.3<ext>", ... instead (Client::recording_path).
+  std::optional<std::string> record_path;
 };
 
 /// Where a step is while its reply has not come: the daemon's step_status_t.
@@ -84,7 +96,8 @@ class Client {
   /// Opens a session, retrying with backoff for options.connect_timeout while no daemon
   /// answers (one may be starting). Errors: kUnavailable ("no far-daemon named ..."), the
   /// daemon's refusal (kLimitExceeded when it has too many sessions, kBusy when this user opens
-  /// too fast), kPermissionDenied when its socket or segment cannot be trusted.
+  /// too fast), kPermissionDenied when its socket or segment cannot be trusted, kIoError when
+  /// the recording (record_path, FAR_RECORD) cannot be created.
   static Result<std::unique_ptr<Client>> Connect(const ClientOptions& options = {});
   /// Closes the session (Close) if still open.
   ~Client();
@@ -116,6 +129,8 @@ class Client {
   Result<void> Close();
 
   int64_t session_id() const;
+  /// The file this session records to ("" when it does not record).
+  std::string recording_path() const;
 
   /// Asks the daemon for its status (retrying for options.connect_timeout like Connect).
   /// Errors: kUnavailable when no daemon answered.
@@ -123,6 +138,7 @@ class Client {
 
  private:
   struct Impl;
+  friend struct internal::ClientAccess;  // replay writes recorded ring records bit for bit
   explicit Client(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };

@@ -30,6 +30,8 @@
 #include "far_lcm/error_t.hpp"
 #include "far_lcm/open_session_reply_t.hpp"
 #include "far_lcm/open_session_t.hpp"
+#include "far_lcm/recording_header_t.hpp"
+#include "far_lcm/ring_record_t.hpp"
 #include "far_lcm/sealed_t.hpp"
 #include "far_lcm/status_reply_t.hpp"
 #include "far_lcm/status_request_t.hpp"
@@ -53,6 +55,8 @@ enum class MessageType {
   kError,
   kStatusRequest,
   kStatusReply,
+  kRecordingHeader,  ///< far recordings only (recording.h), never on the bus
+  kRingRecord,       ///< far recordings only (recording.h), never on the bus
 };
 
 /// Returns the LCM type name, e.g. "step_request_t".
@@ -102,6 +106,14 @@ struct MessageTypeOf<far_lcm::status_request_t> {
 template <>
 struct MessageTypeOf<far_lcm::status_reply_t> {
   static constexpr MessageType value = MessageType::kStatusReply;
+};
+template <>
+struct MessageTypeOf<far_lcm::recording_header_t> {
+  static constexpr MessageType value = MessageType::kRecordingHeader;
+};
+template <>
+struct MessageTypeOf<far_lcm::ring_record_t> {
+  static constexpr MessageType value = MessageType::kRingRecord;
 };
 
 /// Steps 1-3 of DecodeMessage: cap, fingerprint, schema pre-scan.
