@@ -6,9 +6,9 @@
 #   2. dpkg-deb -x unpacks it into a scratch root: every part is there, and the CMake package
 #      names no path of the build machine;
 #   3. the systemd units pass `systemd-analyze verify` (skipped when systemd is not installed);
-#   4. the maintainer scripts run as dpkg runs them, in a private mount namespace whose /etc,
-#      /var and /lib are throw-away overlays: the far user and its groups, the unit's enable
-#      state, mask on remove, everything gone on purge (needs real root: skipped otherwise);
+#   4. dpkg installs, reinstalls, removes and purges it on throw-away overlays of /etc, /var and
+#      /usr in a private mount namespace (dpkg_lifecycle_test.sh; needs real root, skipped
+#      otherwise);
 #   5. the packaged far-daemon, started with the packaged config, serves the packaged
 #      far-client (ping, make-scene, collide, play) and a simulator built against the packaged
 #      CMake package (find_package(far), far::client).
@@ -88,21 +88,23 @@ else
   echo "skipped: systemd-analyze is not installed (apt-get install systemd)"
 fi
 
-# 4. The maintainer scripts, on throw-away copies of /etc, /var and /lib.
-step "maintainer scripts"
-# Overlays need root (not a user namespace's: it cannot read /etc/shadow) and overlayfs.
+# 4. dpkg itself, on throw-away copies of /etc, /var and /usr. Overlays need root (not a user
+# namespace's: it cannot read /etc/shadow) and overlayfs.
+step "dpkg -i, -r, -P"
 overlay_works() {
   local probe=$work/probe
   mkdir -p "$probe/lower" "$probe/upper" "$probe/work" "$probe/mnt"
   unshare -m mount -t overlay overlay \
     -o "lowerdir=$probe/lower,upperdir=$probe/upper,workdir=$probe/work" "$probe/mnt" 2>/dev/null
 }
-if awk 'NR == 1 && $1 == 0 && $2 == 0 { ok = 1 } END { exit !ok }' /proc/self/uid_map &&
+if getent passwd far >/dev/null || dpkg -s far >/dev/null 2>&1; then
+  echo "skipped: this machine has far installed, or a user far (it checks that dpkg makes it)"
+elif awk 'NR == 1 && $1 == 0 && $2 == 0 { ok = 1 } END { exit !ok }' /proc/self/uid_map &&
   [ "$(id -u)" -eq 0 ] && overlay_works; then
-  unshare -m bash "$source_dir/tests/package/maintainer_scripts_test.sh" "$root" "$work/control" \
-    "$work/overlay" || fail "maintainer scripts (above)"
+  unshare -m bash "$source_dir/tests/package/dpkg_lifecycle_test.sh" "$deb" "$work/overlay" ||
+    fail "dpkg lifecycle (above)"
 else
-  echo "skipped: needs root outside a user namespace and overlayfs (for throw-away /etc, /var, /lib)"
+  echo "skipped: needs root outside a user namespace and overlayfs (for throw-away /etc, /var, /usr)"
 fi
 
 # 5. Run what the package holds, from the scratch root.
