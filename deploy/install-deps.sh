@@ -20,6 +20,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
   # private network namespaces for the LCM (udpm) tests
   iproute2 util-linux
+  # the .deb (cpack): dpkg-shlibdeps for its dependencies, file for CPack to find the binaries
+  dpkg-dev file
 )
 
 missing=()

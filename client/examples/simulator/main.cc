@@ -1,6 +1,7 @@
 // A minimal simulator: one falling box over a static floor, stepped through far-daemon.
 //   cmake -S . -B build -DCMAKE_PREFIX_PATH=<far install prefix> && cmake --build build
-//   ./build/simulator            (with far-daemon running on the default LCM URL)
+//   ./build/simulator            (far-daemon on its default socket; docs/daemon.md)
+//   ./build/simulator SOCKET     (far-daemon --socket SOCKET)
 #include <cstdio>
 
 #include "far/client/client.h"
@@ -21,9 +22,10 @@ far::Mesh Box(const Eigen::Vector3d& half) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
   far::client::ClientOptions options;
   options.client_name = "example-simulator";
+  if (argc > 1) options.socket_path = argv[1];
   auto client = far::client::Client::Connect(options);
   if (!client) {
     std::fprintf(stderr, "%s\n", far::ToString(client.error()).c_str());
