@@ -19,6 +19,7 @@ add_executable(far_integration_test
   integration/readable_output_test.cc
   integration/two_daemons_test.cc
   integration/privacy_test.cc
+  integration/waiting_test.cc
   integration/bad_input_test.cc
   integration/lcm_receive_test.cc
   integration/session_lifetime_test.cc
