@@ -55,7 +55,7 @@ class DaemonProcess {
 
   /// Starts the process and waits until it answers. Errors: kUnavailable (fork/exec failed,
   /// the process exited, or it did not answer in time; the message holds the log's tail).
-  Result<void> Start(std::chrono::milliseconds ready_timeout = std::chrono::seconds(10));
+  Result<void> Start(std::chrono::milliseconds ready_timeout = std::chrono::seconds(30));
   /// SIGTERM, then waits up to `timeout` (then SIGKILL). Returns the exit code (128 + signal
   /// when killed by one), or an error when it was not running.
   Result<int> Stop(std::chrono::milliseconds timeout = std::chrono::seconds(10));

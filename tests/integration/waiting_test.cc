@@ -1,0 +1,121 @@
+// A client waits for a step as long as the daemon is alive and working on it, up to the limit
+// the user sets (far-client <command> --timeout), and no longer: no fixed wait blames a busy
+// daemon. While it waits, the daemon says where the step is (queued, started, each stage).
+
+#include <signal.h>
+
+#include <chrono>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "daemon_fixture.h"
+#include "integration_scenes.h"
+#include <gtest/gtest.h>
+
+#include "far/client/client.h"
+#include "far/io/scene_io.h"
+
+namespace far::integration {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using WaitingTest = DaemonTest;
+
+TEST_F(WaitingTest, TheDaemonSaysWhereAStepIsWhileItWorks) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  auto client = client::Client::Connect(TestClientOptions("progress"));
+  ASSERT_TRUE(client.ok()) << far::ToString(client.error());
+  for (const SceneObject& object : ContactSoup(3))
+    ASSERT_TRUE((*client)->AddObject(object.id, object.mesh, object.motion, object.X_WO).ok());
+  StepRequest request;
+  request.method = Method::kAabb;
+  std::vector<std::string> seen;  // "queued", "started", then "stage:<name>"
+  auto result = (*client)->Step(request, [&](const client::StepProgress& progress) {
+    seen.push_back(progress.state == "stage" ? "stage:" + progress.stage : progress.state);
+  });
+  ASSERT_TRUE(result.ok()) << far::ToString(result.error());
+  const std::vector<std::string> expected = {"queued",
+                                             "started",
+                                             "stage:update",
+                                             "stage:object_cull",
+                                             "stage:sweep_and_prune",
+                                             "stage:primitive_cull",
+                                             "stage:exact"};
+  EXPECT_EQ(seen, expected);
+}
+
+// The daemon stopped (SIGSTOP) for longer than any fixed wait of old (5 s): the client's
+// default limit (60 s) keeps it waiting, and the step is answered once the daemon goes on.
+TEST_F(WaitingTest, AClientWaitsForAStepAsLongAsItsOwnLimit) {
+  DaemonProcess* daemon = StartDaemon();
+  ASSERT_NE(daemon, nullptr);
+  TempDir dir;
+  const auto path = dir.path() / "soup.json";
+  Scene scene;
+  scene.objects = ContactSoup(3);
+  ASSERT_TRUE(WriteScene(scene, path).ok());
+  auto child = ChildProcess::Spawn({FAR_CLIENT_PATH, "--socket", CurrentSocketPath(), "play",
+                                    path.string(), "--steps", "3", "--method", "aabb"});
+  ASSERT_TRUE(child.ok()) << far::ToString(child.error());
+  ASSERT_TRUE((*child)->ReadLine(std::chrono::seconds(30)).has_value());  // step 0 answered
+  ::kill(daemon->pid(), SIGSTOP);
+  std::this_thread::sleep_for(std::chrono::milliseconds(5500));
+  EXPECT_FALSE((*child)->Wait(std::chrono::milliseconds(0)).has_value())
+      << "far-client gave up on a daemon that was only slow";
+  ::kill(daemon->pid(), SIGCONT);
+  EXPECT_EQ((*child)->Wait(std::chrono::seconds(30)), 0);
+}
+
+// --timeout is the user's limit: past it far-client says so and exits; the daemon goes on.
+TEST_F(WaitingTest, TimeoutOnTheCommandIsTheLimitAndSaysSo) {
+  DaemonProcess* daemon = StartDaemon();
+  ASSERT_NE(daemon, nullptr);
+  TempDir dir;
+  const auto path = dir.path() / "soup.json";
+  Scene scene;
+  scene.objects = ContactSoup(3);
+  ASSERT_TRUE(WriteScene(scene, path).ok());
+  auto child =
+      ChildProcess::Spawn({FAR_CLIENT_PATH, "--socket", CurrentSocketPath(), "play", path.string(),
+                           "--steps", "3", "--method", "aabb", "--timeout", "700ms"});
+  ASSERT_TRUE(child.ok()) << far::ToString(child.error());
+  ASSERT_TRUE((*child)->ReadLine(std::chrono::seconds(30)).has_value());  // step 0 answered
+  ::kill(daemon->pid(), SIGSTOP);                                         // step 1 now waits
+  const auto start = Clock::now();
+  const std::optional<int> exited = (*child)->Wait(std::chrono::seconds(10));
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  ::kill(daemon->pid(), SIGCONT);
+  ASSERT_TRUE(exited.has_value()) << "far-client waited past its --timeout";
+  EXPECT_NE(*exited, 0);
+  EXPECT_LT(seconds, 5.0);
+  // The daemon serves the next client as before.
+  const ProcessResult next = RunFarClient({"collide", path.string(), "--method", "aabb"});
+  EXPECT_EQ(next.exit_code, 0) << next.err;
+}
+
+// The client library's limit, and what it says when it is reached.
+TEST_F(WaitingTest, TheLibrarysTimeoutNamesTheLimit) {
+  DaemonProcess* daemon = StartDaemon();
+  ASSERT_NE(daemon, nullptr);
+  auto client =
+      client::Client::Connect(TestClientOptions("limited", std::chrono::milliseconds(700)));
+  ASSERT_TRUE(client.ok()) << far::ToString(client.error());
+  for (const SceneObject& object : ContactSoup(3))
+    ASSERT_TRUE((*client)->AddObject(object.id, object.mesh, object.motion, object.X_WO).ok());
+  ::kill(daemon->pid(), SIGSTOP);
+  const auto start = Clock::now();
+  StepRequest request;
+  request.method = Method::kAabb;
+  auto result = (*client)->Step(request);
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  ::kill(daemon->pid(), SIGCONT);
+  ASSERT_FALSE(result.ok());
+  EXPECT_EQ(result.error().code, ErrorCode::kTimeout);
+  EXPECT_NE(result.error().message.find("700 ms"), std::string::npos) << result.error().message;
+  EXPECT_GE(seconds, 0.69);
+  EXPECT_LT(seconds, 3.0);
+}
+
+}  // namespace
+}  // namespace far::integration
