@@ -2,7 +2,9 @@
 // client: `far_integration_test --far-half-writer <mode> <socket>` opens a session, prints
 // "<session id> <segment name> <key hex>" on stdout, then writes part of an update and dies
 // (tests/integration/session_lifetime_test.cc starts it with fork/exec: a forked copy of a
-// multi-threaded test process must not go on to use LCM or malloc-heavy code).
+// multi-threaded test process must not go on to use LCM or malloc-heavy code), and
+// `--far-other-user <socket>` is a well-behaved client that user_limits_test.cc runs as another
+// uid (other_user_client.h).
 #include <signal.h>
 #include <unistd.h>
 
@@ -15,6 +17,7 @@
 
 #include "daemon_process.h"
 #include "integration_scenes.h"
+#include "other_user_client.h"
 #include "raw_session.h"
 #include <gtest/gtest.h>
 
@@ -103,6 +106,9 @@ int main(int argc, char** argv) {
   }
   if (argc == 4 && std::strcmp(argv[1], "--far-half-writer") == 0) {
     return far::integration::HalfWriterMain(argv[2], argv[3]);
+  }
+  if (argc == 3 && std::strcmp(argv[1], "--far-other-user") == 0) {
+    return far::integration::OtherUserClientMain(argv[2]);
   }
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
