@@ -1,7 +1,12 @@
-// Pipeline::Step under a StepControl: progress per stage, cancellation, deadline and the cap on
-// the reply's pairs; the brute-force reference refused on scenes too large for it.
+// Pipeline::Step under a StepControl: progress per stage, cancellation, deadline, the report of
+// a step that runs long and the cap on the reply's pairs; the brute-force reference refused on
+// scenes too large for it.
 #include <atomic>
+#include <chrono>
+#include <mutex>
+#include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -87,6 +92,28 @@ TEST(StepControlTest, AStepPastItsDeadlineIsATimeout) {
   const auto late = pipeline->Step(Request(Method::kAabb), control);
   ASSERT_FALSE(late.ok());
   EXPECT_EQ(late.error().code, ErrorCode::kTimeout);
+}
+
+TEST(StepControlTest, EveryThreadOfAStepThatRunsLongIsToldWhileItRuns) {
+  auto pipeline = TwoGrids(40);  // 3,200 x 3,200 triangle pairs for the brute force
+  std::mutex mutex;
+  std::set<std::thread::id> told;
+  int calls = 0;
+  StepControl control;
+  control.on_slow = [&] {
+    std::lock_guard lock(mutex);
+    told.insert(std::this_thread::get_id());
+    ++calls;
+  };
+  // Not yet slow: never told.
+  control.slow_after = StepControl::Clock::now() + std::chrono::hours(1);
+  ASSERT_TRUE(pipeline->Step(Request(Method::kExact), control).ok());
+  EXPECT_EQ(calls, 0);
+  // Slow from the start: told at the first stage and by each thread of the exact tests.
+  control.slow_after = StepControl::Clock::now();
+  ASSERT_TRUE(pipeline->Step(Request(Method::kExact), control).ok());
+  EXPECT_GT(calls, 1);
+  EXPECT_EQ(told.size(), 2u) << "the calling thread and the pool's worker";
 }
 
 TEST(StepControlTest, AnAnswerOverThePairCapIsRefusedByEveryMethod) {
