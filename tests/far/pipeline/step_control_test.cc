@@ -116,6 +116,22 @@ TEST(StepControlTest, EveryThreadOfAStepThatRunsLongIsToldWhileItRuns) {
   EXPECT_EQ(told.size(), 2u) << "the calling thread and the pool's worker";
 }
 
+TEST(StepControlTest, TheAabbPrimitiveCullChecksAsItGoes) {
+  // 2 x 80,000 triangles: the AABB method's primitive cull tests 160,000 boxes, and checks
+  // (here: reports the slow step) every 65,536 of them, not only as the stage starts.
+  auto pipeline = TwoGrids(200);
+  std::string stage;
+  int during_primitive_cull = 0;
+  StepControl control;
+  control.on_stage = [&](std::string_view name) { stage = name; };
+  control.on_slow = [&] { during_primitive_cull += stage == "primitive_cull"; };
+  control.slow_after = StepControl::Clock::now();
+  StepRequest request = Request(Method::kAabb);
+  request.output = Output::kPrimitivePcs;
+  ASSERT_TRUE(pipeline->Step(request, control).ok());
+  EXPECT_EQ(during_primitive_cull, 3) << "once as the stage starts, twice within it";
+}
+
 TEST(StepControlTest, AnAnswerOverThePairCapIsRefusedByEveryMethod) {
   auto pipeline = TwoGrids(10);
   for (Method method : {Method::kBvh, Method::kAabb, Method::kFcl, Method::kExact}) {
