@@ -307,13 +307,15 @@ void StudyGarbageFlood(const Settings& settings) {
       "\nFlood: %lld messages in %.1f s (%.0f/s achieved of %.0f/s asked); the daemon counted "
       "%lld of them rejected (%.1f%%); its log grew %lld bytes in all. Healthy steps/s during "
       "the flood against the unloaded phase before it: median **%.0f%%**, from %.0f%% to %.0f%% "
-      "(goal: at least 90%%): **%s**. All rounds pooled: %.0f%%. Daemon alive after: %s.\n\n",
+      "(goal: at least 90%%): **%s**. All rounds pooled: %.0f%%. Daemon alive after: %s. "
+      "Healthy steps that failed during the floods: %d%s%s.\n\n",
       static_cast<long long>(total.sent), total.seconds, total.Rate(), settings.flood_rate,
       static_cast<long long>(rejected_total),
       100.0 * rejected_total / std::max<int64_t>(1, total.sent), static_cast<long long>(log_total),
       100 * median, 100 * Q(shares, 0), 100 * Q(shares, 1), median >= 0.9 ? "met" : "not met",
       100 * flooded.StepsPerSecond() / std::max(1e-9, unloaded.StepsPerSecond()),
-      daemon->Running() ? "yes" : "NO");
+      daemon->Running() ? "yes" : "NO", flooded.errors, flooded.errors ? " (the first: " : "",
+      flooded.errors ? (flooded.first_error + ")").c_str() : "");
 }
 
 void PrintOpenRow(const char* who, const OpenReport& r) {
