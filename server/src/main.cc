@@ -68,6 +68,19 @@ int main(int argc, char** argv) {
   auto* per_user = app.add_option("--max-sessions-per-user", flags.max_sessions_per_user,
                                   "sessions one user may hold")
                        ->capture_default_str();
+  auto* open_rate =
+      app.add_option("--max-opens-per-second", flags.max_opens_per_second_per_user,
+                     "sessions one user may open per second, sustained (bursts of as many)")
+          ->capture_default_str();
+  auto* triangles_total = app.add_option("--max-triangles-total", flags.max_triangles_total,
+                                         "triangles of all sessions together")
+                              ->capture_default_str();
+  auto* vertices_total = app.add_option("--max-vertices-total", flags.max_vertices_total,
+                                        "vertices of all sessions together")
+                             ->capture_default_str();
+  auto* reply_pairs = app.add_option("--max-reply-pairs", flags.max_reply_pairs,
+                                     "contact and distance pairs in one reply")
+                          ->capture_default_str();
   auto* deadline = app.add_option("--step-deadline-ms", flags.step_deadline_ms,
                                   "the longest a step may wait and run")
                        ->capture_default_str();
@@ -118,6 +131,10 @@ int main(int argc, char** argv) {
   if (*ring) config.ring_bytes = flags.ring_bytes;
   if (*rate) config.max_requests_per_second = flags.max_requests_per_second;
   if (*per_user) config.max_sessions_per_user = flags.max_sessions_per_user;
+  if (*open_rate) config.max_opens_per_second_per_user = flags.max_opens_per_second_per_user;
+  if (*triangles_total) config.max_triangles_total = flags.max_triangles_total;
+  if (*vertices_total) config.max_vertices_total = flags.max_vertices_total;
+  if (*reply_pairs) config.max_reply_pairs = flags.max_reply_pairs;
   if (*deadline) config.step_deadline_ms = flags.step_deadline_ms;
   if (*threads) config.exact_threads = flags.exact_threads;
   if (*level) config.log_level = flags.log_level;

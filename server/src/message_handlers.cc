@@ -98,7 +98,7 @@ void MessageHandlers::Queue(Session& session, protocol::StepCommand command) {
     return replier_.StepError(
         session, job.command,
         MakeError(ErrorCode::kBusy, "session is over its request rate (" +
-                                        std::to_string(config_.max_requests_per_second) + "/s)"));
+                                        FormatRate(config_.max_requests_per_second) + "/s)"));
   }
   {
     std::lock_guard lock(session.mutex);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <string>
 
 namespace far::server {
 
@@ -29,5 +31,12 @@ class RateLimiter {
   double rate_, burst_, tokens_;
   Clock::time_point last_{};
 };
+
+/// A rate as people write it: "20", "0.5", "2000" (std::to_string says "2000.000000").
+inline std::string FormatRate(double per_second) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", per_second);
+  return text;
+}
 
 }  // namespace far::server

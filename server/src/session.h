@@ -50,8 +50,10 @@ struct Session {
   std::unique_ptr<protocol::UpdateReader> updates;
   std::unique_ptr<protocol::RingWriter> replies;
   std::unique_ptr<Pipeline> pipeline;
-  bool demoted = false;  ///< runs at a lower CPU priority (its steps are heavy)
-  std::thread worker;    ///< joined by the registry (ReapWorkers)
+  /// Runs at a lower CPU priority (a step of it ran longer than heavy_step_ms). Set by the
+  /// worker or a pool thread of its pipeline while such a step runs.
+  std::atomic<bool> demoted{false};
+  std::thread worker;  ///< joined by the registry (ReapWorkers)
   // Shared under `mutex`:
   std::mutex mutex;
   std::condition_variable wake;

@@ -110,17 +110,35 @@ class SessionWorker {
     control.on_stage = [this, &job](std::string_view stage) {
       context_.replier.StepStatus(*session_, job, "stage", 0, stage);
     };
+    // Past heavy_step_ms, every thread of the step lowers itself at its next check, while the
+    // step runs: a step that only ends at its deadline is heavy too.
+    const auto started = Clock::now();
+    control.slow_after = started + std::chrono::milliseconds(context_.config.heavy_step_ms);
+    control.on_slow = [this, started] {
+      LowerThisThread();
+      if (!session_->demoted.load(std::memory_order_relaxed))
+        Demote(MsBetween(started, Clock::now()), "running");
+    };
     return control;
   }
 
-  // A heavy session yields the CPU to light ones from now on (an unprivileged process cannot
-  // undo this; the session's next worker would start at the daemon's priority).
-  void Demote(double ms) {
-    session_->demoted = true;
-    setpriority(PRIO_PROCESS, 0, kHeavyNice);  // this thread (Linux)
+  // The calling thread (a pool thread of the session's pipeline, or its worker) yields the CPU
+  // to light sessions from now on. Once per thread: an unprivileged process cannot undo it, and
+  // the threads die with the session.
+  static void LowerThisThread() {
+    thread_local bool lowered = false;
+    if (lowered) return;
+    setpriority(PRIO_PROCESS, 0, kHeavyNice);  // this thread only (Linux)
+    lowered = true;
+  }
+
+  // A heavy session: its pool's threads lower themselves at their next parallel loop too, and
+  // its later steps start lowered. Said once.
+  void Demote(double ms, const char* step_state) {
+    if (session_->demoted.exchange(true)) return;
     if (session_->pipeline) session_->pipeline->SetCpuNice(kHeavyNice);
-    spdlog::info("event=session_demoted session={} step_ms={:.1f} nice={}", session_->id, ms,
-                 kHeavyNice);
+    spdlog::info("event=session_demoted session={} step_ms={:.1f} step={} nice={}", session_->id,
+                 ms, step_state, kHeavyNice);
   }
 
   void RunStep(const StepJob& job) {
@@ -144,7 +162,13 @@ class SessionWorker {
         context_.close_session(session_->id, "its shared-memory segment cannot be read");
       return;
     }
+    const auto step_started = Clock::now();
     auto result = session_->pipeline->Step(command.request, ControlFor(job));
+    if (const double step_ms = MsBetween(step_started, Clock::now());
+        step_ms > context_.config.heavy_step_ms) {
+      LowerThisThread();
+      Demote(step_ms, result ? "finished" : "failed");
+    }
     if (!result) return replier.StepError(*session_, command, result.error());
     const protocol::StepReplyIds ids{session_->id, command.request_id, command.step_id,
                                      session_->applied_sequence.load()};
@@ -160,8 +184,6 @@ class SessionWorker {
       session_->latency.Add(ms);
     }
     session_->steps++;
-    if (!session_->demoted && result->stats.total_ms > context_.config.heavy_step_ms)
-      Demote(result->stats.total_ms);
     spdlog::debug("event=step session={} step={} method={} ms={:.3f} contacts={}", session_->id,
                   command.step_id, result->stats.method, ms, result->contacts.size());
   }

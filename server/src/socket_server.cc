@@ -112,9 +112,10 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
       open_rate_.try_emplace(uid, config_.max_opens_per_second_per_user,
                              std::max(1.0, config_.max_opens_per_second_per_user));
   if (!rate->second.Allow()) {
-    return refuse(MakeError(ErrorCode::kBusy, "user " + std::to_string(uid) +
+    return refuse(MakeError(ErrorCode::kBusy, "max_opens_per_second_per_user: user " +
+                                                  std::to_string(uid) +
                                                   " opens sessions faster than " +
-                                                  std::to_string(rate->second.rate()) + "/s"));
+                                                  FormatRate(rate->second.rate()) + "/s"));
   }
   if (auto ok = protocol::internal::CheckProtocolVersion(protocol::MessageType::kOpenSession,
                                                          message->protocol_version);

@@ -1,6 +1,7 @@
 #include "daemon_process.h"
 
 #include <fcntl.h>
+#include <grp.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/prctl.h>
@@ -246,7 +247,8 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_in,
   return result;
 }
 
-Result<std::unique_ptr<ChildProcess>> ChildProcess::Spawn(const std::vector<std::string>& argv_in) {
+Result<std::unique_ptr<ChildProcess>> ChildProcess::Spawn(const std::vector<std::string>& argv_in,
+                                                          std::optional<uid_t> user) {
   std::vector<std::string> args = argv_in;
   std::vector<char*> argv = CArgs(args);
   int out[2];
@@ -254,6 +256,12 @@ Result<std::unique_ptr<ChildProcess>> ChildProcess::Spawn(const std::vector<std:
   const pid_t pid = fork();
   if (pid == 0) {
     dup2(out[1], STDOUT_FILENO);
+    // The child has one thread: these are plain system calls here. Group first (after the uid
+    // changes, the child may no longer change it).
+    if (user && (setgroups(0, nullptr) != 0 || setresgid(*user, *user, *user) != 0 ||
+                 setresuid(*user, *user, *user) != 0)) {
+      _exit(kCannotSwitchUser);
+    }
     ExecChild(argv);
   }
   close(out[1]);
@@ -341,6 +349,16 @@ std::vector<std::string> SessionSegmentsOf(pid_t pid) {
     if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
   }
   return names;
+}
+
+int64_t ResidentKiB(pid_t pid, const std::string& field) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind(field + ":", 0) == 0)
+      return std::strtoll(line.c_str() + field.size() + 1, nullptr, 10);
+  }
+  return -1;
 }
 
 bool WaitUntil(const std::function<bool()>& condition, std::chrono::milliseconds timeout) {

@@ -97,8 +97,12 @@ ProcessResult RunProcess(const std::vector<std::string>& argv,
 /// The destructor SIGKILLs and reaps it if it is still running.
 class ChildProcess {
  public:
-  /// Forks and execs `argv` (argv[0] a path). Errors: kUnavailable.
-  static Result<std::unique_ptr<ChildProcess>> Spawn(const std::vector<std::string>& argv);
+  /// Forks and execs `argv` (argv[0] a path); with `user`, as that uid (and gid, with no
+  /// supplementary groups: only root may), the child exiting with kCannotSwitchUser when it
+  /// cannot switch. Errors: kUnavailable.
+  static Result<std::unique_ptr<ChildProcess>> Spawn(const std::vector<std::string>& argv,
+                                                     std::optional<uid_t> user = std::nullopt);
+  static constexpr int kCannotSwitchUser = 77;
   ~ChildProcess();
   /// The next line of its stdout (without the newline); nullopt at EOF or after `timeout`.
   std::optional<std::string> ReadLine(std::chrono::milliseconds timeout);
@@ -129,6 +133,10 @@ ProcessResult RunFarClient(const std::vector<std::string>& args,
 
 /// The session segments ("far-session-<id>") the process `pid` has mapped (/proc/<pid>/maps).
 std::vector<std::string> SessionSegmentsOf(pid_t pid);
+
+/// The resident memory of process `pid` in KiB, or -1: `field` of /proc/<pid>/status, VmRSS
+/// (all of it), RssAnon (private), RssShmem (shared memory: session segments) or RssFile.
+int64_t ResidentKiB(pid_t pid, const std::string& field = "VmRSS");
 
 /// Waits until `condition` holds, checking every 20 ms, up to `timeout`. Returns whether it held.
 bool WaitUntil(const std::function<bool()>& condition, std::chrono::milliseconds timeout);

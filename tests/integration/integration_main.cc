@@ -3,7 +3,9 @@
 // "<session id> <segment name> <key hex>" on stdout, then writes part of an update and dies
 // (tests/integration/session_lifetime_test.cc starts it with fork/exec: a forked copy of a
 // multi-threaded test process must not go on to use LCM or malloc-heavy code), and
-// `--far-simulator` is a well-behaved simulator (below).
+// `--far-simulator` is a well-behaved simulator (below), and
+// `--far-other-user <socket>` is a well-behaved client that user_limits_test.cc runs as another
+// uid (other_user_client.h).
 #include <signal.h>
 #include <unistd.h>
 
@@ -16,6 +18,7 @@
 
 #include "daemon_process.h"
 #include "integration_scenes.h"
+#include "other_user_client.h"
 #include "raw_session.h"
 #include <gtest/gtest.h>
 
@@ -142,6 +145,9 @@ int main(int argc, char** argv) {
   }
   if (argc == 4 && std::strcmp(argv[1], "--far-simulator") == 0) {
     return far::integration::SimulatorMain(argv[2], std::atoi(argv[3]));
+  }
+  if (argc == 3 && std::strcmp(argv[1], "--far-other-user") == 0) {
+    return far::integration::OtherUserClientMain(argv[2]);
   }
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -24,7 +24,11 @@ add_executable(far_integration_test
   integration/lcm_receive_test.cc
   integration/session_lifetime_test.cc
   integration/dispatch_test.cc
-  integration/record_replay_test.cc)
+  integration/record_replay_test.cc
+  integration/other_user_client.cc
+  integration/user_limits_test.cc
+  integration/memory_test.cc
+  integration/cpu_priority_test.cc)
 target_link_libraries(far_integration_test PRIVATE far::client far::protocol far::scenes far::io
                       far_server_core
                       far_test_scenes nlohmann_json::nlohmann_json GTest::gtest far_warnings

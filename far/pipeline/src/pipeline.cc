@@ -9,8 +9,8 @@
 
 #include "fcl_collider.h"
 #include "gpu_culler.h"
-#include "guarantee.h"
 #include "gpu_probe.h"
+#include "guarantee.h"
 #include "scene_cache.h"
 
 #include "far/gpu/culling_renderer.h"
@@ -108,11 +108,14 @@ void SortUnique(std::vector<uint32_t>& values) {
 }
 
 // The AABB baseline's primitive PCS: per object of a candidate pair, the triangles whose box
-// overlaps the partner object's box grown by the query distance D.
-std::vector<std::vector<uint32_t>> TrianglesInPartnerBoxes(
+// overlaps the partner object's box grown by the query distance D. A large scene takes seconds
+// here: `control` is checked every kTrianglesPerCheck triangles.
+Result<std::vector<std::vector<uint32_t>>> TrianglesInPartnerBoxes(
     std::span<const CachedObject* const> objects, std::span<const ObjectPair> pairs,
-    const std::map<uint32_t, size_t>& index_of, double distance) {
+    const std::map<uint32_t, size_t>& index_of, double distance, const StepControl& control) {
+  constexpr size_t kTrianglesPerCheck = 1 << 16;
   std::vector<std::vector<uint32_t>> subsets(objects.size());
+  size_t unchecked = 0;
   for (const auto& pair : pairs) {
     const size_t a = index_of.at(pair.object_a), b = index_of.at(pair.object_b);
     for (auto [self, other] : {std::make_pair(a, b), std::make_pair(b, a)}) {
@@ -121,6 +124,11 @@ std::vector<std::vector<uint32_t>> TrianglesInPartnerBoxes(
       partner.max().array() += distance;
       const CachedObject& object = *objects[self];
       for (size_t t = 0; t < object.mesh.triangles.size(); ++t) {
+        if (++unchecked == kTrianglesPerCheck) {
+          unchecked = 0;
+          if (const StopReason reason = control.Check(); reason != StopReason::kNone)
+            return StopError(reason, "primitive_cull", control);
+        }
         Eigen::AlignedBox3d box;
         for (uint32_t v : object.mesh.triangles[t]) box.extend(object.p_WV[v]);
         if (box.intersects(partner)) subsets[self].push_back(static_cast<uint32_t>(t));
@@ -294,8 +302,10 @@ Result<void> Pipeline::Impl::CullPrimitivesStage(StepState& state) {
     if (!subsets) return subsets.error();
     state.subsets = std::move(*subsets);
   } else {
-    state.subsets = TrianglesInPartnerBoxes(state.objects, result.object_pairs, index_of,
-                                            state.request.distance.value_or(0.0));
+    auto subsets = TrianglesInPartnerBoxes(state.objects, result.object_pairs, index_of,
+                                           state.request.distance.value_or(0.0), state.control);
+    if (!subsets) return subsets.error();
+    state.subsets = std::move(*subsets);
   }
   for (size_t i : paired) {
     if (!state.subsets[i].empty()) result.pcs_primitives[state.objects[i]->id] = state.subsets[i];

@@ -1,7 +1,12 @@
-// Pipeline::Step under a StepControl: progress per stage, cancellation, deadline and the cap on
-// the reply's pairs; the brute-force reference refused on scenes too large for it.
+// Pipeline::Step under a StepControl: progress per stage, cancellation, deadline, the report of
+// a step that runs long and the cap on the reply's pairs; the brute-force reference refused on
+// scenes too large for it.
 #include <atomic>
+#include <chrono>
+#include <mutex>
+#include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -87,6 +92,44 @@ TEST(StepControlTest, AStepPastItsDeadlineIsATimeout) {
   const auto late = pipeline->Step(Request(Method::kAabb), control);
   ASSERT_FALSE(late.ok());
   EXPECT_EQ(late.error().code, ErrorCode::kTimeout);
+}
+
+TEST(StepControlTest, EveryThreadOfAStepThatRunsLongIsToldWhileItRuns) {
+  auto pipeline = TwoGrids(40);  // 3,200 x 3,200 triangle pairs for the brute force
+  std::mutex mutex;
+  std::set<std::thread::id> told;
+  int calls = 0;
+  StepControl control;
+  control.on_slow = [&] {
+    std::lock_guard lock(mutex);
+    told.insert(std::this_thread::get_id());
+    ++calls;
+  };
+  // Not yet slow: never told.
+  control.slow_after = StepControl::Clock::now() + std::chrono::hours(1);
+  ASSERT_TRUE(pipeline->Step(Request(Method::kExact), control).ok());
+  EXPECT_EQ(calls, 0);
+  // Slow from the start: told at the first stage and by each thread of the exact tests.
+  control.slow_after = StepControl::Clock::now();
+  ASSERT_TRUE(pipeline->Step(Request(Method::kExact), control).ok());
+  EXPECT_GT(calls, 1);
+  EXPECT_EQ(told.size(), 2u) << "the calling thread and the pool's worker";
+}
+
+TEST(StepControlTest, TheAabbPrimitiveCullChecksAsItGoes) {
+  // 2 x 80,000 triangles: the AABB method's primitive cull tests 160,000 boxes, and checks
+  // (here: reports the slow step) every 65,536 of them, not only as the stage starts.
+  auto pipeline = TwoGrids(200);
+  std::string stage;
+  int during_primitive_cull = 0;
+  StepControl control;
+  control.on_stage = [&](std::string_view name) { stage = name; };
+  control.on_slow = [&] { during_primitive_cull += stage == "primitive_cull"; };
+  control.slow_after = StepControl::Clock::now();
+  StepRequest request = Request(Method::kAabb);
+  request.output = Output::kPrimitivePcs;
+  ASSERT_TRUE(pipeline->Step(request, control).ok());
+  EXPECT_EQ(during_primitive_cull, 3) << "once as the stage starts, twice within it";
 }
 
 TEST(StepControlTest, AnAnswerOverThePairCapIsRefusedByEveryMethod) {

@@ -36,13 +36,22 @@ struct StepControl {
   /// Called at the start of each stage with its name ("update", "object_cull", ...), on the
   /// step's thread: progress for a client that waits.
   std::function<void(std::string_view stage)> on_stage;
+  /// Called by every check (Check) from `slow_after` on, on the thread that checks: each
+  /// thread working on a step that runs long hears it within milliseconds, which lets a daemon
+  /// lower that thread's CPU priority while the step still runs, whether it ends well or not.
+  /// Called again at every later check: it must be cheap once it has done its work.
+  std::function<void()> on_slow;
+  Clock::time_point slow_after = Clock::time_point::max();
 
-  /// kCancelled or kDeadline when the step must stop now, else kNone (reads the clock).
+  /// kCancelled or kDeadline when the step must stop now, else kNone (reads the clock; calls
+  /// on_slow past slow_after).
   StopReason Check() const {
     if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return StopReason::kCancelled;
-    if (deadline != Clock::time_point::max() && Clock::now() >= deadline)
-      return StopReason::kDeadline;
-    return StopReason::kNone;
+    if (deadline == Clock::time_point::max() && slow_after == Clock::time_point::max())
+      return StopReason::kNone;
+    const Clock::time_point now = Clock::now();
+    if (now >= slow_after && on_slow) on_slow();
+    return now >= deadline ? StopReason::kDeadline : StopReason::kNone;
   }
 };
 

@@ -1,0 +1,79 @@
+// A session whose step runs longer than heavy_step_ms gives way to light sessions while that
+// step still runs, even when the step never finishes (it is stopped at its deadline): its
+// threads drop to nice 10, and a light client is served meanwhile.
+#include <dirent.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "daemon_fixture.h"
+#include "integration_scenes.h"
+#include "raw_session.h"
+#include <gtest/gtest.h>
+
+#include "far/protocol/convert.h"
+
+namespace far::integration {
+namespace {
+
+using namespace std::chrono_literals;
+
+// How many threads of process `pid` run at nice value `nice` (/proc/<pid>/task/*/stat).
+int ThreadsAtNice(pid_t pid, int nice) {
+  const std::string tasks = "/proc/" + std::to_string(pid) + "/task";
+  DIR* dir = opendir(tasks.c_str());
+  if (dir == nullptr) return -1;
+  int count = 0;
+  while (const dirent* entry = readdir(dir)) {
+    if (entry->d_name[0] == '.') continue;
+    std::ifstream stat(tasks + "/" + entry->d_name + "/stat");
+    std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+    // After "(comm)": state is field 3; nice is field 19.
+    std::istringstream fields(text.substr(text.rfind(')') + 2));
+    std::string field;
+    for (int i = 3; i <= 19 && fields >> field; ++i) {
+    }
+    if (!field.empty() && std::stoi(field) == nice) ++count;
+  }
+  closedir(dir);
+  return count;
+}
+
+using CpuPriorityTest = DaemonTest;
+
+TEST_F(CpuPriorityTest, AStepThatRunsLongIsLoweredWhileItRunsThoughItEndsAtItsDeadline) {
+  DaemonProcess* daemon = StartDaemon({"--step-deadline-ms", "500"});
+  ASSERT_NE(daemon, nullptr);
+  ASSERT_EQ(ThreadsAtNice(daemon->pid(), 10), 0);
+  auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "heavy");
+  ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
+  // Two coplanar grids of 28,800 triangles: the brute force tests 8e8 pairs, more than a second
+  // of work on two cores.
+  ASSERT_TRUE((*raw)->writer().AddObject(1, FlatGrid(120), Motion::kStatic, Pose{}).ok());
+  ASSERT_TRUE((*raw)->writer().AddObject(2, FlatGrid(120), Motion::kStatic, Pose{}).ok());
+  ASSERT_TRUE((*raw)->SendStep(0, SmallRequest(Method::kExact)).ok());
+  auto exact = (*raw)->WaitReply(
+      [](const ReplyMessage& m) { return m.status && m.status->stage == "exact"; }, 20s);
+  ASSERT_TRUE(exact.has_value()) << "the step never reached its exact stage";
+  // Within moments of passing heavy_step_ms (50), with the step still running: the session is
+  // demoted, and its threads (the worker and the pool's) run at nice 10.
+  const std::string tag = "event=session_demoted session=" + std::to_string((*raw)->id());
+  EXPECT_TRUE(WaitUntil([&] { return daemon->Log().find(tag) != std::string::npos; }, 2s))
+      << "no demotion while the step runs";
+  EXPECT_NE(daemon->Log().find("step=running"), std::string::npos);
+  // (each thread lowers itself at its next check, a few milliseconds apart)
+  const int threads = static_cast<int>(std::min(2u, std::thread::hardware_concurrency()));
+  EXPECT_TRUE(WaitUntil([&] { return ThreadsAtNice(daemon->pid(), 10) >= threads; }, 1s))
+      << ThreadsAtNice(daemon->pid(), 10) << " threads at nice 10";
+  // A light client is served meanwhile.
+  EXPECT_TRUE(HealthyClientSteps("light"));
+  auto reply = (*raw)->WaitStepReply(0, 10s);
+  ASSERT_TRUE(reply.has_value());
+  EXPECT_EQ(reply->status, protocol::ToWireStatus(ErrorCode::kTimeout)) << reply->message;
+  EXPECT_NE(reply->message.find("stopped at its deadline"), std::string::npos) << reply->message;
+}
+
+}  // namespace
+}  // namespace far::integration

@@ -1,0 +1,182 @@
+// Per-user limits of the daemon's socket, keyed by the uid the kernel reports (SO_PEERCRED):
+// the sessions one user may hold (max_sessions_per_user), how fast they may open them
+// (max_opens_per_second_per_user), and that another user is still served, and sees only its own
+// sessions in status, while one user holds all it may.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "daemon_fixture.h"
+#include "integration_scenes.h"
+#include "other_user_client.h"
+#include "raw_session.h"
+#include <gtest/gtest.h>
+
+#include "far/client/client.h"
+
+namespace far::integration {
+namespace {
+
+using namespace std::chrono_literals;
+
+// The uid of the other user (Debian's "nobody").
+constexpr uid_t kOtherUid = 65534;
+
+// A session of the healthy scene that has stepped once with the reference contacts.
+std::unique_ptr<client::Client> HealthySession(const std::string& name) {
+  auto client = client::Client::Connect(TestClientOptions(name));
+  EXPECT_TRUE(client.ok()) << name << ": " << far::ToString(client.error());
+  if (!client) return nullptr;
+  Scene scene;
+  scene.objects = ContactSoup(kHealthySeed);
+  EXPECT_TRUE((*client)->LoadScene(scene).ok());
+  auto result = (*client)->Step(SmallRequest());
+  EXPECT_TRUE(result.ok()) << name << ": " << far::ToString(result.error());
+  if (result) {
+    EXPECT_EQ(result->contacts, ReferenceContacts(scene.objects)) << name;
+  }
+  return std::move(*client);
+}
+
+::testing::AssertionResult StepsWithTheReference(client::Client& client) {
+  static const auto kExpected = ReferenceContacts(ContactSoup(kHealthySeed));
+  auto result = client.Step(SmallRequest());
+  if (!result) return ::testing::AssertionFailure() << far::ToString(result.error());
+  if (result->contacts != kExpected)
+    return ::testing::AssertionFailure() << "contacts " << ToString(result->contacts);
+  return ::testing::AssertionSuccess();
+}
+
+int SessionsOpen() {
+  auto status = client::Client::Status(TestClientOptions("status"));
+  return status ? status->sessions_open : -1;
+}
+
+using UserLimitsTest = DaemonTest;
+
+TEST_F(UserLimitsTest, AUserOverItsSessionLimitIsRefusedWhileItsSessionsWork) {
+  ASSERT_NE(StartDaemon({"--max-sessions-per-user", "3"}), nullptr);
+  std::vector<std::unique_ptr<client::Client>> mine;
+  for (int i = 0; i < 3; ++i) mine.push_back(HealthySession("mine-" + std::to_string(i)));
+  for (const auto& client : mine) ASSERT_NE(client, nullptr);
+
+  // The fourth: refused with the limit's name, though the daemon has room for 64.
+  auto fourth = client::Client::Connect(TestClientOptions("one-too-many"));
+  ASSERT_FALSE(fourth.ok());
+  EXPECT_EQ(fourth.error().code, ErrorCode::kLimitExceeded);
+  EXPECT_NE(fourth.error().message.find("max_sessions_per_user: user " + std::to_string(geteuid()) +
+                                        " has 3 sessions open"),
+            std::string::npos)
+      << fourth.error().message;
+  // The three go on as if nothing happened.
+  for (const auto& client : mine) EXPECT_TRUE(StepsWithTheReference(*client));
+
+  // One closed, the user may open one again.
+  ASSERT_TRUE(mine.back()->Close().ok());
+  ASSERT_TRUE(WaitUntil([] { return SessionsOpen() == 2; }, 3s));
+  EXPECT_NE(HealthySession("again"), nullptr);
+}
+
+TEST_F(UserLimitsTest, OpeningFasterThanTheOpenRateIsBusyAndTheRateRefills) {
+  // One open every 2 s, a burst of one: the second open at once is over the rate, whatever the
+  // machine's speed.
+  ASSERT_NE(StartDaemon({"--max-opens-per-second", "0.5"}), nullptr);
+  auto first = HealthySession("first");
+  ASSERT_NE(first, nullptr);
+  auto second = client::Client::Connect(TestClientOptions("too-soon"));
+  ASSERT_FALSE(second.ok());
+  EXPECT_EQ(second.error().code, ErrorCode::kBusy);
+  EXPECT_NE(
+      second.error().message.find("max_opens_per_second_per_user: user " +
+                                  std::to_string(geteuid()) + " opens sessions faster than 0.5/s"),
+      std::string::npos)
+      << second.error().message;
+  EXPECT_TRUE(StepsWithTheReference(*first));
+  // The bucket refills at the rate: after 2 s there is a token again.
+  std::this_thread::sleep_for(2100ms);
+  EXPECT_NE(HealthySession("later"), nullptr);
+}
+
+// What the other user's client printed (other_user_client.h).
+struct OtherUserReport {
+  int uid = -1;
+  size_t contacts = 0;
+  std::vector<client::DaemonStatus::Session> sessions;  // uid, client_name, triangles
+  int sessions_open = -1;
+};
+
+std::optional<OtherUserReport> ReadReport(ChildProcess& child, std::string* failure) {
+  OtherUserReport report;
+  while (auto line = child.ReadLine(20s)) {
+    std::istringstream in(*line);
+    std::string tag;
+    in >> tag;
+    if (tag == "stepped") {
+      in >> report.uid >> report.contacts;
+    } else if (tag == "session") {
+      client::DaemonStatus::Session session;
+      in >> session.uid >> session.client_name >> session.triangles;
+      report.sessions.push_back(session);
+    } else if (tag == "end") {
+      in >> report.sessions_open;
+      return report;
+    } else {
+      *failure = *line;
+      return std::nullopt;
+    }
+  }
+  *failure = "no report (the child printed nothing more)";
+  return std::nullopt;
+}
+
+TEST_F(UserLimitsTest, AnotherUserIsServedAndSeesOnlyItsOwnSessionsWhileRootIsAtItsLimit) {
+  if (geteuid() != 0) GTEST_SKIP() << "needs root to run a client as uid " << kOtherUid;
+  // The other user must reach the socket: a folder it may enter (and not write to).
+  TempDir dir;
+  ASSERT_EQ(chmod(dir.path().c_str(), 0755), 0);
+  const std::string socket = (dir.path() / "far.sock").string();
+  ASSERT_NE(StartDaemon({"--socket", socket, "--max-sessions-per-user", "2"}), nullptr);
+  auto root_a = HealthySession("root-a");
+  auto root_b = HealthySession("root-b");
+  ASSERT_NE(root_a, nullptr);
+  ASSERT_NE(root_b, nullptr);
+  auto third = client::Client::Connect(TestClientOptions("root-c"));
+  ASSERT_FALSE(third.ok());
+  EXPECT_EQ(third.error().code, ErrorCode::kLimitExceeded) << third.error().message;
+
+  auto child = ChildProcess::Spawn({SelfPath(), "--far-other-user", socket}, kOtherUid);
+  ASSERT_TRUE(child.ok()) << far::ToString(child.error());
+  std::string failure;
+  auto report = ReadReport(**child, &failure);
+  if (!report && (*child)->Wait(2s) == ChildProcess::kCannotSwitchUser)
+    GTEST_SKIP() << "cannot switch to uid " << kOtherUid << " (a user namespace without it?)";
+  ASSERT_TRUE(report.has_value()) << failure;
+  // Served: its step has the reference contacts.
+  EXPECT_EQ(report->uid, static_cast<int>(kOtherUid));
+  EXPECT_EQ(report->contacts, ReferenceContacts(ContactSoup(kHealthySeed)).size());
+  // Its status: the count of all sessions, but only its own session's name and size.
+  EXPECT_EQ(report->sessions_open, 3);
+  ASSERT_EQ(report->sessions.size(), 1u) << "the other user sees someone else's sessions";
+  EXPECT_EQ(report->sessions[0].uid, static_cast<int>(kOtherUid));
+  EXPECT_EQ(report->sessions[0].client_name, kOtherUserClientName);
+  EXPECT_EQ(report->sessions[0].triangles, 192);
+
+  // Root sees every session, each with its owner and size.
+  auto status = client::Client::Status(TestClientOptions("root-status"));
+  ASSERT_TRUE(status.ok()) << far::ToString(status.error());
+  std::map<std::string, std::pair<int, int64_t>> listed;  // name -> uid, triangles
+  for (const auto& s : status->sessions) listed[s.client_name] = {s.uid, s.triangles};
+  EXPECT_EQ(listed.size(), 3u);
+  EXPECT_EQ(listed["root-a"], std::make_pair(0, int64_t{192}));
+  EXPECT_EQ(listed["root-b"], std::make_pair(0, int64_t{192}));
+  EXPECT_EQ(listed[kOtherUserClientName],
+            std::make_pair(static_cast<int>(kOtherUid), int64_t{192}));
+  (*child)->Kill();
+  EXPECT_TRUE(StepsWithTheReference(*root_a));
+}
+
+}  // namespace
+}  // namespace far::integration
