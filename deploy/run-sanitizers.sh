@@ -5,10 +5,11 @@
 #         (protocol, server, io, model), the integration tests that play hostile clients, and a
 #         smoke run of every libFuzzer target from its committed corpus.
 #   tsan  build/ci-tsan: ThreadSanitizer. The protocol and server unit tests and the integration
-#         tests of the daemon's threads (sessions opening and closing, dispatch).
+#         tests of the daemon's threads (sessions opening and closing, dispatch, hostile
+#         clients writing shared memory while the daemon reads it).
 #   bash deploy/run-sanitizers.sh            # both
 #   bash deploy/run-sanitizers.sh asan       # one
-# Assumes deploy/install-deps.sh has run. Prints each stage's duration.
+# Assumes deploy/install-deps.sh has run. Prints each stage's wall and CPU time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -18,12 +19,28 @@ lcm_tarball=$(ls build/*/_deps/far_lcm/lcm_1.3.1+repack1.orig.tar.gz 2>/dev/null
 lcm_flag=()
 [ -n "$lcm_tarball" ] && lcm_flag=(-DFAR_LCM_TARBALL="$PWD/$lcm_tarball")
 
+# Sets `cpu` to the CPU seconds this shell's finished children used (bash's `times`, second
+# line). `times` must run in this shell, not in a $(...) subshell, whose children are its own.
+cpu_file=$(mktemp)
+trap 'rm -f "$cpu_file"' EXIT
+children_cpu() {
+  times >"$cpu_file"
+  cpu=$(awk 'NR == 2 {
+    for (i = 1; i <= 2; ++i) { split($i, t, /[ms]/); total += 60 * t[1] + t[2] }
+    printf "%d", total }' "$cpu_file")
+}
+
+# Runs a stage and says how long it took: wall time, and CPU time (meaningful when the machine
+# is shared: CPU seconds / cores is what the stage would take alone).
 timed() {
   local name=$1
   shift
-  local start=$SECONDS
+  local start=$SECONDS before
+  children_cpu
+  before=$cpu
   "$@"
-  echo "run-sanitizers: stage $name took $((SECONDS - start)) s" >&2
+  children_cpu
+  echo "run-sanitizers: stage $name took $((SECONDS - start)) s ($((cpu - before)) s CPU)" >&2
 }
 
 # Unit tests (the executables this tree built: the others show as <target>_NOT_BUILT).
@@ -31,7 +48,7 @@ asan_unit_targets=(far_protocol_test far_server_test far_io_test far_model_test)
 # Integration tests that send the daemon what a hostile or careless client would.
 asan_integration='^(BadInputTest|LimitsTest|LcmForgedDatagramTest)\.'
 tsan_unit_targets=(far_protocol_test far_server_test)
-tsan_integration='^(SessionLifetimeTest|DispatchTest)\.'
+tsan_integration='^(SessionLifetimeTest|DispatchTest|BadInputTest|LimitsTest)\.'
 
 configure() {
   cmake --preset "$1" "${lcm_flag[@]}" >/dev/null
