@@ -6,6 +6,9 @@ set -euo pipefail
 packages=(
   # toolchain
   build-essential cmake ninja-build pkg-config git clang-format
+  # sanitizer and fuzzing builds (docs/testing.md): clang 14, its runtimes (libFuzzer, ASan,
+  # UBSan, TSan: libclang-rt-14-dev) and llvm-symbolizer for readable reports (llvm)
+  clang libclang-rt-dev llvm
   # geometry and math
   libeigen3-dev libgmp-dev libfcl-dev
   # headless GL: EGL + GL headers and Mesa's software rasterizer (llvmpipe). Nothing pulls

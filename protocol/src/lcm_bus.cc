@@ -56,8 +56,12 @@ void LcmBus::Subscribe(const std::string& channel, Handler handler) {
 }
 
 Result<void> LcmBus::Publish(const std::string& channel, std::span<const uint8_t> bytes) {
+  // An empty span's data() may be null, and memq copies the payload with memcpy, whose
+  // pointers must never be null (even for 0 bytes): give LCM a valid address.
+  static constexpr uint8_t kNoBytes = 0;
+  const uint8_t* data = bytes.empty() ? &kNoBytes : bytes.data();
   std::lock_guard lock(publish_mutex_);
-  if (lcm_publish(static_cast<lcm_t*>(lcm_), channel.c_str(), bytes.data(),
+  if (lcm_publish(static_cast<lcm_t*>(lcm_), channel.c_str(), data,
                   static_cast<unsigned int>(bytes.size())) != 0) {
     return MakeError(
         ErrorCode::kUnavailable,

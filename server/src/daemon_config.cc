@@ -1,7 +1,11 @@
 #include "daemon_config.h"
 
 #include <fstream>
+#include <limits>
 #include <set>
+#include <sstream>
+#include <type_traits>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -14,12 +18,58 @@ Error Invalid(const std::string& key, const std::string& why) {
   return MakeError(ErrorCode::kInvalidArgument, "config '" + key + "': " + why);
 }
 
-// Reads one key (other than gl_platform) into `config`; false when the key is unknown.
-bool ReadKey(const std::string& key, const nlohmann::json& value, DaemonConfig& config) {
-  const auto set = [&](auto& field) {
-    field = value.get<std::decay_t<decltype(field)>>();
-    return true;
+// Reads a JSON number into `out`. nlohmann's get<T> converts any number (and booleans) with a
+// plain cast: 1e10 into an int or 1e29 into a uint64_t is undefined behaviour, 4294967297 into
+// an int silently becomes 1. So integers must be JSON integers within T's range.
+template <typename T>
+Result<void> ReadNumber(const std::string& key, const nlohmann::json& value, T* out) {
+  if constexpr (std::is_floating_point_v<T>) {
+    if (value.is_number()) {
+      *out = value.get<T>();
+      return {};
+    }
+    return Invalid(key, value.dump() + " is not a number");
+  } else {
+    if (value.is_number_unsigned() && std::in_range<T>(value.get<uint64_t>())) {
+      *out = static_cast<T>(value.get<uint64_t>());
+      return {};
+    }
+    if (value.is_number_integer() && !value.is_number_unsigned() &&
+        std::in_range<T>(value.get<int64_t>())) {
+      *out = static_cast<T>(value.get<int64_t>());
+      return {};
+    }
+    return Invalid(key, value.dump() + " is not an integer in [" +
+                            std::to_string(std::numeric_limits<T>::min()) + ", " +
+                            std::to_string(std::numeric_limits<T>::max()) + "]");
+  }
+}
+
+Result<void> ReadPlatform(const std::string& key, const nlohmann::json& value, GlPlatform* out) {
+  const auto name = value.get<std::string>();
+  if (name == "auto") {
+    *out = GlPlatform::kAuto;
+  } else if (name == "device") {
+    *out = GlPlatform::kDevice;
+  } else if (name == "surfaceless") {
+    *out = GlPlatform::kSurfaceless;
+  } else {
+    return Invalid(key, "unknown platform " + value.dump() + " (auto, device, surfaceless)");
+  }
+  return {};
+}
+
+// Sets the field `key` names. Throws nlohmann's type_error for a string field of another type.
+Result<void> ReadKey(const std::string& key, const nlohmann::json& value, DaemonConfig& config) {
+  const auto set = [&](auto& field) -> Result<void> {
+    if constexpr (std::is_same_v<std::decay_t<decltype(field)>, std::string>) {
+      field = value.get<std::string>();
+      return {};
+    } else {
+      return ReadNumber(key, value, &field);
+    }
   };
+  if (key == "gl_platform") return ReadPlatform(key, value, &config.gl_platform);
   if (key == "name") return set(config.name);
   if (key == "socket_path") return set(config.socket_path);
   if (key == "lcm_url") return set(config.lcm_url);
@@ -42,40 +92,35 @@ bool ReadKey(const std::string& key, const nlohmann::json& value, DaemonConfig& 
   if (key == "heavy_step_ms") return set(config.heavy_step_ms);
   if (key == "exact_threads") return set(config.exact_threads);
   if (key == "log_level") return set(config.log_level);
-  return false;
+  return Invalid(key, "unknown key");
 }
 
 }  // namespace
 
-Result<DaemonConfig> LoadDaemonConfig(const std::filesystem::path& path, DaemonConfig config) {
-  std::ifstream file(path);
+Result<DaemonConfig> LoadDaemonConfig(const std::filesystem::path& path, DaemonConfig base) {
+  std::ifstream file(path, std::ios::binary);
   if (!file) return MakeError(ErrorCode::kIoError, path.string() + ": cannot open");
+  std::ostringstream text;
+  text << file.rdbuf();
+  return ParseDaemonConfig(text.str(), path.string(), std::move(base));
+}
+
+Result<DaemonConfig> ParseDaemonConfig(std::string_view text, std::string_view name_for_errors,
+                                       DaemonConfig config) {
+  const std::string name(name_for_errors);
   nlohmann::json json;
   try {
-    json = nlohmann::json::parse(file);
+    json = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
-    return MakeError(ErrorCode::kParseError, path.string() + ": " + e.what());
+    return MakeError(ErrorCode::kParseError, name + ": " + e.what());
   }
-  if (!json.is_object())
-    return MakeError(ErrorCode::kParseError, path.string() + ": not a JSON object");
+  if (!json.is_object()) return MakeError(ErrorCode::kParseError, name + ": not a JSON object");
   try {
     for (const auto& [key, value] : json.items()) {
-      if (key == "gl_platform") {
-        const auto name = value.get<std::string>();
-        if (name == "auto")
-          config.gl_platform = GlPlatform::kAuto;
-        else if (name == "device")
-          config.gl_platform = GlPlatform::kDevice;
-        else if (name == "surfaceless")
-          config.gl_platform = GlPlatform::kSurfaceless;
-        else
-          return Invalid(key, "unknown platform " + value.dump() + " (auto, device, surfaceless)");
-      } else if (!ReadKey(key, value, config)) {
-        return Invalid(key, "unknown key");
-      }
+      if (auto read = ReadKey(key, value, config); !read) return read.error();
     }
   } catch (const nlohmann::json::exception& e) {
-    return MakeError(ErrorCode::kInvalidArgument, path.string() + ": wrong type: " + e.what());
+    return MakeError(ErrorCode::kInvalidArgument, name + ": wrong type: " + e.what());
   }
   if (auto ok = ValidateDaemonConfig(config); !ok.ok()) return ok.error();
   return config;

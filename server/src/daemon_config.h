@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include "far/gpu/gl_context.h"
 #include "far/model/result.h"
@@ -48,6 +49,11 @@ struct DaemonConfig {
 /// Reads a JSON config file; unknown keys are errors (a typo must not be silently ignored).
 /// Errors: kIoError, kParseError, kInvalidArgument naming the key and value.
 Result<DaemonConfig> LoadDaemonConfig(const std::filesystem::path& path, DaemonConfig base = {});
+
+/// As LoadDaemonConfig, for the file's text held in memory; `name_for_errors` starts every
+/// error message (LoadDaemonConfig passes the path). Errors: kParseError, kInvalidArgument.
+Result<DaemonConfig> ParseDaemonConfig(std::string_view text, std::string_view name_for_errors,
+                                       DaemonConfig base = {});
 
 /// Checks ranges. Errors: kInvalidArgument naming the field and value.
 Result<void> ValidateDaemonConfig(const DaemonConfig& config);

@@ -453,11 +453,15 @@ TEST_F(BadInputTest, RingScribbledWhileTheDaemonReadsGetsErrorsNotACrash) {
     const protocol::RingRegion reply_ring = raw.segment().reply_ring();
     std::mutex mutex;
     std::vector<std::pair<uint64_t, uint64_t>> payloads;  // [begin, end) ring indices
+    // The writer's index as the scribbler may read it: the writer itself is this thread's (the
+    // shared-memory races are the point of the test, a race on the writer's own state is not).
+    std::atomic<uint64_t> written{0};
     auto add = [&](uint32_t id) {
       auto at = raw.writer().AddObject(id, TriangleRow(40), Motion::kRigid, Pose{});
       // With the daemon-owned read index scribbled, our own writer may refuse (kParseError).
       if (!payload_only && !at.ok()) return;
       ASSERT_TRUE(at.ok()) << far::ToString(at.error());
+      written = raw.writer().ring().write_index();
       std::lock_guard lock(mutex);
       payloads.emplace_back(at->index + sizeof(protocol::AddObjectRecord), at->index + at->size);
     };
@@ -479,28 +483,28 @@ TEST_F(BadInputTest, RingScribbledWhileTheDaemonReadsGetsErrorsNotACrash) {
                    std::min<uint64_t>(1 + random() % sizeof(junk), range.second - at));
           continue;
         }
-        const uint64_t written = raw.writer().ring().write_index();
+        const uint64_t written_index = written.load();
         switch (random() % 8) {
           case 0:
           case 1:
           case 2:
           case 3:
             // Random bytes anywhere in the records, headers included.
-            PokeRing(ring, random() % written, junk, 1 + random() % sizeof(junk));
+            PokeRing(ring, random() % written_index, junk, 1 + random() % sizeof(junk));
             break;
           case 4: {
             // Plausible-looking headers with wrong sizes and sequences.
             const protocol::RecordHeader h{static_cast<uint32_t>(1 + random() % 4),
                                            static_cast<uint32_t>((random() % 512) * 8),
                                            random() % 6};
-            PokeRing(ring, (random() % (written / 8)) * 8, &h, sizeof(h));
+            PokeRing(ring, (random() % (written_index / 8)) * 8, &h, sizeof(h));
             break;
           }
           case 5:
             ring.write_index->store(random() % (2 * ring.capacity), std::memory_order_release);
             break;
           case 6:
-            ring.write_index->store(written, std::memory_order_release);
+            ring.write_index->store(written_index, std::memory_order_release);
             break;
           default:
             // The daemon-owned index and the reply ring's are fair game for a hostile client.

@@ -36,5 +36,39 @@ TEST(LcmBusTest, MemqDeliversWhatWasPublished) {
   EXPECT_EQ(got, sent);
 }
 
+// Found by the daemon_datagram fuzz target: an empty span's data() is null, and memq's
+// memcpy(dst, NULL, 0) is undefined behaviour (UBSan's nonnull-attribute check in the asan build).
+TEST(LcmBusTest, MemqDeliversAnEmptyMessage) {
+  auto bus = LcmBus::Create("memq://");
+  ASSERT_TRUE(bus.ok()) << ToString(bus.error());
+  int delivered = 0;
+  size_t size = 1;
+  (*bus)->Subscribe("FAR_TEST", [&](std::string_view, std::span<const uint8_t> bytes) {
+    ++delivered;
+    size = bytes.size();
+  });
+  ASSERT_TRUE((*bus)->Publish("FAR_TEST", std::span<const uint8_t>()).ok());
+  ASSERT_TRUE((*bus)->Handle(std::chrono::seconds(1)));
+  EXPECT_EQ(delivered, 1);
+  EXPECT_EQ(size, 0u);
+}
+
+// LCM 1.3.1's lcm_destroy never freed the mutex lcm_handle allocates (56 bytes per bus that
+// ever handled a message: one per client session); far's LCM patch frees it. Found by
+// LeakSanitizer in the daemon_datagram fuzz target; without the fix this test fails where leaks
+// are detected (the ci-asan build, docs/testing.md).
+TEST(LcmBusTest, ABusThatHandledMessagesLeavesNothingBehind) {
+  for (int i = 0; i < 3; ++i) {
+    auto bus = LcmBus::Create("memq://");
+    ASSERT_TRUE(bus.ok()) << ToString(bus.error());
+    int delivered = 0;
+    (*bus)->Subscribe("FAR_TEST", [&](std::string_view, std::span<const uint8_t>) { ++delivered; });
+    const uint8_t byte = 1;
+    ASSERT_TRUE((*bus)->Publish("FAR_TEST", std::span<const uint8_t>(&byte, 1)).ok());
+    ASSERT_TRUE((*bus)->Handle(std::chrono::seconds(1)));
+    EXPECT_EQ(delivered, 1);
+  }
+}
+
 }  // namespace
 }  // namespace far::protocol

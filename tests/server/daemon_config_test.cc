@@ -1,7 +1,10 @@
 #include "daemon_config.h"
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -30,7 +33,8 @@ TEST(DaemonConfigTest, ReadsKnownKeys) {
 TEST(DaemonConfigTest, RejectsUnknownKeysWrongTypesAndRanges) {
   const std::pair<const char*, const char*> cases[] = {
       {R"({"max_sesions": 3})", "max_sesions"},
-      {R"({"max_sessions": "three"})", "wrong type"},
+      {R"({"max_sessions": "three"})", "max_sessions"},
+      {R"({"log_level": 3})", "wrong type"},
       {R"({"max_resolution": 4})", "max_resolution"},
       {R"({"default_resolution": 512})", "default_resolution"},
       {R"({"ring_bytes": 100000})", "ring_bytes"},
@@ -46,6 +50,63 @@ TEST(DaemonConfigTest, RejectsUnknownKeysWrongTypesAndRanges) {
     EXPECT_NE(config.error().message.find(expected), std::string::npos) << config.error().message;
   }
   EXPECT_EQ(LoadDaemonConfig("/nonexistent/far.json").error().code, ErrorCode::kIoError);
+}
+
+TEST(DaemonConfigTest, ParsesTextInMemoryWithTheGivenName) {
+  auto config = ParseDaemonConfig(R"({"max_sessions": 5})", "inline.json");
+  ASSERT_TRUE(config.ok()) << ToString(config.error());
+  EXPECT_EQ(config->max_sessions, 5);
+  auto bad = ParseDaemonConfig("{", "inline.json");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().code, ErrorCode::kParseError);
+  EXPECT_EQ(bad.error().message.rfind("inline.json: ", 0), 0u) << bad.error().message;
+}
+
+// Found by the daemon_config fuzz target (the first case is its crash input verbatim): nlohmann's
+// get<T> casts any JSON number, so a double out of T's range was undefined behaviour (UBSan:
+// float-cast-overflow) and an integer out of range or a boolean was silently wrapped or taken.
+TEST(DaemonConfigTest, RejectsNumbersOutsideTheFieldsTypeInsteadOfCastingThem) {
+  const std::pair<const char*, const char*> cases[] = {
+      {R"({"ring_bytes":101073749223372036854775807180})", "ring_bytes"},
+      {R"({"max_resolution": 1e10})", "max_resolution"},
+      {R"({"max_resolution": 512.5})", "max_resolution"},
+      {R"({"reply_bytes": -65536})", "reply_bytes"},
+      {R"({"max_sessions": 4294967297})", "max_sessions"},
+      {R"({"max_sessions": true})", "max_sessions"},
+      {R"({"max_triangles_per_session": 9223372036854775808})", "max_triangles_per_session"},
+      {R"({"max_requests_per_second": "fast"})", "max_requests_per_second"},
+  };
+  for (const auto& [text, key] : cases) {
+    auto config = ParseDaemonConfig(text, "fuzz.json");
+    ASSERT_FALSE(config.ok()) << text;
+    EXPECT_EQ(config.error().code, ErrorCode::kInvalidArgument) << text;
+    EXPECT_NE(config.error().message.find(std::string("config '") + key + "'"), std::string::npos)
+        << config.error().message;
+  }
+  auto exact = ParseDaemonConfig(
+      R"({"max_triangles_per_session": 9223372036854775807, "max_requests_per_second": 1e300})",
+      "fuzz.json");
+  ASSERT_TRUE(exact.ok()) << ToString(exact.error());
+  EXPECT_EQ(exact->max_triangles_per_session, INT64_MAX);
+  EXPECT_EQ(exact->max_requests_per_second, 1e300);
+}
+
+// Budgets up to INT64_MAX are valid; the limits derived from them must stay in range (a ring
+// record never carries more than 2^30 elements).
+TEST(DaemonConfigTest, DerivedLimitsOfHugeBudgetsStayInRange) {
+  auto huge = ParseDaemonConfig(
+      R"({"max_triangles_per_session": 9223372036854775807, "max_vertices_per_session": 7868123033422542130})",
+      "fuzz.json");
+  ASSERT_TRUE(huge.ok()) << ToString(huge.error());
+  EXPECT_EQ(SceneLimitsOf(*huge).max_triangles, INT64_MAX);
+  EXPECT_EQ(SceneLimitsOf(*huge).max_vertices, 7868123033422542130);
+  EXPECT_EQ(RingLimitsOf(*huge).max_triangles, 1u << 30);
+  EXPECT_EQ(RingLimitsOf(*huge).max_vertices, 1u << 30);
+  DaemonConfig config;
+  config.max_triangles_per_session = 1000;
+  config.max_vertices_per_session = 3000;
+  EXPECT_EQ(RingLimitsOf(config).max_triangles, 1000u);
+  EXPECT_EQ(RingLimitsOf(config).max_vertices, 3000u);
 }
 
 }  // namespace

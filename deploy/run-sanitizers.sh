@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# CI's sanitizer and fuzzing stages (docs/testing.md says what runs and why), each in its own
+# clang build tree next to the release one:
+#   asan  build/ci-asan: ASan + UBSan. The unit tests of every layer that reads outside input
+#         (protocol, server, io, model), the integration tests that play hostile clients, and a
+#         smoke run of every libFuzzer target from its committed corpus.
+#   tsan  build/ci-tsan: ThreadSanitizer. The protocol and server unit tests and the integration
+#         tests of the daemon's threads (sessions opening and closing, dispatch, hostile
+#         clients writing shared memory while the daemon reads it).
+#   bash deploy/run-sanitizers.sh            # both
+#   bash deploy/run-sanitizers.sh asan       # one
+# Assumes deploy/install-deps.sh has run. Prints each stage's wall and CPU time.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+jobs=$(nproc)
+# The release tree's copy of LCM's tarball, when there is one: no second download.
+lcm_tarball=$(ls build/*/_deps/far_lcm/lcm_1.3.1+repack1.orig.tar.gz 2>/dev/null | head -n 1 || true)
+lcm_flag=()
+[ -n "$lcm_tarball" ] && lcm_flag=(-DFAR_LCM_TARBALL="$PWD/$lcm_tarball")
+
+# Sets `cpu` to the CPU seconds this shell's finished children used (bash's `times`, second
+# line). `times` must run in this shell, not in a $(...) subshell, whose children are its own.
+cpu_file=$(mktemp)
+trap 'rm -f "$cpu_file"' EXIT
+children_cpu() {
+  times >"$cpu_file"
+  cpu=$(awk 'NR == 2 {
+    for (i = 1; i <= 2; ++i) { split($i, t, /[ms]/); total += 60 * t[1] + t[2] }
+    printf "%d", total }' "$cpu_file")
+}
+
+# Runs a stage and says how long it took: wall time, and CPU time (meaningful when the machine
+# is shared: CPU seconds / cores is what the stage would take alone).
+timed() {
+  local name=$1
+  shift
+  local start=$SECONDS before
+  children_cpu
+  before=$cpu
+  "$@"
+  children_cpu
+  echo "run-sanitizers: stage $name took $((SECONDS - start)) s ($((cpu - before)) s CPU)" >&2
+}
+
+# Unit tests (the executables this tree built: the others show as <target>_NOT_BUILT).
+asan_unit_targets=(far_protocol_test far_server_test far_io_test far_model_test)
+# Integration tests that send the daemon what a hostile or careless client would.
+asan_integration='^(BadInputTest|LimitsTest|LcmForgedDatagramTest)\.'
+tsan_unit_targets=(far_protocol_test far_server_test)
+tsan_integration='^(SessionLifetimeTest|DispatchTest|BadInputTest|LimitsTest)\.'
+
+configure() {
+  cmake --preset "$1" "${lcm_flag[@]}" >/dev/null
+}
+
+asan() {
+  timed asan-configure configure ci-asan
+  local fuzzers
+  fuzzers=$(sed -n 's/^far_add_fuzzer(\([a-z_]*\) .*/far_fuzz_\1/p' tests/fuzz/CMakeLists.txt)
+  # shellcheck disable=SC2086
+  timed asan-build cmake --build build/ci-asan -j "$jobs" --target "${asan_unit_targets[@]}" \
+    far_integration_test $fuzzers
+  timed asan-unit ctest --preset ci-asan -j "$jobs" -L unit -E '_NOT_BUILT$|^InstallConsumerTest'
+  # Leak checks off for the daemons: Mesa's driver leaks a few hundred bytes per GL context and
+  # is unloaded at exit, so LeakSanitizer cannot even name it. Memory errors stay fatal.
+  timed asan-integration env ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --test-dir build/ci-asan --output-on-failure -j "$jobs" -L integration \
+    -R "$asan_integration"
+  timed asan-fuzz ctest --preset ci-asan -j "$jobs" -L fuzz
+}
+
+tsan() {
+  timed tsan-configure configure ci-tsan
+  timed tsan-build cmake --build build/ci-tsan -j "$jobs" --target "${tsan_unit_targets[@]}" \
+    far_integration_test
+  timed tsan-unit ctest --preset ci-tsan -j "$jobs" -L unit -E '_NOT_BUILT$|^InstallConsumerTest'
+  timed tsan-integration ctest --preset ci-tsan -j "$jobs" -L integration -R "$tsan_integration"
+}
+
+case "${1:-all}" in
+  asan) asan ;;
+  tsan) tsan ;;
+  all)
+    asan
+    tsan
+    ;;
+  *)
+    echo "usage: $0 [asan|tsan|all]" >&2
+    exit 2
+    ;;
+esac
