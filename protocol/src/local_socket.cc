@@ -7,7 +7,10 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <chrono>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 
@@ -51,6 +54,20 @@ std::string Octal(mode_t mode) {
   char text[8];
   std::snprintf(text, sizeof(text), "%04o", static_cast<unsigned>(mode & 07777));
   return text;
+}
+
+// poll() that goes on waiting when a signal interrupts it (EINTR), for what is left of
+// `timeout_ms` (>= 0): a signal meant for something else in the process (a timer, a child) is
+// not the peer going away.
+int PollRetrying(pollfd* fds, nfds_t count, int timeout_ms) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  for (;;) {
+    const int polled = poll(fds, count, timeout_ms);
+    if (polled >= 0 || errno != EINTR) return polled;
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    timeout_ms = static_cast<int>(std::max<int64_t>(left.count(), 0));
+  }
 }
 
 // A directory that group or others may write to (sticky or not) can hold anyone's socket.
@@ -126,7 +143,7 @@ Result<void> LocalConnection::Send(std::span<const uint8_t> bytes, int fd_to_pas
   }
   // A peer that does not read must not stall the sender: wait briefly, then give up.
   pollfd ready{fd_, POLLOUT, 0};
-  if (poll(&ready, 1, 1000) <= 0 || (ready.revents & POLLOUT) == 0) {
+  if (PollRetrying(&ready, 1, 1000) <= 0 || (ready.revents & POLLOUT) == 0) {
     if (ready.revents & (POLLHUP | POLLERR)) {
       return MakeError(ErrorCode::kUnavailable, "the peer closed the connection");
     }
@@ -148,7 +165,7 @@ Result<void> LocalConnection::Send(std::span<const uint8_t> bytes, int fd_to_pas
 Result<LocalMessage> LocalConnection::Receive(size_t max_bytes, std::chrono::milliseconds timeout,
                                               bool accept_fd) {
   pollfd ready{fd_, POLLIN, 0};
-  const int polled = poll(&ready, 1, static_cast<int>(timeout.count()));
+  const int polled = PollRetrying(&ready, 1, static_cast<int>(timeout.count()));
   if (polled == 0) return MakeError(ErrorCode::kTimeout, "no message within the timeout");
   if (polled < 0) return MakeError(ErrorCode::kUnavailable, "poll failed: " + ErrnoText(errno));
   LocalMessage received;
@@ -183,7 +200,7 @@ Result<LocalMessage> LocalConnection::Receive(size_t max_bytes, std::chrono::mil
 
 bool LocalConnection::PeerClosed() const {
   pollfd ready{fd_, POLLRDHUP, 0};
-  return poll(&ready, 1, 0) > 0 && (ready.revents & (POLLRDHUP | POLLHUP | POLLERR)) != 0;
+  return PollRetrying(&ready, 1, 0) > 0 && (ready.revents & (POLLRDHUP | POLLHUP | POLLERR)) != 0;
 }
 
 Result<std::unique_ptr<LocalListener>> LocalListener::Listen(const std::string& path) {

@@ -23,6 +23,7 @@
 // session; a queued step is a validated request within max_resolution, and a session's queue
 // never holds more than max_queued_per_session steps.
 
+#include <cerrno>
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -161,14 +162,19 @@ struct DaemonUnderTest {
     });
   }
 
-  // Publishes one datagram and handles messages until the bus is quiet.
+  // Publishes one datagram and handles messages until the bus is quiet. libFuzzer's -timeout
+  // alarm (SIGALRM) may interrupt LCM's select (EINTR, Handle false): that wait is tried again.
   void Deliver(const std::string& channel, std::span<const uint8_t> payload) {
     if (!bus->Publish(channel, payload)) return;
-    uint64_t before = 0;
-    do {
-      before = dispatched;
-      FAR_FUZZ_CHECK(bus->Handle(std::chrono::milliseconds(0)));
-    } while (dispatched != before);
+    for (;;) {
+      const uint64_t before = dispatched;
+      errno = 0;
+      if (!bus->Handle(std::chrono::milliseconds(0))) {
+        FAR_FUZZ_CHECK(errno == EINTR);
+        continue;
+      }
+      if (dispatched == before) return;
+    }
   }
 
   std::shared_ptr<server::Session> SessionOf(const std::string& channel) const {

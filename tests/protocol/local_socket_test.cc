@@ -3,6 +3,8 @@
 #include "far/protocol/local_socket.h"
 
 #include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
 #include <sys/mman.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -13,6 +15,8 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -169,6 +173,36 @@ TEST(LocalSocketTest, NoDaemonIsNotFound) {
   auto too_long = LocalConnection::Connect("/" + std::string(200, 'a'));
   ASSERT_FALSE(too_long);
   EXPECT_EQ(too_long.error().code, ErrorCode::kInvalidArgument);
+}
+
+// A signal that interrupts a wait (poll's EINTR) is not the peer going away: the wait goes on.
+// Found while fuzzing: libFuzzer's timeout alarm interrupted the waits of the socket_handshake
+// and open_reply targets, and Receive said "poll failed" (kUnavailable), as if the peer had
+// closed the connection; a daemon dropped a client in its handshake that way, and a client with
+// timers of its own could fail to open its session.
+TEST(LocalSocketTest, ASignalDuringAWaitDoesNotEndIt) {
+  struct sigaction ignore {};
+  ignore.sa_handler = [](int) {};  // no SA_RESTART (poll is never restarted anyway)
+  struct sigaction old {};
+  ASSERT_EQ(sigaction(SIGUSR1, &ignore, &old), 0);
+  const std::string dir = TempDirectory();
+  Pair pair = Connect(dir + "/far.sock");
+  ASSERT_TRUE(pair.client && pair.server);
+  const pthread_t waiter = pthread_self();
+  std::thread interrupter([&] {
+    for (int i = 0; i < 20; ++i) {
+      pthread_kill(waiter, SIGUSR1);
+      usleep(5000);
+    }
+    const std::vector<uint8_t> late = {7};
+    EXPECT_TRUE(pair.server->Send(late));
+  });
+  auto received = pair.client->Receive(16, std::chrono::seconds(10));
+  interrupter.join();
+  sigaction(SIGUSR1, &old, nullptr);
+  ASSERT_TRUE(received) << received.error().message;
+  EXPECT_EQ(received->bytes, std::vector<uint8_t>{7});
+  fs::remove_all(dir);
 }
 
 }  // namespace
