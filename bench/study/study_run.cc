@@ -82,18 +82,6 @@ bool RunsDistance(const StudyScene& scene, const RunOptions& options) {
          (scene.family == Family::kScaling && options.distance_on_scaling);
 }
 
-// Copies of a frame's updates, in the order Pipeline::Apply expects them.
-std::vector<far::SceneUpdate> ToUpdates(const far::FrameUpdate& frame) {
-  std::vector<far::SceneUpdate> updates;
-  for (uint32_t id : frame.removals) updates.push_back(far::RemoveObject{id});
-  for (const auto& object : frame.additions) {
-    updates.push_back(far::AddObject{object.id, object.mesh, object.motion, object.X_WO});
-  }
-  for (const auto& [id, pose] : frame.poses) updates.push_back(far::SetPose{id, pose});
-  for (const auto& [id, mesh] : frame.vertices) updates.push_back(far::SetVertices{id, mesh.p_MV});
-  return updates;
-}
-
 template <typename T>
 int64_t CountMissing(const std::vector<T>& expected, const std::vector<T>& found) {
   std::vector<T> missing;
@@ -592,6 +580,17 @@ const Row* Find(const SceneReport& report, const std::string& config, far::Outpu
     if (row.config == config && row.spec.output == output) return &row;
   }
   return nullptr;
+}
+
+std::vector<far::SceneUpdate> ToUpdates(const far::FrameUpdate& frame) {
+  std::vector<far::SceneUpdate> updates;
+  for (uint32_t id : frame.removals) updates.push_back(far::RemoveObject{id});
+  for (const auto& object : frame.additions) {
+    updates.push_back(far::AddObject{object.id, object.mesh, object.motion, object.X_WO});
+  }
+  for (const auto& [id, pose] : frame.poses) updates.push_back(far::SetPose{id, pose});
+  for (const auto& [id, mesh] : frame.vertices) updates.push_back(far::SetVertices{id, mesh.p_MV});
+  return updates;
 }
 
 }  // namespace far_study

@@ -16,6 +16,7 @@
 #include "study_scenes.h"
 
 #include "far/model/result.h"
+#include "far/model/scene_update.h"
 #include "far/model/step_request.h"
 
 namespace far_study {
@@ -138,5 +139,8 @@ far::Result<SceneReport> RunScene(const StudyScene& scene, const RunOptions& opt
 /// The row of a configuration ("far/id-buffer/1024") and output; nullptr when not run.
 const Row* Find(const SceneReport& report, const std::string& config,
                 far::Output output = far::Output::kContacts);
+
+/// Copies of a frame's updates, in the order Pipeline::Apply expects them.
+std::vector<far::SceneUpdate> ToUpdates(const far::FrameUpdate& frame);
 
 }  // namespace far_study

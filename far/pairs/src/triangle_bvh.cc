@@ -65,8 +65,13 @@ struct TriangleBvh::Builder {
   double area_sum = 0;
 
   // Splits [begin, end) at the best SAH bin boundary along the centroids' longest axis; returns
-  // the split index, or `end` when a leaf is cheaper (only allowed for small ranges).
-  uint32_t Split(uint32_t begin, uint32_t end, const Box& box) {
+  // the split index, or `end` for a leaf.
+  uint32_t Split(uint32_t begin, uint32_t end) {
+    // Every range of at most kLeafSize triangles is a leaf, even where the SAH would split it
+    // further: a simultaneous descent pays per node pair visited, and testing a few more
+    // triangle boxes at a leaf costs less (far_step_profile on the paper scenes: 1.25x-1.9x
+    // faster steps than single-triangle leaves; leaves of 8 were no faster).
+    if (end - begin <= kLeafSize) return end;
     Box centroid_box;
     for (uint32_t i = begin; i < end; ++i) centroid_box.Extend(centroids[order[i]]);
     int axis = 0;
@@ -76,7 +81,7 @@ struct TriangleBvh::Builder {
     }
     const double lo = centroid_box.lo[axis], extent = centroid_box.hi[axis] - lo;
     const uint32_t n = end - begin;
-    if (!(extent > 0)) return n <= kLeafSize ? end : begin + n / 2;  // all centroids equal
+    if (!(extent > 0)) return begin + n / 2;  // all centroids equal
     auto bin_of = [&](uint32_t t) {
       return std::min(kBins - 1, static_cast<int>(kBins * (centroids[t][axis] - lo) / extent));
     };
@@ -109,7 +114,6 @@ struct TriangleBvh::Builder {
         best = k;
       }
     }
-    if (n <= kLeafSize && !(best_cost < box.Area() * n)) return end;
     if (best < 0) return begin + n / 2;
     const auto middle = std::partition(order.begin() + begin, order.begin() + end,
                                        [&](uint32_t t) { return bin_of(t) < best; });
@@ -121,7 +125,7 @@ struct TriangleBvh::Builder {
     for (uint32_t i = begin; i < end; ++i) box.Extend(boxes[order[i]]);
     SetNodeBox(nodes[node], box);
     area_sum += box.Area();
-    const uint32_t split = Split(begin, end, box);
+    const uint32_t split = Split(begin, end);
     if (split == end || split == begin) {
       nodes[node].first = begin;
       nodes[node].count = end - begin;

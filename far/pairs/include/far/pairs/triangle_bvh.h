@@ -11,7 +11,8 @@
 namespace far {
 
 /// A bounding volume hierarchy of one mesh's triangles in the mesh's own frame M: axis-aligned
-/// boxes, built by binned surface-area heuristic, at most kLeafSize triangles per leaf. A rigid
+/// boxes, built by binned surface-area heuristic down to leaves of at most kLeafSize triangles
+/// (every range that small is a leaf: fewer node pairs for a descent to visit). A rigid
 /// or static object builds it once; a deformable one refits it when its vertices move (and
 /// rebuilds it when refitting has made it much looser). Boxes hold the vertex coordinates
 /// themselves (min/max in double, exact), so every triangle lies in the closed box of each of
