@@ -326,4 +326,8 @@ bool TrianglesIntersect(const TrianglePoints& s, const TrianglePoints& t) {
   return IntersectAfterBoxTest(s, t);
 }
 
+bool TrianglesIntersectWithinBoxes(const TrianglePoints& s, const TrianglePoints& t) {
+  return IntersectAfterBoxTest(s, t);
+}
+
 }  // namespace far

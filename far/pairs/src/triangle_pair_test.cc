@@ -13,7 +13,8 @@ void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
   bool intersects = false;
   const size_t before = out.contacts.size() + out.distance_pairs.size();
   if (wanted.contacts && (wanted.slack == 0 || BoxesWithin(a, b, 0))) {
-    intersects = TrianglesIntersect(s, t);
+    // The caller's prefilter found the boxes within the slack; here they also touch.
+    intersects = TrianglesIntersectWithinBoxes(s, t);
     if (intersects) out.contacts.push_back(pair);
   }
   if (wanted.distance) {

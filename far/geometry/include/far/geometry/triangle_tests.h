@@ -16,6 +16,10 @@ struct TrianglePoints {
 /// answered exactly. @pre all coordinates finite. Thread-safe (pure function).
 bool TrianglesIntersect(const TrianglePoints& s, const TrianglePoints& t);
 
+/// TrianglesIntersect for a caller that has already found the two triangles' closed bounding
+/// boxes to share a point (it skips that first check). The same answer for such a pair.
+bool TrianglesIntersectWithinBoxes(const TrianglePoints& s, const TrianglePoints& t);
+
 /// Returns the Euclidean distance between the closed triangles `s` and `t` (0 if they
 /// intersect), computed in double. Stable for near-parallel and degenerate triangles.
 /// @pre all coordinates finite. Thread-safe.
