@@ -1,7 +1,8 @@
 // A session whose step runs longer than heavy_step_ms gives way to light sessions while that
 // step still runs, even when the step never finishes (it is stopped at its deadline): its
-// threads drop to nice 10, and a light client is served meanwhile.
+// threads drop to nice 10 under SCHED_IDLE, and a light client is served meanwhile.
 #include <dirent.h>
+#include <sched.h>
 
 #include <algorithm>
 #include <fstream>
@@ -20,8 +21,9 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// How many threads of process `pid` run at nice value `nice` (/proc/<pid>/task/*/stat).
-int ThreadsAtNice(pid_t pid, int nice) {
+// How many threads of process `pid` run at nice 10 under SCHED_IDLE, the background of a heavy
+// session (/proc/<pid>/task/*/stat: after "(comm)", nice is field 19 and policy field 41).
+int ThreadsInBackground(pid_t pid) {
   const std::string tasks = "/proc/" + std::to_string(pid) + "/task";
   DIR* dir = opendir(tasks.c_str());
   if (dir == nullptr) return -1;
@@ -30,12 +32,13 @@ int ThreadsAtNice(pid_t pid, int nice) {
     if (entry->d_name[0] == '.') continue;
     std::ifstream stat(tasks + "/" + entry->d_name + "/stat");
     std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
-    // After "(comm)": state is field 3; nice is field 19.
     std::istringstream fields(text.substr(text.rfind(')') + 2));
-    std::string field;
-    for (int i = 3; i <= 19 && fields >> field; ++i) {
+    std::string field, nice, policy;
+    for (int i = 3; i <= 41 && fields >> field; ++i) {
+      if (i == 19) nice = field;
+      if (i == 41) policy = field;
     }
-    if (!field.empty() && std::stoi(field) == nice) ++count;
+    if (nice == "10" && policy == std::to_string(SCHED_IDLE)) ++count;
   }
   closedir(dir);
   return count;
@@ -46,7 +49,7 @@ using CpuPriorityTest = DaemonTest;
 TEST_F(CpuPriorityTest, AStepThatRunsLongIsLoweredWhileItRunsThoughItEndsAtItsDeadline) {
   DaemonProcess* daemon = StartDaemon({"--step-deadline-ms", "500"});
   ASSERT_NE(daemon, nullptr);
-  ASSERT_EQ(ThreadsAtNice(daemon->pid(), 10), 0);
+  ASSERT_EQ(ThreadsInBackground(daemon->pid()), 0);
   auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "heavy");
   ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
   // Two coplanar grids of 28,800 triangles: the brute force tests 8e8 pairs, more than a second
@@ -58,15 +61,15 @@ TEST_F(CpuPriorityTest, AStepThatRunsLongIsLoweredWhileItRunsThoughItEndsAtItsDe
       [](const ReplyMessage& m) { return m.status && m.status->stage == "exact"; }, 20s);
   ASSERT_TRUE(exact.has_value()) << "the step never reached its exact stage";
   // Within moments of passing heavy_step_ms (50), with the step still running: the session is
-  // demoted, and its threads (the worker and the pool's) run at nice 10.
+  // demoted, and its threads (the worker and the pool's) run at nice 10 under SCHED_IDLE.
   const std::string tag = "event=session_demoted session=" + std::to_string((*raw)->id());
   EXPECT_TRUE(WaitUntil([&] { return daemon->Log().find(tag) != std::string::npos; }, 2s))
       << "no demotion while the step runs";
   EXPECT_NE(daemon->Log().find("step=running"), std::string::npos);
   // (each thread lowers itself at its next check, a few milliseconds apart)
   const int threads = static_cast<int>(std::min(2u, std::thread::hardware_concurrency()));
-  EXPECT_TRUE(WaitUntil([&] { return ThreadsAtNice(daemon->pid(), 10) >= threads; }, 1s))
-      << ThreadsAtNice(daemon->pid(), 10) << " threads at nice 10";
+  EXPECT_TRUE(WaitUntil([&] { return ThreadsInBackground(daemon->pid()) >= threads; }, 1s))
+      << ThreadsInBackground(daemon->pid()) << " threads at nice 10 under SCHED_IDLE";
   // A light client is served meanwhile.
   EXPECT_TRUE(HealthyClientSteps("light"));
   auto reply = (*raw)->WaitStepReply(0, 10s);

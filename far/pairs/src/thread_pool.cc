@@ -1,5 +1,6 @@
 #include "far/pairs/thread_pool.h"
 
+#include <sched.h>
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -10,7 +11,10 @@ ThreadPool::ThreadPool(int num_threads) {
   if (num_threads <= 0)
     num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   // The calling thread works too, so start one worker fewer than asked.
-  for (int i = 1; i < num_threads; ++i) workers_.emplace_back([this] { WorkerLoop(); });
+  taking_part_ = static_cast<size_t>(num_threads - 1);
+  for (int i = 1; i < num_threads; ++i) {
+    workers_.emplace_back([this, i] { WorkerLoop(static_cast<size_t>(i - 1)); });
+  }
 }
 
 ThreadPool::~ThreadPool() {
@@ -27,7 +31,8 @@ void ThreadPool::ParallelFor(size_t count, size_t grain,
   if (count == 0) return;
   grain = std::max<size_t>(grain, 1);
   // Small loops are not worth waking anyone.
-  if (workers_.empty() || count <= grain) {
+  const size_t helpers = std::min(workers_.size(), taking_part_.load());
+  if (helpers == 0 || count <= grain) {
     body(0, count);
     return;
   }
@@ -37,7 +42,8 @@ void ThreadPool::ParallelFor(size_t count, size_t grain,
     count_ = count;
     grain_ = grain;
     next_ = 0;
-    active_ = workers_.size() + 1;
+    active_ = helpers + 1;
+    helpers_ = helpers;
     ++generation_;
   }
   wake_.notify_all();
@@ -63,25 +69,31 @@ void ThreadPool::RunChunks() {
   if (--active_ == 0) done_.notify_all();
 }
 
-void ThreadPool::WorkerLoop() {
+void ThreadPool::WorkerLoop(size_t index) {
   uint64_t seen = 0;
-  int applied_nice = 0;
+  bool lowered = false;
   for (;;) {
     {
       std::unique_lock lock(mutex_);
       wake_.wait(lock, [&] { return stopping_ || generation_ != seen; });
       if (stopping_) return;
       seen = generation_;
+      if (index >= helpers_) continue;  // not taking part in this loop
     }
-    // On Linux, PRIO_PROCESS with who = 0 sets the calling thread's nice value only.
-    if (const int nice = nice_.load(); nice != applied_nice) {
-      setpriority(PRIO_PROCESS, 0, nice);
-      applied_nice = nice;
+    if (background_.load() && !lowered) {
+      // On Linux, who = 0 and pid 0 name the calling thread only.
+      setpriority(PRIO_PROCESS, 0, 10);
+      sched_param param{};
+      sched_setscheduler(0, SCHED_IDLE, &param);
+      lowered = true;
     }
     RunChunks();
   }
 }
 
-void ThreadPool::SetNice(int nice) { nice_ = nice; }
+void ThreadPool::SetBackground(int max_threads) {
+  taking_part_ = static_cast<size_t>(std::max(1, max_threads) - 1);
+  background_ = true;
+}
 
 }  // namespace far

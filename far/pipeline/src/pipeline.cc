@@ -525,7 +525,7 @@ Result<StepResult> Pipeline::Step(const StepRequest& request, const StepControl&
 }
 int Pipeline::num_objects() const { return impl_->cache.size(); }
 int64_t Pipeline::num_triangles() const { return impl_->model.num_triangles(); }
-void Pipeline::SetCpuNice(int nice) { impl_->pool.SetNice(nice); }
+void Pipeline::SetCpuBackground(int max_threads) { impl_->pool.SetBackground(max_threads); }
 const SceneCounters& Pipeline::counters() const { return impl_->cache.counters(); }
 std::string Pipeline::gl_renderer() const { return impl_->renderer_name; }
 

@@ -27,13 +27,16 @@ class ThreadPool {
   /// workers and the calling thread; returns when all chunks are done. `body` must not throw.
   void ParallelFor(size_t count, size_t grain, const std::function<void(size_t, size_t)>& body);
 
-  /// Runs the workers at this nice value (Linux; from their next loop on). A daemon lowers the
-  /// priority of a session whose steps are heavy, so that light sessions stay responsive.
-  /// An unprivileged process can raise a nice value but not lower it again.
-  void SetNice(int nice);
+  /// Makes the pool background work from its next loop on: each ParallelFor runs on at most
+  /// `max_threads` threads (the calling thread and max_threads - 1 workers; at least 1), and
+  /// the workers that take part run at nice 10 under SCHED_IDLE (Linux): they get a core only
+  /// when no normal thread wants it, and give it up at once when one wakes. A daemon does this
+  /// to a session whose steps are heavy, so that light sessions keep their latency (what nice
+  /// alone did not do: bench/RESULTS.md). One way: an unprivileged process cannot undo it.
+  void SetBackground(int max_threads);
 
  private:
-  void WorkerLoop();
+  void WorkerLoop(size_t index);
   void RunChunks();
 
   std::vector<std::thread> workers_;
@@ -42,9 +45,12 @@ class ThreadPool {
   std::condition_variable done_;
   const std::function<void(size_t, size_t)>* body_ = nullptr;
   size_t count_ = 0, grain_ = 1, next_ = 0, active_ = 0;
+  size_t helpers_ = 0;  // workers that take part in the current loop (index < helpers_)
   uint64_t generation_ = 0;
   bool stopping_ = false;
-  std::atomic<int> nice_{0};
+  // Workers with an index below this take part in a loop; and whether they lower themselves.
+  std::atomic<size_t> taking_part_;
+  std::atomic<bool> background_{false};
 };
 
 }  // namespace far

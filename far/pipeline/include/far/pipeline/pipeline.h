@@ -83,8 +83,9 @@ class Pipeline {
   /// kInternal.
   Result<StepResult> Step(const StepRequest& request, const StepControl& control = {});
 
-  /// Runs the pipeline's CPU pool at this nice value (see ThreadPool::SetNice).
-  void SetCpuNice(int nice);
+  /// Makes the pipeline's CPU pool background work on at most `max_threads` threads (see
+  /// ThreadPool::SetBackground; one way).
+  void SetCpuBackground(int max_threads);
 
   int num_objects() const;
   int64_t num_triangles() const;
