@@ -48,7 +48,18 @@ struct Settings {
   double heavy_distance = 2;
   std::string daemon = FAR_DAEMON_PATH;
   std::vector<std::string> daemon_args;  // added to every far-daemon's command line
+  // The healthy client's steps per second in (a) and (b) (0: back to back, as fast as it can).
+  double healthy_rate = 0;
 };
+
+// How the healthy client steps, for the tables' captions.
+std::string HealthyPace(const Settings& settings) {
+  if (settings.healthy_rate <= 0) return "steps back to back";
+  char text[96];
+  std::snprintf(text, sizeof(text), "one step every %.2f ms (%.0f steps/s, a simulator's clock)",
+                1000 / settings.healthy_rate, settings.healthy_rate);
+  return text;
+}
 
 std::unique_ptr<StudyDaemon> StartDaemon(const Settings& settings,
                                          const std::vector<std::string>& args = {}) {
@@ -181,14 +192,15 @@ void StudyHeavyClient(const Settings& settings, const Scene& scene) {
   std::printf("## (a) A healthy client beside the heaviest legal client\n\n");
   std::printf(
       "Healthy: 8 rigid clusters of 128 triangles (1,024), all moved every step, method bvh, "
-      "contacts, steps back to back. Heavy: ScalingScene of %lld triangles, %lld vertices "
+      "contacts, %s. Heavy: ScalingScene of %lld triangles, %lld vertices "
       "(uploaded in %.2f s), method %s, contacts, search distance %g (every triangle within "
       "that distance of a partner object's box is a candidate: more work, the same contacts), "
       "steps back to back; each runs until the step deadline (far-daemon --step-deadline-ms "
       "%d, one phase). Phases of %.0f s alternate, unloaded first; a loaded phase's last heavy "
       "step ends before the next phase starts.\n\n",
-      static_cast<long long>(TriangleCount(scene)), static_cast<long long>(VertexCount(scene)),
-      upload_s, settings.heavy_method.c_str(), settings.heavy_distance, phase_ms, settings.seconds);
+      HealthyPace(settings).c_str(), static_cast<long long>(TriangleCount(scene)),
+      static_cast<long long>(VertexCount(scene)), upload_s, settings.heavy_method.c_str(),
+      settings.heavy_distance, phase_ms, settings.seconds);
   std::printf(
       "| phase | round | steps | steps/s | p50 ms | p99 ms | max ms | errors | p99 / unloaded "
       "p99 | heavy client's steps |\n");
@@ -200,13 +212,13 @@ void StudyHeavyClient(const Settings& settings, const Scene& scene) {
   LatencySample unloaded, loaded;
   std::vector<double> ratios;
   for (int round = 1; round <= settings.rounds; ++round) {
-    const LatencySample quiet = (*healthy)->StepFor(settings.seconds);
+    const LatencySample quiet = (*healthy)->StepFor(settings.seconds, settings.healthy_rate);
     PrintLatencyRow("unloaded", round, quiet, "- | -");
     unloaded.Merge(quiet);
     std::atomic<bool> phase_over{false};
     auto heavy_steps = std::async(std::launch::async,
                                   [&] { return HeavySteps(**heavy, heavy_request, phase_over); });
-    const LatencySample busy = (*healthy)->StepFor(settings.seconds);
+    const LatencySample busy = (*healthy)->StepFor(settings.seconds, settings.healthy_rate);
     phase_over = true;
     ratios.push_back(Q(busy.ms, 0.99) / std::max(1e-9, Q(quiet.ms, 0.99)));
     char ratio[32];
@@ -243,7 +255,7 @@ FloodRound FloodPhase(StudyDaemon& daemon, HealthyClient& healthy,
   auto flood = GarbageFlood::Start(status.lcm_url, status.channel_prefix, healthy.session_id(),
                                    settings.flood_rate);
   if (!flood) Die("flood", flood.error());
-  round.busy = healthy.StepFor(settings.seconds);
+  round.busy = healthy.StepFor(settings.seconds, settings.healthy_rate);
   round.sent = (*flood)->Stop();
   round.daemon_cpu = (daemon.CpuSeconds() - cpu_before) / round.busy.seconds;
   std::this_thread::sleep_for(500ms);  // the daemon drains what is still queued
@@ -262,13 +274,14 @@ void StudyGarbageFlood(const Settings& settings) {
   if (!healthy) Die("healthy client", healthy.error());
   std::printf("## (b) A healthy client during a garbage flood\n\n");
   std::printf(
-      "Healthy client as in (a) (2 s step timeout). Flood: one thread of this process, its own "
+      "Healthy client as in (a), %s (2 s step timeout). Flood: one thread of this process, its own "
       "LCM instance on %s, target %.0f messages/s, a third each: random bytes (8-507) on the "
       "healthy session's request channel, random bytes on session channels 1-100, step_request_t "
       "for the healthy session signed with a wrong key. Phases of %.0f s alternate. Every "
       "process on the multicast group receives every datagram: the healthy client's own LCM "
       "thread reads the flood too. Daemon CPU: all its threads, in cores.\n\n",
-      status->lcm_url.c_str(), settings.flood_rate, settings.seconds);
+      HealthyPace(settings).c_str(), status->lcm_url.c_str(), settings.flood_rate,
+      settings.seconds);
   std::printf(
       "| phase | round | steps | steps/s | p50 ms | p99 ms | max ms | errors | daemon CPU | flood "
       "sent/s | flood thread CPU | rejected by the daemon | daemon log growth | steps/s / "
@@ -281,7 +294,7 @@ void StudyGarbageFlood(const Settings& settings) {
   std::vector<double> shares;
   for (int round = 1; round <= settings.rounds; ++round) {
     const double cpu_before = daemon->CpuSeconds();
-    const LatencySample quiet = (*healthy)->StepFor(settings.seconds);
+    const LatencySample quiet = (*healthy)->StepFor(settings.seconds, settings.healthy_rate);
     char cpu[160];
     std::snprintf(cpu, sizeof(cpu), "%.0f%% | - | - | - | - | -",
                   100 * (daemon->CpuSeconds() - cpu_before) / quiet.seconds);
@@ -316,6 +329,10 @@ void StudyGarbageFlood(const Settings& settings) {
       100 * flooded.StepsPerSecond() / std::max(1e-9, unloaded.StepsPerSecond()),
       daemon->Running() ? "yes" : "NO", flooded.errors, flooded.errors ? " (the first: " : "",
       flooded.errors ? (flooded.first_error + ")").c_str() : "");
+  if (unloaded.errors > 0) {
+    std::printf("Healthy steps that failed in the unloaded phases: %d (the first: %s).\n\n",
+                unloaded.errors, unloaded.first_error.c_str());
+  }
 }
 
 void PrintOpenRow(const char* who, const OpenReport& r) {
@@ -433,6 +450,10 @@ int main(int argc, char** argv) {
   app.add_option("--heavy-distance", settings.heavy_distance,
                  "> 0: the heavy client's steps look for contacts among all triangles this close "
                  "to a partner object (a wider search: more work)")
+      ->capture_default_str();
+  app.add_option("--healthy-rate", settings.healthy_rate,
+                 "the healthy client's steps per second in (a) and (b), as a simulator's fixed "
+                 "rate (0: back to back)")
       ->capture_default_str();
   app.add_option("--daemon", settings.daemon, "far-daemon to start")->capture_default_str();
   app.add_option("--daemon-arg", settings.daemon_args,

@@ -1,7 +1,9 @@
 #include "healthy_client.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <thread>
 
 #include "far/scenes/scenes.h"
 
@@ -46,11 +48,19 @@ bool HealthyClient::MoveObjects() {
   return true;
 }
 
-LatencySample HealthyClient::StepFor(double seconds) {
+LatencySample HealthyClient::StepFor(double seconds, double steps_per_second) {
   LatencySample sample;
   const auto start = Clock::now();
   const auto end = start + std::chrono::duration<double>(seconds);
+  auto next = start;
   while (Clock::now() < end) {
+    if (steps_per_second > 0) {
+      std::this_thread::sleep_until(next);
+      const auto period = std::chrono::duration_cast<Clock::duration>(
+          std::chrono::duration<double>(1 / steps_per_second));
+      next = std::max(next + period, Clock::now());
+      if (Clock::now() >= end) break;
+    }
     ++step_;
     const auto t0 = Clock::now();
     Result<StepResult> result =

@@ -1,8 +1,8 @@
 #pragma once
 
 // The well-behaved client of the hardening study: a ~1K-triangle scene (8 rigid clusters of
-// 128 triangles) whose objects move every step, stepped back to back (method bvh, contacts),
-// with each step's round trip recorded.
+// 128 triangles) whose objects move every step, stepped back to back or at a simulator's fixed
+// rate (method bvh, contacts), with each step's round trip recorded.
 
 #include <cstdint>
 #include <memory>
@@ -35,8 +35,10 @@ class HealthyClient {
   static Result<std::unique_ptr<HealthyClient>> Open(const StudyDaemon& daemon,
                                                      const std::string& name,
                                                      std::chrono::milliseconds timeout);
-  /// Steps back to back for `seconds`.
-  LatencySample StepFor(double seconds);
+  /// Steps for `seconds`: back to back when steps_per_second is 0, else one step every
+  /// 1 / steps_per_second seconds as a simulator's clock would (a late step starts at once,
+  /// and the clock does not try to catch up).
+  LatencySample StepFor(double seconds, double steps_per_second = 0);
   int64_t session_id() const { return client_->session_id(); }
 
  private:
