@@ -19,29 +19,9 @@ lcm_tarball=$(ls build/*/_deps/far_lcm/lcm_1.3.1+repack1.orig.tar.gz 2>/dev/null
 lcm_flag=()
 [ -n "$lcm_tarball" ] && lcm_flag=(-DFAR_LCM_TARBALL="$PWD/$lcm_tarball")
 
-# Sets `cpu` to the CPU seconds this shell's finished children used (bash's `times`, second
-# line). `times` must run in this shell, not in a $(...) subshell, whose children are its own.
-cpu_file=$(mktemp)
-trap 'rm -f "$cpu_file"' EXIT
-children_cpu() {
-  times >"$cpu_file"
-  cpu=$(awk 'NR == 2 {
-    for (i = 1; i <= 2; ++i) { split($i, t, /[ms]/); total += 60 * t[1] + t[2] }
-    printf "%d", total }' "$cpu_file")
-}
-
-# Runs a stage and says how long it took: wall time, and CPU time (meaningful when the machine
-# is shared: CPU seconds / cores is what the stage would take alone).
-timed() {
-  local name=$1
-  shift
-  local start=$SECONDS before
-  children_cpu
-  before=$cpu
-  "$@"
-  children_cpu
-  echo "run-sanitizers: stage $name took $((SECONDS - start)) s ($((cpu - before)) s CPU)" >&2
-}
+stage_timer_name=run-sanitizers
+# shellcheck source=deploy/stage-timer.sh
+source deploy/stage-timer.sh
 
 # Unit tests (the executables this tree built: the others show as <target>_NOT_BUILT).
 asan_unit_targets=(far_protocol_test far_server_test far_io_test far_model_test)

@@ -8,29 +8,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# Sets `cpu` to the CPU seconds this shell's finished children used (bash's `times`, second
-# line). `times` must run in this shell, not in a $(...) subshell, whose children are its own.
-cpu_file=$(mktemp)
-trap 'rm -f "$cpu_file"' EXIT
-children_cpu() {
-  times >"$cpu_file"
-  cpu=$(awk 'NR == 2 {
-    for (i = 1; i <= 2; ++i) { split($i, t, /[ms]/); total += 60 * t[1] + t[2] }
-    printf "%d", total }' "$cpu_file")
-}
-
-# Runs a stage and says how long it took: wall time, and CPU time (meaningful when the machine
-# is shared: CPU seconds / cores is what the stage would take alone).
-timed() {
-  local name=$1
-  shift
-  local start=$SECONDS before
-  children_cpu
-  before=$cpu
-  "$@"
-  children_cpu
-  echo "run-tests: stage $name took $((SECONDS - start)) s ($((cpu - before)) s CPU)" >&2
-}
+stage_timer_name=run-tests
+# shellcheck source=deploy/stage-timer.sh
+source deploy/stage-timer.sh
 
 timed install-deps bash deploy/install-deps.sh
 
