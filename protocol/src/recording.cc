@@ -5,6 +5,8 @@
 #include <cstring>
 #include <map>
 
+#include "pose_doubles.h"
+
 #include "far/protocol/convert.h"
 
 namespace far::protocol {
@@ -23,23 +25,6 @@ far_lcm::ring_record_t BaseRecord(uint64_t sequence, int64_t step_id, RecordType
   record.num_coordinates = 0;
   record.num_indices = 0;
   return record;
-}
-
-void StorePose(const Pose& X_WO, double out[kPoseDoubles]) {
-  out[0] = X_WO.translation.x();
-  out[1] = X_WO.translation.y();
-  out[2] = X_WO.translation.z();
-  out[3] = X_WO.rotation.w();
-  out[4] = X_WO.rotation.x();
-  out[5] = X_WO.rotation.y();
-  out[6] = X_WO.rotation.z();
-}
-
-Pose LoadPose(const double v[kPoseDoubles]) {
-  Pose pose;
-  pose.translation = Eigen::Vector3d(v[0], v[1], v[2]);
-  pose.rotation = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);  // bits as recorded
-  return pose;
 }
 
 void StorePositions(std::span<const Eigen::Vector3d> p_MV, wire::ring_record_t& record) {
@@ -97,7 +82,7 @@ Result<RingUpdate> ParseAddObject(const wire::ring_record_t& record) {
   far::AddObject add{static_cast<uint32_t>(record.object_id),
                      {},
                      static_cast<Motion>(record.motion),
-                     LoadPose(record.X_WO)};
+                     internal::DecodePose(record.X_WO)};
   add.mesh.p_MV = std::move(*positions);
   add.mesh.triangles.resize(static_cast<size_t>(n / 3));
   // int32 bit patterns back to the uint32 indices the client wrote.
@@ -132,7 +117,7 @@ wire::ring_record_t MakeAddObjectRingRecord(uint64_t sequence, int64_t step_id, 
                                             const Mesh& mesh, Motion motion, const Pose& X_WO) {
   wire::ring_record_t record = BaseRecord(sequence, step_id, RecordType::kAddObject, id);
   record.motion = static_cast<int32_t>(motion);
-  StorePose(X_WO, record.X_WO);
+  internal::EncodePose(X_WO, record.X_WO);
   StorePositions(mesh.p_MV, record);
   record.num_indices = static_cast<int32_t>(3 * mesh.triangles.size());
   record.triangles.resize(3 * mesh.triangles.size());
@@ -150,7 +135,7 @@ wire::ring_record_t MakeRemoveObjectRingRecord(uint64_t sequence, int64_t step_i
 wire::ring_record_t MakeSetPoseRingRecord(uint64_t sequence, int64_t step_id, uint32_t id,
                                           const Pose& X_WO) {
   wire::ring_record_t record = BaseRecord(sequence, step_id, RecordType::kSetPose, id);
-  StorePose(X_WO, record.X_WO);
+  internal::EncodePose(X_WO, record.X_WO);
   return record;
 }
 
@@ -188,7 +173,7 @@ Result<RecordedUpdate> ParseRingRecord(const wire::ring_record_t& record) {
       return recorded;
     case RecordType::kSetPose:
       if (auto ok = CheckUnused(record, false, true, false, false); !ok) return ok.error();
-      recorded.update = far::SetPose{id, LoadPose(record.X_WO)};
+      recorded.update = far::SetPose{id, internal::DecodePose(record.X_WO)};
       return recorded;
     case RecordType::kSetVertices: {
       if (auto ok = CheckUnused(record, false, false, true, false); !ok) return ok.error();

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <string>
 
+#include "pose_doubles.h"
+
 namespace far::protocol {
 namespace {
 
@@ -113,9 +115,7 @@ Result<Pose> LoadPose(const RecordErrors& errors, std::span<const uint8_t> bytes
       return errors.Invalid(kNames[i], FormatDouble(v[i]) + " is not finite");
     }
   }
-  Pose pose;
-  pose.translation = Eigen::Vector3d(v[0], v[1], v[2]);
-  pose.rotation = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
+  const Pose pose = internal::DecodePose(v);
   // The unit-quaternion rule is the model's (far::CheckPose), as for every other pose. The pose
   // is passed on bit for bit; the pipeline normalizes it where it places the object
   // (scene_cache.cc), as it does for in-process callers, so normalizing happens once.
@@ -148,16 +148,6 @@ Result<std::vector<Eigen::Vector3d>> LoadPositions(const RecordErrors& errors,
     }
   }
   return positions;
-}
-
-void EncodePose(const Pose& X_WO, double out[kPoseDoubles]) {
-  out[0] = X_WO.translation.x();
-  out[1] = X_WO.translation.y();
-  out[2] = X_WO.translation.z();
-  out[3] = X_WO.rotation.w();
-  out[4] = X_WO.rotation.x();
-  out[5] = X_WO.rotation.y();
-  out[6] = X_WO.rotation.z();
 }
 
 template <typename T>
@@ -321,7 +311,7 @@ Result<RecordPosition> UpdateWriter::AddObject(uint32_t id, const Mesh& mesh, Mo
   fixed.motion = static_cast<uint32_t>(motion);
   fixed.vertex_count = static_cast<uint32_t>(mesh.p_MV.size());
   fixed.triangle_count = static_cast<uint32_t>(mesh.triangles.size());
-  EncodePose(X_WO, fixed.X_WO);
+  internal::EncodePose(X_WO, fixed.X_WO);
   return WriteRecord(ring_, RecordType::kAddObject,
                      {BodyOf(fixed), BytesOf(std::span<const Eigen::Vector3d>(mesh.p_MV)),
                       BytesOf(std::span<const TriangleIndices>(mesh.triangles))},
@@ -338,7 +328,7 @@ Result<RecordPosition> UpdateWriter::SetPose(uint32_t id, const Pose& X_WO,
                                              std::chrono::milliseconds timeout) {
   SetPoseRecord fixed{};
   fixed.object_id = id;
-  EncodePose(X_WO, fixed.X_WO);
+  internal::EncodePose(X_WO, fixed.X_WO);
   return WriteRecord(ring_, RecordType::kSetPose, {BodyOf(fixed)}, timeout);
 }
 
