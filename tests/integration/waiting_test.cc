@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <chrono>
+#include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
@@ -45,16 +46,22 @@ TEST_F(WaitingTest, TheDaemonSaysWhereAStepIsWhileItWorks) {
   EXPECT_EQ(seen, expected);
 }
 
+// A small soup with contacts, written as a scene file into `dir`, for far-client play.
+std::filesystem::path WriteSoup(const TempDir& dir) {
+  const auto path = dir.path() / "soup.json";
+  Scene scene;
+  scene.objects = ContactSoup(3);
+  EXPECT_TRUE(WriteScene(scene, path).ok());
+  return path;
+}
+
 // The daemon stopped (SIGSTOP) for longer than any fixed wait of old (5 s): the client's
 // default limit (60 s) keeps it waiting, and the step is answered once the daemon goes on.
 TEST_F(WaitingTest, AClientWaitsForAStepAsLongAsItsOwnLimit) {
   DaemonProcess* daemon = StartDaemon();
   ASSERT_NE(daemon, nullptr);
   TempDir dir;
-  const auto path = dir.path() / "soup.json";
-  Scene scene;
-  scene.objects = ContactSoup(3);
-  ASSERT_TRUE(WriteScene(scene, path).ok());
+  const std::filesystem::path path = WriteSoup(dir);
   auto child = ChildProcess::Spawn({FAR_CLIENT_PATH, "--socket", CurrentSocketPath(), "play",
                                     path.string(), "--steps", "3", "--method", "aabb"});
   ASSERT_TRUE(child.ok()) << far::ToString(child.error());
@@ -72,10 +79,7 @@ TEST_F(WaitingTest, TimeoutOnTheCommandIsTheLimitAndSaysSo) {
   DaemonProcess* daemon = StartDaemon();
   ASSERT_NE(daemon, nullptr);
   TempDir dir;
-  const auto path = dir.path() / "soup.json";
-  Scene scene;
-  scene.objects = ContactSoup(3);
-  ASSERT_TRUE(WriteScene(scene, path).ok());
+  const std::filesystem::path path = WriteSoup(dir);
   auto child =
       ChildProcess::Spawn({FAR_CLIENT_PATH, "--socket", CurrentSocketPath(), "play", path.string(),
                            "--steps", "3", "--method", "aabb", "--timeout", "700ms"});
