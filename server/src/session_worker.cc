@@ -7,6 +7,7 @@
 #include <exception>
 #include <thread>
 
+#include "deadline_memory.h"
 #include <spdlog/spdlog.h>
 
 #include "far/protocol/convert.h"
@@ -14,6 +15,10 @@
 
 namespace far::server {
 namespace {
+
+// A step refused for running into the step deadline is tried again after this many deadlines:
+// the session spends at most about 1 / (1 + this) of its time on steps that cannot finish.
+constexpr int kRecheckDeadlines = 6;
 
 // The nice value of a session whose steps are heavy (its threads also run under SCHED_IDLE).
 constexpr int kHeavyNice = 10;
@@ -29,7 +34,10 @@ constexpr uint64_t kWireBytesPerPair = 32;
 class SessionWorker {
  public:
   SessionWorker(std::shared_ptr<Session> session, const WorkerContext& context)
-      : session_(std::move(session)), context_(context) {}
+      : session_(std::move(session)),
+        context_(context),
+        deadlines_(kRecheckDeadlines * std::chrono::milliseconds(context.config.step_deadline_ms)) {
+  }
 
   void Run() {
     StepJob job;
@@ -174,8 +182,18 @@ class SessionWorker {
         context_.close_session(session_->id, "its shared-memory segment cannot be read");
       return;
     }
+    const int64_t triangles = session_->pipeline->num_triangles();
+    if (auto fits = deadlines_.Check(command.request, triangles, Clock::now()); !fits)
+      return replier.StepError(*session_, command, fits.error());
     const auto step_started = Clock::now();
     auto result = session_->pipeline->Step(command.request, ControlFor(job));
+    // Ran into the daemon's own deadline (not a shorter one the client asked for)?
+    const bool daemon_deadline =
+        job.deadline >= job.received + std::chrono::milliseconds(context_.config.step_deadline_ms);
+    const bool hit_deadline =
+        !result && result.error().code == ErrorCode::kTimeout && daemon_deadline;
+    deadlines_.Record(command.request, triangles, hit_deadline,
+                      result ? std::string() : result.error().message, Clock::now());
     if (const double step_ms = MsBetween(step_started, Clock::now());
         step_ms > context_.config.heavy_step_ms) {
       LowerThisThread();
@@ -202,6 +220,7 @@ class SessionWorker {
 
   std::shared_ptr<Session> session_;
   const WorkerContext& context_;
+  DeadlineMemory deadlines_;  // the cost of this session's steps, judged before they run
 };
 
 }  // namespace

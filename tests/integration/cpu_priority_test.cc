@@ -78,5 +78,41 @@ TEST_F(CpuPriorityTest, AStepThatRunsLongIsLoweredWhileItRunsThoughItEndsAtItsDe
   EXPECT_NE(reply->message.find("stopped at its deadline"), std::string::npos) << reply->message;
 }
 
+// The step's cost is judged before it runs: once a step ran into the daemon's deadline, the same
+// request on the same scene is refused at once (the updates still applied), and another
+// request runs.
+TEST_F(CpuPriorityTest, AStepThatRanIntoTheDeadlineIsRefusedAtOnceWhenAskedAgain) {
+  DaemonProcess* daemon = StartDaemon({"--step-deadline-ms", "500"});
+  ASSERT_NE(daemon, nullptr);
+  auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "heavy");
+  ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
+  ASSERT_TRUE((*raw)->writer().AddObject(1, FlatGrid(120), Motion::kStatic, Pose{}).ok());
+  ASSERT_TRUE((*raw)->writer().AddObject(2, FlatGrid(120), Motion::kStatic, Pose{}).ok());
+  ASSERT_TRUE((*raw)->SendStep(0, SmallRequest(Method::kExact)).ok());
+  auto first = (*raw)->WaitStepReply(0, 20s);
+  ASSERT_TRUE(first.has_value());
+  ASSERT_EQ(first->status, protocol::ToWireStatus(ErrorCode::kTimeout)) << first->message;
+
+  // The same request again, with an update in the ring: refused before it runs.
+  ASSERT_TRUE((*raw)->writer().AddObject(3, FlatGrid(2), Motion::kStatic, Pose{}).ok());
+  const auto start = std::chrono::steady_clock::now();
+  ASSERT_TRUE((*raw)->SendStep(1, SmallRequest(Method::kExact)).ok());
+  auto second = (*raw)->WaitStepReply(1, 20s);
+  ASSERT_TRUE(second.has_value());
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 400ms) << "the step ran";
+  EXPECT_EQ(second->status, protocol::ToWireStatus(ErrorCode::kLimitExceeded)) << second->message;
+  EXPECT_NE(second->message.find("ran into the daemon's step deadline"), std::string::npos)
+      << second->message;
+
+  // Another request on the same scene runs, and sees the object the refused step brought.
+  StepRequest pcs = SmallRequest(Method::kAabb);
+  pcs.output = Output::kObjectPcs;
+  ASSERT_TRUE((*raw)->SendStep(2, pcs).ok());
+  auto third = (*raw)->WaitStepReply(2, 20s);
+  ASSERT_TRUE(third.has_value());
+  EXPECT_EQ(third->status, 0) << third->message;
+  EXPECT_EQ(third->ring_applied_sequence, 3);  // the three objects' records
+}
+
 }  // namespace
 }  // namespace far::integration
