@@ -49,7 +49,10 @@ struct Settings {
   std::string daemon = FAR_DAEMON_PATH;
   std::vector<std::string> daemon_args;  // added to every far-daemon's command line
   // The healthy client's steps per second in (a) and (b) (0: back to back, as fast as it can).
-  double healthy_rate = 0;
+  // 500: a simulator's control rate, under the daemon's per-session request limit (2000/s),
+  // which a back-to-back client reaches on a quiet machine (it is then refused as "busy": no
+  // longer a healthy client by the daemon's own rules).
+  double healthy_rate = 500;
 };
 
 // How the healthy client steps, for the tables' captions.
