@@ -1,8 +1,5 @@
 #include "session_worker.h"
 
-#include <sched.h>
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <exception>
 #include <thread>
@@ -10,6 +7,7 @@
 #include "deadline_memory.h"
 #include <spdlog/spdlog.h>
 
+#include "far/pairs/thread_pool.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/shm_reply.h"
 
@@ -19,9 +17,6 @@ namespace {
 // A step refused for running into the step deadline is tried again after this many deadlines:
 // the session spends at most about 1 / (1 + this) of its time on steps that cannot finish.
 constexpr int kRecheckDeadlines = 6;
-
-// The nice value of a session whose steps are heavy (its threads also run under SCHED_IDLE).
-constexpr int kHeavyNice = 10;
 
 // The threads a heavy session's parallel loops may use: half the cores (at least one), so
 // that the other half is left to light sessions even before the scheduler steps in.
@@ -131,25 +126,11 @@ class SessionWorker {
     const auto started = Clock::now();
     control.slow_after = started + std::chrono::milliseconds(context_.config.heavy_step_ms);
     control.on_slow = [this, started] {
-      LowerThisThread();
+      ThreadPool::MoveCallingThreadToBackground();
       if (!session_->demoted.load(std::memory_order_relaxed))
         Demote(MsBetween(started, Clock::now()), "running");
     };
     return control;
-  }
-
-  // The calling thread (a pool thread of the session's pipeline, or its worker) yields the CPU
-  // to light sessions from now on. Once per thread: an unprivileged process cannot undo it, and
-  // the threads die with the session.
-  static void LowerThisThread() {
-    thread_local bool lowered = false;
-    if (lowered) return;
-    setpriority(PRIO_PROCESS, 0, kHeavyNice);  // this thread only (Linux)
-    // SCHED_IDLE: a light session's thread that wakes takes the core at once. Nice 10 alone
-    // left it waiting for the heavy thread's time slice (a p99 of 4-5 ms against 0.7 ms).
-    sched_param param{};
-    sched_setscheduler(0, SCHED_IDLE, &param);
-    lowered = true;
   }
 
   // A heavy session: its pool's threads lower themselves at their next parallel loop too, and
@@ -158,7 +139,7 @@ class SessionWorker {
     if (session_->demoted.exchange(true)) return;
     if (session_->pipeline) session_->pipeline->SetCpuBackground(HeavySessionThreads());
     spdlog::info("event=session_demoted session={} step_ms={:.1f} step={} nice={}", session_->id,
-                 ms, step_state, kHeavyNice);
+                 ms, step_state, ThreadPool::kBackgroundNice);
   }
 
   void RunStep(const StepJob& job) {
@@ -196,7 +177,7 @@ class SessionWorker {
                       result ? std::string() : result.error().message, Clock::now());
     if (const double step_ms = MsBetween(step_started, Clock::now());
         step_ms > context_.config.heavy_step_ms) {
-      LowerThisThread();
+      ThreadPool::MoveCallingThreadToBackground();
       Demote(step_ms, result ? "finished" : "failed");
     }
     if (!result) return replier.StepError(*session_, command, result.error());

@@ -71,7 +71,6 @@ void ThreadPool::RunChunks() {
 
 void ThreadPool::WorkerLoop(size_t index) {
   uint64_t seen = 0;
-  bool lowered = false;
   for (;;) {
     {
       std::unique_lock lock(mutex_);
@@ -80,13 +79,7 @@ void ThreadPool::WorkerLoop(size_t index) {
       seen = generation_;
       if (index >= helpers_) continue;  // not taking part in this loop
     }
-    if (background_.load() && !lowered) {
-      // On Linux, who = 0 and pid 0 name the calling thread only.
-      setpriority(PRIO_PROCESS, 0, 10);
-      sched_param param{};
-      sched_setscheduler(0, SCHED_IDLE, &param);
-      lowered = true;
-    }
+    if (background_.load()) MoveCallingThreadToBackground();
     RunChunks();
   }
 }
@@ -94,6 +87,17 @@ void ThreadPool::WorkerLoop(size_t index) {
 void ThreadPool::SetBackground(int max_threads) {
   taking_part_ = static_cast<size_t>(std::max(1, max_threads) - 1);
   background_ = true;
+}
+
+void ThreadPool::MoveCallingThreadToBackground() {
+  thread_local bool moved = false;
+  if (moved) return;
+  // On Linux, who = 0 and pid 0 name the calling thread only. SCHED_IDLE: a normal thread that
+  // wakes takes the core at once; nice alone left it waiting for this thread's time slice.
+  setpriority(PRIO_PROCESS, 0, kBackgroundNice);
+  sched_param param{};
+  sched_setscheduler(0, SCHED_IDLE, &param);
+  moved = true;
 }
 
 }  // namespace far

@@ -35,6 +35,13 @@ class ThreadPool {
   /// alone did not do: bench/RESULTS.md). One way: an unprivileged process cannot undo it.
   void SetBackground(int max_threads);
 
+  /// The nice value of background threads.
+  static constexpr int kBackgroundNice = 10;
+  /// Moves the calling thread to the background (nice kBackgroundNice under SCHED_IDLE, Linux),
+  /// once per thread (later calls return at once): what SetBackground does to the workers, for
+  /// another thread working on the same heavy job. One way, as SetBackground.
+  static void MoveCallingThreadToBackground();
+
  private:
   void WorkerLoop(size_t index);
   void RunChunks();
@@ -48,7 +55,7 @@ class ThreadPool {
   size_t helpers_ = 0;  // workers that take part in the current loop (index < helpers_)
   uint64_t generation_ = 0;
   bool stopping_ = false;
-  // Workers with an index below this take part in a loop; and whether they lower themselves.
+  // Workers with an index below this take part in a loop; and whether they go to the background.
   std::atomic<size_t> taking_part_;
   std::atomic<bool> background_{false};
 };
