@@ -1,9 +1,12 @@
 #pragma once
 
 // Shared by the fuzz targets whose input has a structure (datagrams on channels, rounds on a
-// ring): a reader of the fuzzer's bytes, front to back, and the check that turns a broken
-// invariant into a crash libFuzzer reports. The seed writer (make_seeds.cc) writes inputs with
-// the same layouts, so every layout is documented once, in its target's file.
+// ring): a reader of the fuzzer's bytes, front to back, the check that turns a broken
+// invariant into a crash libFuzzer reports, and a count of open descriptors for leak checks. The
+// seed writer (make_seeds.cc) writes inputs with the same layouts, so every layout is documented
+// once, in its target's file.
+
+#include <dirent.h>
 
 #include <cstdint>
 #include <cstdio>
@@ -56,5 +59,16 @@ class FuzzInput {
   size_t size_;
   size_t pos_ = 0;
 };
+
+// The process's open file descriptors (entries of /proc/self/fd): what a harness compares
+// before and after an input to find a descriptor the code under test leaked.
+inline int OpenDescriptors() {
+  int count = 0;
+  DIR* dir = opendir("/proc/self/fd");
+  FAR_FUZZ_CHECK(dir != nullptr);
+  while (readdir(dir) != nullptr) ++count;
+  closedir(dir);
+  return count;
+}
 
 }  // namespace far::fuzz

@@ -22,7 +22,6 @@
 // daemon's segment) always succeeds, as does an echoed status reply that decodes; and the
 // client leaves no descriptor open (a refused answer's descriptor is closed).
 
-#include <dirent.h>
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/socket.h>
@@ -48,15 +47,6 @@ namespace {
 
 namespace wire = far_lcm;
 constexpr size_t kRequestIdOffset = 8 + 4;  // fingerprint, protocol_version
-
-int OpenDescriptors() {
-  int count = 0;
-  DIR* dir = opendir("/proc/self/fd");
-  FAR_FUZZ_CHECK(dir != nullptr);
-  while (readdir(dir) != nullptr) ++count;
-  closedir(dir);
-  return count;
-}
 
 // What the harness's daemon sends: the answer, and a descriptor made from the input.
 struct Answer {

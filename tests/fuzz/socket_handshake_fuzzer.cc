@@ -20,7 +20,6 @@
 // the ring sizes the reply names, on the session's channels; after the client hangs up, the
 // session closes and no descriptor is left open (none leaked by the daemon's side).
 
-#include <dirent.h>
 #include <fcntl.h>
 #include <stdlib.h>
 #include <unistd.h>
@@ -68,15 +67,6 @@ server::DaemonConfig FuzzConfig(const std::string& socket_path) {
   // meets the same daemon.
   config.max_opens_per_second_per_user = 1e9;
   return config;
-}
-
-int OpenDescriptors() {
-  int count = 0;
-  DIR* dir = opendir("/proc/self/fd");
-  FAR_FUZZ_CHECK(dir != nullptr);
-  while (readdir(dir) != nullptr) ++count;
-  closedir(dir);
-  return count;
 }
 
 template <typename Predicate>
