@@ -35,145 +35,168 @@ struct LoadFlags {
   StepFlags step;
 };
 
-int RunLoad(const client::ClientOptions& base, const LoadFlags& flags, const StepRequest& request) {
-  const int clients = flags.clients, steps = flags.steps;
-  const double seconds = flags.seconds;
-  const std::string& scene_path = flags.scene;
-  const bool as_json = flags.as_json;
+// What every client of a run shares: the flags, the request, the scene (empty: each makes a
+// random soup), and the start line.
+struct LoadRun {
+  const client::ClientOptions& base;
+  const LoadFlags& flags;
+  const StepRequest& request;
   far::Scene scene;
-  if (!scene_path.empty()) {
-    auto loaded = far::ReadScene(scene_path);
-    if (!loaded) return Fail(loaded.error());
-    scene = std::move(*loaded);
-  }
-  std::vector<LoadStats> stats(static_cast<size_t>(clients));
   std::atomic<int> ready{0};
   std::atomic<bool> go{false};
-  const auto deadline_of = [&](Clock::time_point start) {
-    return seconds > 0 ? start + std::chrono::duration_cast<Clock::duration>(
-                                     std::chrono::duration<double>(seconds))
-                       : Clock::time_point::max();
-  };
-  Clock::time_point start;
-  std::vector<std::thread> threads;
-  for (int i = 0; i < clients; ++i) {
-    threads.emplace_back([&, i] {
-      LoadStats& mine = stats[static_cast<size_t>(i)];
-      client::ClientOptions options = base;
-      options.client_name = "load-" + std::to_string(i);
-      auto client = client::Client::Connect(options);
-      auto fail = [&](const far::Error& e) {
-        if (mine.errors++ == 0) mine.first_error = far::ToString(e);
-      };
-      if (!client) {
-        fail(client.error());
-        ready++;
-        return;
-      }
-      // Each client simulates its own scene: the given one, or a random soup of rigid objects.
-      std::vector<far::SceneObject> objects =
-          scene_path.empty() ? far::scenes::RandomSoup(static_cast<uint64_t>(i), 24, 40, 3.0, 0.4)
-                             : scene.objects;
-      for (const auto& o : objects) {
-        if (auto ok = (*client)->AddObject(o.id, o.mesh, o.motion, o.X_WO); !ok) fail(ok.error());
-      }
-      ready++;
-      // Everyone starts together, once the main thread has set `start` and said go.
-      while (!go) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-      const auto deadline = deadline_of(start);
-      // After an error the client backs off (doubling, up to a second) instead of spinning;
-      // a session the daemon ended is the end of this client.
-      auto backoff = std::chrono::milliseconds(0);
-      for (int s = 0; (steps <= 0 || s < steps) && Clock::now() < deadline; ++s) {
-        if (backoff.count() > 0) std::this_thread::sleep_for(backoff);
-        // Rigid objects drift a little every step, as a simulation would move them.
-        bool posed = true;
-        for (auto& o : objects) {
-          if (o.motion != far::Motion::kRigid) continue;
-          o.X_WO.translation.x() += 0.002 * std::sin(0.1 * s + o.id);
-          if (auto ok = (*client)->SetPose(o.id, o.X_WO); !ok) {
-            fail(ok.error());
-            posed = false;
-            break;
-          }
-        }
-        const auto t0 = Clock::now();
-        auto result =
-            posed
-                ? (*client)->Step(request)
-                : far::Result<far::StepResult>(far::MakeError(far::ErrorCode::kBusy, "not posed"));
-        if (!result) {
-          if (posed) fail(result.error());
-          if (result.error().code == far::ErrorCode::kUnavailable) break;
-          backoff = std::clamp(backoff * 2, std::chrono::milliseconds(10),
-                               std::chrono::milliseconds(1000));
-          continue;
-        }
-        backoff = std::chrono::milliseconds(0);
-        mine.latency_ms.push_back(
-            std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-      }
-    });
-  }
-  while (ready < clients) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  start = Clock::now();
-  go = true;  // (release: the workers read `start` after seeing it)
-  for (auto& t : threads) t.join();
-  const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+  Clock::time_point start;  // written before `go`, read after it
 
-  std::vector<double> all;
-  int errors = 0;
-  size_t min_steps = SIZE_MAX, max_steps = 0;
-  json per_client = json::array();
-  for (int i = 0; i < clients; ++i) {
-    const LoadStats& s = stats[static_cast<size_t>(i)];
-    all.insert(all.end(), s.latency_ms.begin(), s.latency_ms.end());
-    errors += s.errors;
-    min_steps = std::min(min_steps, s.latency_ms.size());
-    max_steps = std::max(max_steps, s.latency_ms.size());
-    per_client.push_back({{"client", i},
-                          {"steps", s.latency_ms.size()},
-                          {"steps_per_s", s.latency_ms.size() / elapsed},
-                          {"p50_ms", Quantile(s.latency_ms, 0.5)},
-                          {"p90_ms", Quantile(s.latency_ms, 0.9)},
-                          {"p99_ms", Quantile(s.latency_ms, 0.99)},
-                          {"errors", s.errors},
-                          {"first_error", s.first_error}});
+  Clock::time_point Deadline() const {
+    return flags.seconds > 0 ? start + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(flags.seconds))
+                             : Clock::time_point::max();
   }
-  const double fairness =
-      min_steps > 0 ? static_cast<double>(max_steps) / static_cast<double>(min_steps) : 0.0;
-  json overall = {{"clients", clients},
-                  {"seconds", elapsed},
-                  {"steps", all.size()},
-                  {"steps_per_s", all.size() / elapsed},
-                  {"p50_ms", Quantile(all, 0.5)},
-                  {"p90_ms", Quantile(all, 0.9)},
-                  {"p99_ms", Quantile(all, 0.99)},
-                  {"max_ms", Quantile(all, 1.0)},
-                  {"errors", errors},
-                  {"fairness_max_over_min_steps", fairness}};
-  if (as_json) {
-    std::cout << json{{"overall", overall}, {"per_client", per_client}}.dump(2) << "\n";
-  } else {
-    std::printf("%-8s %8s %10s %9s %9s %9s %7s\n", "client", "steps", "steps/s", "p50 ms", "p90 ms",
-                "p99 ms", "errors");
-    for (const auto& c : per_client) {
-      std::printf("%-8d %8zu %10.1f %9.3f %9.3f %9.3f %7d\n", c["client"].get<int>(),
-                  c["steps"].get<size_t>(), c["steps_per_s"].get<double>(),
-                  c["p50_ms"].get<double>(), c["p90_ms"].get<double>(), c["p99_ms"].get<double>(),
-                  c["errors"].get<int>());
-      if (!c["first_error"].get<std::string>().empty()) {
-        std::printf("         first error: %s\n", c["first_error"].get<std::string>().c_str());
+};
+
+// One client of the run (thread `i`): its own session and scene, then steps until the step
+// count or the time is up.
+void RunOneClient(LoadRun& run, int i, LoadStats& mine) {
+  client::ClientOptions options = run.base;
+  options.client_name = "load-" + std::to_string(i);
+  auto client = client::Client::Connect(options);
+  auto fail = [&](const far::Error& e) {
+    if (mine.errors++ == 0) mine.first_error = far::ToString(e);
+  };
+  if (!client) {
+    fail(client.error());
+    run.ready++;
+    return;
+  }
+  // Each client simulates its own scene: the given one, or a random soup of rigid objects.
+  std::vector<far::SceneObject> objects =
+      run.flags.scene.empty() ? far::scenes::RandomSoup(static_cast<uint64_t>(i), 24, 40, 3.0, 0.4)
+                              : run.scene.objects;
+  for (const auto& o : objects) {
+    if (auto ok = (*client)->AddObject(o.id, o.mesh, o.motion, o.X_WO); !ok) fail(ok.error());
+  }
+  run.ready++;
+  // Everyone starts together, once the main thread has set `start` and said go.
+  while (!run.go) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const auto deadline = run.Deadline();
+  const int steps = run.flags.steps;
+  // After an error the client backs off (doubling, up to a second) instead of spinning;
+  // a session the daemon ended is the end of this client.
+  auto backoff = std::chrono::milliseconds(0);
+  for (int s = 0; (steps <= 0 || s < steps) && Clock::now() < deadline; ++s) {
+    if (backoff.count() > 0) std::this_thread::sleep_for(backoff);
+    // Rigid objects drift a little every step, as a simulation would move them.
+    bool posed = true;
+    for (auto& o : objects) {
+      if (o.motion != far::Motion::kRigid) continue;
+      o.X_WO.translation.x() += 0.002 * std::sin(0.1 * s + o.id);
+      if (auto ok = (*client)->SetPose(o.id, o.X_WO); !ok) {
+        fail(ok.error());
+        posed = false;
+        break;
       }
     }
-    std::printf(
-        "overall: %zu steps in %.2f s = %.1f steps/s; latency p50 %.3f p90 %.3f p99 %.3f max %.3f "
-        "ms; "
-        "errors %d; fairness (max/min steps per client) %.2f\n",
-        all.size(), elapsed, all.size() / elapsed, Quantile(all, 0.5), Quantile(all, 0.9),
-        Quantile(all, 0.99), Quantile(all, 1.0), errors, fairness);
+    const auto t0 = Clock::now();
+    auto result =
+        posed ? (*client)->Step(run.request)
+              : far::Result<far::StepResult>(far::MakeError(far::ErrorCode::kBusy, "not posed"));
+    if (!result) {
+      if (posed) fail(result.error());
+      if (result.error().code == far::ErrorCode::kUnavailable) break;
+      backoff =
+          std::clamp(backoff * 2, std::chrono::milliseconds(10), std::chrono::milliseconds(1000));
+      continue;
+    }
+    backoff = std::chrono::milliseconds(0);
+    mine.latency_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
-  return errors == 0 ? 0 : 1;
+}
+
+// The run's report: per client and overall, and the total number of errors.
+struct LoadReport {
+  json per_client = json::array();
+  json overall;
+  std::vector<double> all;  // every step's latency
+  int errors = 0;
+  double fairness = 0;
+};
+
+LoadReport Summarize(const std::vector<LoadStats>& stats, double elapsed) {
+  LoadReport report;
+  size_t min_steps = SIZE_MAX, max_steps = 0;
+  for (size_t i = 0; i < stats.size(); ++i) {
+    const LoadStats& s = stats[i];
+    report.all.insert(report.all.end(), s.latency_ms.begin(), s.latency_ms.end());
+    report.errors += s.errors;
+    min_steps = std::min(min_steps, s.latency_ms.size());
+    max_steps = std::max(max_steps, s.latency_ms.size());
+    report.per_client.push_back({{"client", i},
+                                 {"steps", s.latency_ms.size()},
+                                 {"steps_per_s", s.latency_ms.size() / elapsed},
+                                 {"p50_ms", Quantile(s.latency_ms, 0.5)},
+                                 {"p90_ms", Quantile(s.latency_ms, 0.9)},
+                                 {"p99_ms", Quantile(s.latency_ms, 0.99)},
+                                 {"errors", s.errors},
+                                 {"first_error", s.first_error}});
+  }
+  const std::vector<double>& all = report.all;
+  report.fairness =
+      min_steps > 0 ? static_cast<double>(max_steps) / static_cast<double>(min_steps) : 0.0;
+  report.overall = {
+      {"clients", stats.size()},       {"seconds", elapsed},
+      {"steps", all.size()},           {"steps_per_s", all.size() / elapsed},
+      {"p50_ms", Quantile(all, 0.5)},  {"p90_ms", Quantile(all, 0.9)},
+      {"p99_ms", Quantile(all, 0.99)}, {"max_ms", Quantile(all, 1.0)},
+      {"errors", report.errors},       {"fairness_max_over_min_steps", report.fairness}};
+  return report;
+}
+
+void PrintTable(const LoadReport& report, double elapsed) {
+  std::printf("%-8s %8s %10s %9s %9s %9s %7s\n", "client", "steps", "steps/s", "p50 ms", "p90 ms",
+              "p99 ms", "errors");
+  for (const auto& c : report.per_client) {
+    std::printf("%-8d %8zu %10.1f %9.3f %9.3f %9.3f %7d\n", c["client"].get<int>(),
+                c["steps"].get<size_t>(), c["steps_per_s"].get<double>(), c["p50_ms"].get<double>(),
+                c["p90_ms"].get<double>(), c["p99_ms"].get<double>(), c["errors"].get<int>());
+    if (!c["first_error"].get<std::string>().empty()) {
+      std::printf("         first error: %s\n", c["first_error"].get<std::string>().c_str());
+    }
+  }
+  const std::vector<double>& all = report.all;
+  std::printf(
+      "overall: %zu steps in %.2f s = %.1f steps/s; latency p50 %.3f p90 %.3f p99 %.3f max %.3f "
+      "ms; "
+      "errors %d; fairness (max/min steps per client) %.2f\n",
+      all.size(), elapsed, all.size() / elapsed, Quantile(all, 0.5), Quantile(all, 0.9),
+      Quantile(all, 0.99), Quantile(all, 1.0), report.errors, report.fairness);
+}
+
+int RunLoad(const client::ClientOptions& base, const LoadFlags& flags, const StepRequest& request) {
+  LoadRun run{base, flags, request, {}, {}, {}, {}};
+  if (!flags.scene.empty()) {
+    auto loaded = far::ReadScene(flags.scene);
+    if (!loaded) return Fail(loaded.error());
+    run.scene = std::move(*loaded);
+  }
+  std::vector<LoadStats> stats(static_cast<size_t>(flags.clients));
+  std::vector<std::thread> threads;
+  for (int i = 0; i < flags.clients; ++i) {
+    threads.emplace_back(
+        [&run, &stats, i] { RunOneClient(run, i, stats[static_cast<size_t>(i)]); });
+  }
+  while (run.ready < flags.clients) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  run.start = Clock::now();
+  run.go = true;  // (release: the workers read `start` after seeing it)
+  for (auto& t : threads) t.join();
+  const double elapsed = std::chrono::duration<double>(Clock::now() - run.start).count();
+
+  const LoadReport report = Summarize(stats, elapsed);
+  if (flags.as_json) {
+    std::cout << json{{"overall", report.overall}, {"per_client", report.per_client}}.dump(2)
+              << "\n";
+  } else {
+    PrintTable(report, elapsed);
+  }
+  return report.errors == 0 ? 0 : 1;
 }
 
 }  // namespace
