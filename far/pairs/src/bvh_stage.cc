@@ -18,7 +18,9 @@
 // axis can show a larger gap. The test below compares the gap along the face axes of both boxes
 // with margin = slack + 2^-40 (the boxes' and poses' magnitudes), which also covers the
 // rounding of the relative pose and of the test itself (tens of eps of the same magnitudes,
-// far below 2^-40 = 8192 eps).
+// far below 2^-40 = 8192 eps). The same holds for a triangle's slab as the axis: the triangle's
+// exact vertices project into [lo, hi] up to a few ulps, and a unit axis (up to rounding) shows
+// no gap larger than the distance.
 
 namespace far {
 namespace {
@@ -106,10 +108,11 @@ bool OverlapInB(const PairFrame& f, const Node& y, const Task& t) {
 
 double NodeSize(const Node& n) { return n.half_extent.sum(); }
 
-// One chunk's output: the exact answers.
+// One chunk's output: the exact answers; and the stack DescendLeaf reuses.
 struct Output {
   Partial partial;
   size_t considered = 0;
+  std::vector<std::pair<uint32_t, uint32_t>> leaf_stack;
 };
 
 // Everything a descent reads, and the candidate marks every thread writes: per object, per
@@ -125,16 +128,105 @@ struct Descent {
   }
 };
 
-// The triangle pairs of two overlapping leaves: world boxes, prefilter, exact tests.
-void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, const Node& y, Output& out) {
+// A leaf of one object (L) prepared for a descent of the other object's hierarchy (T): its
+// box and its triangles' slabs, moved into T's frame. A node of T is passed over when its box is
+// apart from the leaf's along T's axes, or when every slab of the leaf separates it: the node's
+// box, projected onto the triangle's normal, lies beyond the triangle's own projection. For the
+// thin, slanted triangles that make axis-aligned boxes loose (slivers, fans, tilted leaves)
+// that plane is the separating axis the boxes lack. Margins as for the boxes: the projections
+// below are dot products of the same magnitudes, a few ulps each, and an approximate unit
+// normal is still a valid axis (a gap along it is at most the distance, up to a few ulps).
+struct LeafProbe {
+  const Node* leaf = nullptr;
+  bool leaf_in_a = true;                  // L is the pair's A (T is B), or the other way round
+  const Eigen::Matrix3d* R_LT = nullptr;  // null: aligned (the same rotation)
+  const Eigen::Matrix3d* abs_R_LT = nullptr;
+  Eigen::Vector3d t_LT;
+  Eigen::Vector3d center, half_extent;  // the leaf's box in T (an AABB around its OBB)
+  uint32_t count = 0;
+  bool has_slabs = false;
+  Eigen::Vector3d normal[TriangleBvh::kLeafSize];                 // in T
+  double lo[TriangleBvh::kLeafSize], hi[TriangleBvh::kLeafSize];  // along normal, in T
+};
+
+LeafProbe MakeProbe(const PairFrame& f, const TriangleBvh& leaf_bvh, const Node& leaf,
+                    bool leaf_in_a) {
+  LeafProbe p;
+  p.leaf = &leaf;
+  p.leaf_in_a = leaf_in_a;
+  p.count = leaf.count;
+  // p_L = R_LT p_T + t_LT and p_T = R_TL p_L + t_TL.
+  const Eigen::Matrix3d& R_TL = leaf_in_a ? f.R_BA : f.R_AB;
+  const Eigen::Matrix3d& abs_R_TL = leaf_in_a ? f.abs_R_BA : f.abs_R_AB;
+  const Eigen::Vector3d& t_TL = leaf_in_a ? f.t_BA : f.t_AB;
+  const Eigen::Vector3d& t_LT = leaf_in_a ? f.t_AB : f.t_BA;
+  if (!f.aligned) p.R_LT = leaf_in_a ? &f.R_AB : &f.R_BA;
+  if (!f.aligned) p.abs_R_LT = leaf_in_a ? &f.abs_R_AB : &f.abs_R_BA;
+  p.t_LT = t_LT;
+  p.center =
+      f.aligned ? Eigen::Vector3d(leaf.center + t_TL) : Eigen::Vector3d(R_TL * leaf.center + t_TL);
+  p.half_extent = f.aligned ? leaf.half_extent : Eigen::Vector3d(abs_R_TL * leaf.half_extent);
+  p.has_slabs = !leaf_bvh.slabs().empty();
+  for (uint32_t i = 0; i < leaf.count && p.has_slabs; ++i) {
+    // n . p_L = (R_TL n) . p_T + n . t_LT
+    const TriangleBvh::Slab& slab = leaf_bvh.slabs()[leaf.first + i];
+    const double shift = slab.normal.dot(t_LT);
+    p.normal[i] = f.aligned ? slab.normal : Eigen::Vector3d(R_TL * slab.normal);
+    p.lo[i] = slab.lo - shift;
+    p.hi[i] = slab.hi - shift;
+  }
+  return p;
+}
+
+// The probe's triangles, among `live` (bit i: triangle i), whose slabs do not separate `node`.
+uint32_t LiveAgainst(const LeafProbe& p, const Node& node, uint32_t live, double margin) {
+  if (!p.has_slabs) return live;
+  uint32_t kept = 0;
+  for (uint32_t i = 0; i < p.count; ++i) {
+    if (!(live >> i & 1)) continue;
+    const double middle = p.normal[i].dot(node.center);
+    const double radius = p.normal[i].cwiseAbs().dot(node.half_extent);
+    if (middle - radius > p.hi[i] + margin || middle + radius < p.lo[i] - margin) continue;
+    kept |= 1u << i;
+  }
+  return kept;
+}
+
+// The triangles of a leaf of T whose slabs do not separate the probe's leaf (its oriented box:
+// center in T, axes R_TL, the leaf's own half extents).
+uint32_t TreeLeafLive(const LeafProbe& p, const TriangleBvh& tree, const Node& leaf,
+                      double margin) {
+  if (tree.slabs().empty()) return (1u << leaf.count) - 1;
+  uint32_t kept = 0;
+  for (uint32_t j = 0; j < leaf.count; ++j) {
+    const TriangleBvh::Slab& slab = tree.slabs()[leaf.first + j];
+    const double middle = slab.normal.dot(p.center);
+    // |R_TL^T n| . e_L: the OBB's extent along n.
+    const Eigen::Vector3d n_L =
+        p.R_LT != nullptr ? Eigen::Vector3d(*p.R_LT * slab.normal) : slab.normal;
+    const double radius = n_L.cwiseAbs().dot(p.leaf->half_extent);
+    if (middle - radius > slab.hi + margin || middle + radius < slab.lo - margin) continue;
+    kept |= 1u << j;
+  }
+  return kept;
+}
+
+// The live triangle pairs of two leaves (x of A, y of B): world boxes, prefilter, exact tests.
+void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t live_x, const Node& y,
+                uint32_t live_y, Output& out) {
   const BvhObject& a = d.query.objects[f.a];
   const BvhObject& b = d.query.objects[f.b];
   TriangleBox boxes_a[TriangleBvh::kLeafSize], boxes_b[TriangleBvh::kLeafSize];
-  for (uint32_t i = 0; i < x.count; ++i) boxes_a[i] = BoxOf(a.world, a.bvh->order()[x.first + i]);
-  for (uint32_t j = 0; j < y.count; ++j) boxes_b[j] = BoxOf(b.world, b.bvh->order()[y.first + j]);
-  out.considered += size_t{x.count} * y.count;
+  uint32_t na = 0, nb = 0;
   for (uint32_t i = 0; i < x.count; ++i) {
-    for (uint32_t j = 0; j < y.count; ++j) {
+    if (live_x >> i & 1) boxes_a[na++] = BoxOf(a.world, a.bvh->order()[x.first + i]);
+  }
+  for (uint32_t j = 0; j < y.count; ++j) {
+    if (live_y >> j & 1) boxes_b[nb++] = BoxOf(b.world, b.bvh->order()[y.first + j]);
+  }
+  out.considered += size_t{na} * nb;
+  for (uint32_t i = 0; i < na; ++i) {
+    for (uint32_t j = 0; j < nb; ++j) {
       if (!BoxesWithin(boxes_a[i], boxes_b[j], d.wanted.slack)) continue;
       if (!d.marks.empty()) {
         d.Mark(f.a, boxes_a[i].triangle);
@@ -147,15 +239,69 @@ void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, const Node&
   }
 }
 
-// Descends an overlapping task one level: the children pairs of its bigger node (the inner one
-// when the other is a leaf) that overlap too are tested as leaves or pushed onto `next`.
-void Expand(const Descent& d, const Task& task, std::vector<Task>& next, Output& out) {
+// Descends T's hierarchy from `root` against the probe's leaf, keeping per node the leaf's
+// triangles that its slabs have not yet separated (a triangle apart from a node is apart from
+// everything below it), down to T's leaves.
+void DescendLeaf(const Descent& d, const PairFrame& f, const LeafProbe& p, uint32_t root,
+                 Output& out) {
+  const BvhObject& tree_object = d.query.objects[p.leaf_in_a ? f.b : f.a];
+  const TriangleBvh& tree = *tree_object.bvh;
+  const auto& nodes = tree.nodes();
+  const uint32_t all = (1u << p.count) - 1;
+  std::vector<std::pair<uint32_t, uint32_t>>& stack = out.leaf_stack;
+  stack.assign(1, {root, all});
+  for (uint32_t visited = 0; !stack.empty(); ++visited) {
+    if (visited % 256 == 255 && d.wanted.stopper->Poll()) return;
+    const auto [index, parent_live] = stack.back();
+    stack.pop_back();
+    const Node& node = nodes[index];
+    const Eigen::Array3d gap =
+        (node.center - p.center).array().abs() - (node.half_extent + p.half_extent).array();
+    if ((gap > f.margin).any()) continue;
+    if (p.R_LT != nullptr) {  // and along L's axes, the node moved into L
+      const Eigen::Array3d gap_L =
+          ((*p.R_LT * node.center + p.t_LT) - p.leaf->center).array().abs() -
+          (*p.abs_R_LT * node.half_extent + p.leaf->half_extent).array();
+      if ((gap_L > f.margin).any()) continue;
+    }
+    const uint32_t live = LiveAgainst(p, node, parent_live, f.margin);
+    if (live == 0) continue;
+    if (!node.leaf()) {
+      stack.emplace_back(node.first, live);
+      stack.emplace_back(node.first + 1, live);
+      continue;
+    }
+    const uint32_t tree_live = TreeLeafLive(p, tree, node, f.margin);
+    if (tree_live == 0) continue;
+    if (p.leaf_in_a) {
+      TestLeaves(d, f, *p.leaf, live, node, tree_live, out);
+    } else {
+      TestLeaves(d, f, node, tree_live, *p.leaf, live, out);
+    }
+  }
+}
+
+// A node pair where at least one node is a leaf: the leaf (x when both are) probes the other.
+void DescendFromLeaf(const Descent& d, const PairFrame& f, uint32_t x, uint32_t y, Output& out) {
+  const TriangleBvh& bvh_a = *d.query.objects[f.a].bvh;
+  const TriangleBvh& bvh_b = *d.query.objects[f.b].bvh;
+  const Node& node_x = bvh_a.nodes()[x];
+  if (node_x.leaf()) {
+    DescendLeaf(d, f, MakeProbe(f, bvh_a, node_x, /*leaf_in_a=*/true), y, out);
+  } else {
+    DescendLeaf(d, f, MakeProbe(f, bvh_b, bvh_b.nodes()[y], /*leaf_in_a=*/false), x, out);
+  }
+}
+
+// Descends an overlapping task of two inner nodes one level: the children pairs of its bigger
+// node that overlap too are pushed onto `next`.
+void Expand(const Descent& d, const Task& task, std::vector<Task>& next) {
   const PairFrame& f = d.frames[task.frame];
   const auto& nodes_a = d.query.objects[f.a].bvh->nodes();
   const auto& nodes_b = d.query.objects[f.b].bvh->nodes();
   const Node& x = nodes_a[task.x];
   const Node& y = nodes_b[task.y];
-  const bool split_x = y.leaf() || (!x.leaf() && NodeSize(x) >= NodeSize(y));
+  const bool split_x = NodeSize(x) >= NodeSize(y);
   for (uint32_t child : {split_x ? x.first : y.first, (split_x ? x.first : y.first) + 1}) {
     // The kept node's box is already in the other frame: test that side first, and move the
     // child only when it passes.
@@ -171,14 +317,15 @@ void Expand(const Descent& d, const Task& task, std::vector<Task>& next, Output&
       MoveIntoA(f, nodes_b[child], t);
       if (!OverlapInA(f, x, t)) continue;
     }
-    const Node& cx = nodes_a[t.x];
-    const Node& cy = nodes_b[t.y];
-    if (cx.leaf() && cy.leaf()) {
-      TestLeaves(d, f, cx, cy, out);
-    } else {
-      next.push_back(t);
-    }
+    next.push_back(t);
   }
+}
+
+// Whether a task has reached a leaf on either side (then it is descended from that leaf).
+bool HasLeaf(const Descent& d, const Task& task) {
+  const PairFrame& f = d.frames[task.frame];
+  return d.query.objects[f.a].bvh->nodes()[task.x].leaf() ||
+         d.query.objects[f.b].bvh->nodes()[task.y].leaf();
 }
 
 // The descent of an aligned pair (same rotation: boxes differ by a translation only), with
@@ -199,16 +346,15 @@ void DescendAligned(const Descent& d, const PairFrame& f, uint32_t root_x, uint3
     stack.pop_back();
     const Node& x = nodes_a[ix];
     const Node& y = nodes_b[iy];
-    const bool split_x = y.leaf() || (!x.leaf() && NodeSize(x) >= NodeSize(y));
+    if (x.leaf() || y.leaf()) {
+      DescendFromLeaf(d, f, ix, iy, out);
+      continue;
+    }
+    const bool split_x = NodeSize(x) >= NodeSize(y);
     const uint32_t first = split_x ? x.first : y.first;
     for (uint32_t child : {first, first + 1}) {
       const uint32_t cx = split_x ? child : ix, cy = split_x ? iy : child;
-      if (!overlap(nodes_a[cx], nodes_b[cy])) continue;
-      if (nodes_a[cx].leaf() && nodes_b[cy].leaf()) {
-        TestLeaves(d, f, nodes_a[cx], nodes_b[cy], out);
-      } else {
-        stack.emplace_back(cx, cy);
-      }
+      if (overlap(nodes_a[cx], nodes_b[cy])) stack.emplace_back(cx, cy);
     }
   }
 }
@@ -222,7 +368,11 @@ void Descend(const Descent& d, const Task& root, Output& out) {
     if (visited % 256 == 255 && d.wanted.stopper->Poll()) return;
     const Task task = stack.back();
     stack.pop_back();
-    Expand(d, task, stack, out);
+    if (HasLeaf(d, task)) {
+      DescendFromLeaf(d, f, task.x, task.y, out);
+    } else {
+      Expand(d, task, stack);
+    }
   }
 }
 
@@ -258,8 +408,8 @@ std::vector<PairFrame> MakeFrames(const BvhQuery& query, double slack) {
 }
 
 // The overlapping root pairs, expanded breadth-first until there are enough tasks to share among
-// threads; leaves met on the way are tested into `out`.
-std::vector<Task> SeedTasks(const Descent& d, size_t target, Output& out) {
+// threads.
+std::vector<Task> SeedTasks(const Descent& d, size_t target) {
   std::vector<Task> tasks;
   for (uint32_t i = 0; i < d.frames.size(); ++i) {
     const PairFrame& f = d.frames[i];
@@ -268,16 +418,17 @@ std::vector<Task> SeedTasks(const Descent& d, size_t target, Output& out) {
     Task root{i, 0, 0, {}, {}, {}, {}};
     MoveIntoA(f, y, root);
     MoveIntoB(f, x, root);
-    if (!OverlapInA(f, x, root) || !OverlapInB(f, y, root)) continue;
-    if (x.leaf() && y.leaf()) {
-      TestLeaves(d, f, x, y, out);
-    } else {
-      tasks.push_back(root);
-    }
+    if (OverlapInA(f, x, root) && OverlapInB(f, y, root)) tasks.push_back(root);
   }
   while (!tasks.empty() && tasks.size() < target) {
     std::vector<Task> next;
-    for (const Task& task : tasks) Expand(d, task, next, out);
+    for (const Task& task : tasks) {
+      if (HasLeaf(d, task)) {
+        next.push_back(task);  // descended from its leaf later, on the pool
+      } else {
+        Expand(d, task, next);
+      }
+    }
     const bool growing = next.size() > tasks.size();
     tasks = std::move(next);
     if (!growing) break;  // mostly leaves left: descend what there is
@@ -326,12 +477,11 @@ BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
 
   // Seed tasks on this thread, then descend them on the pool.
   const size_t threads = static_cast<size_t>(pool.num_threads());
-  std::vector<Output> outputs(1);
-  const std::vector<Task> tasks = SeedTasks(descent, 64 * threads, outputs[0]);
+  const std::vector<Task> tasks = SeedTasks(descent, 64 * threads);
   const size_t grain = std::clamp<size_t>(tasks.size() / (16 * threads), 1, 256);
-  outputs.resize(1 + (tasks.size() + grain - 1) / grain);
+  std::vector<Output> outputs((tasks.size() + grain - 1) / grain);
   pool.ParallelFor(tasks.size(), grain, [&](size_t begin, size_t end) {
-    Output& out = outputs[1 + begin / grain];
+    Output& out = outputs[begin / grain];
     for (size_t i = begin; i < end && !stopper.Poll(); ++i) Descend(descent, tasks[i], out);
   });
 

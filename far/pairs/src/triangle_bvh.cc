@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Geometry>
+
 namespace far {
 namespace {
 
@@ -52,6 +54,21 @@ void SetNodeBox(TriangleBvh::Node& node, const Box& box) {
     // nextafter: e 2^-52 is between one and two ulps of e), and is > 0 even for e = 0.
     node.half_extent[a] = e + (e * 0x1p-52 + std::numeric_limits<double>::denorm_min());
   }
+}
+
+TriangleBvh::Slab SlabOf(std::span<const Eigen::Vector3d> p, const TriangleIndices& t) {
+  const Eigen::Vector3d& a = p[t[0]];
+  const Eigen::Vector3d& b = p[t[1]];
+  const Eigen::Vector3d& c = p[t[2]];
+  TriangleBvh::Slab slab;
+  slab.normal = (b - a).cross(c - a);
+  const double length = slab.normal.norm();
+  if (!(length > 0) || !std::isfinite(length)) return {Eigen::Vector3d::Zero(), 0, 0};
+  slab.normal *= 1 / length;
+  const double da = slab.normal.dot(a), db = slab.normal.dot(b), dc = slab.normal.dot(c);
+  slab.lo = std::min({da, db, dc});
+  slab.hi = std::max({da, db, dc});
+  return slab;
 }
 
 }  // namespace
@@ -160,6 +177,8 @@ void TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
   nodes_.emplace_back();
   builder.Build(0, 0, static_cast<uint32_t>(triangles.size()));
   built_area_ = builder.area_sum;
+  slabs_.resize(order_.size());
+  for (size_t k = 0; k < order_.size(); ++k) slabs_[k] = SlabOf(p_MV, triangles[order_[k]]);
 }
 
 bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,
@@ -175,8 +194,9 @@ bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,
     const Node& node = nodes_[i];
     Box& box = boxes[i];
     if (node.leaf()) {
-      for (uint32_t k = node.first; k < node.first + node.count; ++k)
+      for (uint32_t k = node.first; k < node.first + node.count; ++k) {
         box.Extend(TriangleBox(p_MV, triangles[order_[k]]));
+      }
     } else {
       box = boxes[node.first];
       box.Extend(boxes[node.first + 1]);
@@ -188,6 +208,7 @@ bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,
     Build(p_MV, triangles);
     return true;
   }
+  slabs_.clear();
   return false;
 }
 
