@@ -81,15 +81,6 @@ std::unique_ptr<StudyDaemon> StartDaemon(const Settings& settings,
   std::exit(1);
 }
 
-std::string CpuModel() {
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpuinfo, line)) {
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  }
-  return "unknown CPU";
-}
-
 void PrintHeader(int argc, char** argv, const Settings& settings) {
   char date[32];
   const std::time_t now = std::time(nullptr);
@@ -409,26 +400,12 @@ void StudyMemory(const Settings& settings, const Scene& scene) {
               (after - baseline) / 1024.0);
 }
 
-// The program re-runs itself inside a private network namespace, as the integration tests do.
-void EnterNetworkNamespace(int argc, char** argv) {
-  const char* in = std::getenv("FAR_IN_NETNS");
-  if (in != nullptr && std::strcmp(in, "1") == 0) return;
-  std::vector<char*> args = {const_cast<char*>(FAR_NETNS_RUN_PATH)};
-  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
-  args.push_back(const_cast<char*>(self.c_str()));
-  for (int i = 1; i < argc; ++i) args.push_back(argv[i]);
-  args.push_back(nullptr);
-  execv(FAR_NETNS_RUN_PATH, args.data());
-  std::fprintf(stderr, "far_hardening_study: cannot run %s\n", FAR_NETNS_RUN_PATH);
-  std::exit(1);
-}
-
 }  // namespace
 }  // namespace far::study
 
 int main(int argc, char** argv) {
   using namespace far::study;
-  EnterNetworkNamespace(argc, argv);
+  EnterNetworkNamespace(argc, argv, FAR_NETNS_RUN_PATH);
   if (argc == 4 && std::strcmp(argv[1], kOtherUserFlag) == 0)
     return OtherUserMain(argv[2], std::atoi(argv[3]));
   Settings settings;

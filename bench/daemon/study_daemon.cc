@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -105,11 +106,12 @@ Result<client::DaemonStatus> StudyDaemon::Status() const {
   return client::Client::Status(Options("study-status"));
 }
 
-int64_t StudyDaemon::ResidentKiB() const {
+int64_t StudyDaemon::StatusKiB(const std::string& field) const {
   std::ifstream status("/proc/" + std::to_string(pid_) + "/status");
   std::string line;
+  const std::string key = field + ":";
   while (std::getline(status, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) return std::strtoll(line.c_str() + 6, nullptr, 10);
+    if (line.rfind(key, 0) == 0) return std::strtoll(line.c_str() + key.size(), nullptr, 10);
   }
   return -1;
 }
@@ -148,6 +150,28 @@ int64_t StudyDaemon::LogBytes() const {
   std::error_code ec;
   const auto size = std::filesystem::file_size(log_path_, ec);
   return ec ? -1 : static_cast<int64_t>(size);
+}
+
+std::string CpuModel() {
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  }
+  return "unknown CPU";
+}
+
+void EnterNetworkNamespace(int argc, char** argv, const char* netns_run) {
+  const char* in = std::getenv("FAR_IN_NETNS");
+  if (in != nullptr && std::strcmp(in, "1") == 0) return;
+  std::vector<char*> args = {const_cast<char*>(netns_run)};
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  args.push_back(const_cast<char*>(self.c_str()));
+  for (int i = 1; i < argc; ++i) args.push_back(argv[i]);
+  args.push_back(nullptr);
+  execv(netns_run, args.data());
+  std::fprintf(stderr, "%s: cannot run %s\n", self.c_str(), netns_run);
+  std::exit(1);
 }
 
 }  // namespace far::study

@@ -34,7 +34,9 @@ class StudyDaemon {
                                 std::chrono::milliseconds timeout = std::chrono::seconds(60)) const;
   Result<client::DaemonStatus> Status() const;
   /// VmRSS of the process in KiB (-1 when it cannot be read).
-  int64_t ResidentKiB() const;
+  int64_t ResidentKiB() const { return StatusKiB("VmRSS"); }
+  /// A size field of /proc/<pid>/status ("VmRSS", "RssAnon", "RssShmem", ...) in KiB, or -1.
+  int64_t StatusKiB(const std::string& field) const;
   /// The resident size once no session is open any more and it stopped falling (session
   /// workers free their memory as they end).
   int64_t SettledResidentKiB() const;
@@ -53,5 +55,13 @@ class StudyDaemon {
   pid_t pid_ = -1;
   bool exited_ = false;
 };
+
+/// The CPU's model name from /proc/cpuinfo ("unknown CPU" when it has none).
+std::string CpuModel();
+
+/// Re-runs this program inside a private network namespace through `netns_run`
+/// (deploy/netns-run.sh), as the integration tests run, unless it already runs in one
+/// (FAR_IN_NETNS=1): LCM multicast then never leaves the machine. Returns only inside.
+void EnterNetworkNamespace(int argc, char** argv, const char* netns_run);
 
 }  // namespace far::study
