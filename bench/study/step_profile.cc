@@ -1,9 +1,9 @@
-// far-step-profile: the time of every step of one paper-scale scene with one CPU method, in
+// far-step-profile: the time of every step of one far-study scene with one CPU method, in
 // process (no GL), with the counts a hierarchy change moves (triangle pairs at leaves, exact
 // tests). For profiling a kernel change with `perf record`, and for comparing two builds of it
 // step by step on the same scene; far-study is the interleaved study of record.
-//   far-step-profile --scene breaking --method bvh --frames 8
-//   perf record -g far-step-profile --scene breaking --frames 5 --repeat 50 --repeat-from 3
+//   far-step-profile --scene breaking --method bvh --steps 4
+//   perf record -g far-step-profile --scene breaking --steps 4 --repeat 50 --repeat-from 3
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -11,11 +11,10 @@
 #include <vector>
 
 #include "study_run.h"
+#include "study_scenes.h"
 #include <CLI/CLI.hpp>
 
-#include "far/io/mesh_io.h"
 #include "far/pipeline/pipeline.h"
-#include "far/scenes/scenes.h"
 
 namespace {
 
@@ -24,20 +23,20 @@ using Clock = std::chrono::steady_clock;
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"far-step-profile: time per step of one method on one paper-scale scene"};
+  CLI::App app{"far-step-profile: time per step of one CPU method on one far-study scene"};
   std::string scene_name = "breaking", method_name = "bvh";
-  std::string bunny_path = FAR_STUDY_DATA_DIR "/bunny.obj";
-  int frames = 8, threads = 0, repeat = 1, repeat_from = 0;
-  uint64_t seed = 1;
+  far_study::SceneOptions scene_options;
+  scene_options.bunny_path = FAR_STUDY_DATA_DIR "/bunny.obj";
+  int threads = 0, repeat = 1, repeat_from = 0;
   app.add_option("--scene", scene_name,
-                 "leaves, breaking, bunnies, or a triangle count (the scaling family)")
+                 "a far-study scene, built as far-study builds it: soup, bunnies, leaves, "
+                 "paper-leaves, breaking, paper-bunnies, scaling-<triangles>")
       ->capture_default_str();
   app.add_option("--method", method_name, "a CPU method: bvh, aabb, fcl, exact")
       ->capture_default_str();
-  app.add_option("--frames", frames, "frames of the scene (steps: frames)")->capture_default_str();
-  app.add_option("--threads", threads, "CPU pool threads (0: hardware)")->capture_default_str();
-  app.add_option("--seed", seed, "scene seed (1: far-study's paper-scale scenes)")
+  app.add_option("--steps", scene_options.steps, "measured steps (far-study's --steps)")
       ->capture_default_str();
+  app.add_option("--threads", threads, "CPU pool threads (0: hardware)")->capture_default_str();
   app.add_option("--repeat", repeat,
                  "run each step's Step this many times on the same updates (repeat_ms: their "
                  "median), for enough perf samples of one step")
@@ -45,7 +44,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--repeat-from", repeat_from, "repeat only steps from this one on")
       ->capture_default_str();
-  app.add_option("--bunny", bunny_path, "bunny mesh")->capture_default_str();
+  app.add_option("--bunny", scene_options.bunny_path, "bunny mesh")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   const auto method = far::ParseMethod(method_name);
@@ -55,28 +54,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "far-step-profile: --method must be bvh, aabb, fcl or exact\n");
     return 2;
   }
-  far::Scene scene;
-  if (scene_name == "leaves") {
-    scene = far::scenes::PaperLeavesScene(seed, frames);
-  } else if (scene_name == "breaking") {
-    scene = far::scenes::BreakingScene(seed, frames);
-  } else if (scene_name == "bunnies") {
-    auto bunny = far::ReadMesh(bunny_path);
-    if (!bunny.ok()) {
-      std::fprintf(stderr, "far-step-profile: %s\n", bunny.error().message.c_str());
-      return 1;
-    }
-    scene = far::scenes::BunniesScene(*bunny, 5, seed, frames);
-  } else {
-    int triangles = 0;
-    try {
-      triangles = std::stoi(scene_name);
-    } catch (const std::exception&) {
-      std::fprintf(stderr, "far-step-profile: unknown --scene '%s'\n", scene_name.c_str());
-      return 2;
-    }
-    scene = far::scenes::ScalingScene(seed, triangles, frames);
+  auto study_scene = far_study::MakeStudyScene(scene_name, scene_options);
+  if (!study_scene.ok()) {
+    std::fprintf(stderr, "far-step-profile: %s\n", study_scene.error().message.c_str());
+    return 2;
   }
+  const far::Scene& scene = study_scene->scene;
 
   far::PipelineOptions options;
   options.use_gl = false;

@@ -248,22 +248,28 @@ void DescendLeaf(const Descent& d, const PairFrame& f, const LeafProbe& p, uint3
   const BvhObject& tree_object = d.query.objects[p.leaf_in_a ? f.b : f.a];
   const TriangleBvh& tree = *tree_object.bvh;
   const auto& nodes = tree.nodes();
+  // Stack entries: a node of T and the probe's triangles still live above it (bits 0-3), with
+  // kBoxesTested set for the root, whose box the caller has already found overlapping.
+  constexpr uint32_t kBoxesTested = 1u << 31;
   const uint32_t all = (1u << p.count) - 1;
   std::vector<std::pair<uint32_t, uint32_t>>& stack = out.leaf_stack;
-  stack.assign(1, {root, all});
+  stack.assign(1, {root, all | kBoxesTested});
   for (uint32_t visited = 0; !stack.empty(); ++visited) {
     if (visited % 256 == 255 && d.wanted.stopper->Poll()) return;
-    const auto [index, parent_live] = stack.back();
+    const auto [index, entry] = stack.back();
     stack.pop_back();
     const Node& node = nodes[index];
-    const Eigen::Array3d gap =
-        (node.center - p.center).array().abs() - (node.half_extent + p.half_extent).array();
-    if ((gap > f.margin).any()) continue;
-    if (p.R_LT != nullptr) {  // and along L's axes, the node moved into L
-      const Eigen::Array3d gap_L =
-          ((*p.R_LT * node.center + p.t_LT) - p.leaf->center).array().abs() -
-          (*p.abs_R_LT * node.half_extent + p.leaf->half_extent).array();
-      if ((gap_L > f.margin).any()) continue;
+    const uint32_t parent_live = entry & ~kBoxesTested;
+    if (!(entry & kBoxesTested)) {
+      const Eigen::Array3d gap =
+          (node.center - p.center).array().abs() - (node.half_extent + p.half_extent).array();
+      if ((gap > f.margin).any()) continue;
+      if (p.R_LT != nullptr) {  // and along L's axes, the node moved into L
+        const Eigen::Array3d gap_L =
+            ((*p.R_LT * node.center + p.t_LT) - p.leaf->center).array().abs() -
+            (*p.abs_R_LT * node.half_extent + p.leaf->half_extent).array();
+        if ((gap_L > f.margin).any()) continue;
+      }
     }
     const uint32_t live = LiveAgainst(p, node, parent_live, f.margin);
     if (live == 0) continue;
@@ -295,8 +301,9 @@ void DescendFromLeaf(const Descent& d, const PairFrame& f, uint32_t x, uint32_t 
 }
 
 // Descends an overlapping task of two inner nodes one level: the children pairs of its bigger
-// node that overlap too are pushed onto `next`.
-void Expand(const Descent& d, const Task& task, std::vector<Task>& next) {
+// node that overlap too are pushed onto `next`, except that, with `out`, a pair with a leaf is
+// descended from its leaf at once (seeding passes no `out`: it leaves the work to the pool).
+void Expand(const Descent& d, const Task& task, std::vector<Task>& next, Output* out) {
   const PairFrame& f = d.frames[task.frame];
   const auto& nodes_a = d.query.objects[f.a].bvh->nodes();
   const auto& nodes_b = d.query.objects[f.b].bvh->nodes();
@@ -318,7 +325,11 @@ void Expand(const Descent& d, const Task& task, std::vector<Task>& next) {
       MoveIntoA(f, nodes_b[child], t);
       if (!OverlapInA(f, x, t)) continue;
     }
-    next.push_back(t);
+    if (out != nullptr && (nodes_a[t.x].leaf() || nodes_b[t.y].leaf())) {
+      DescendFromLeaf(d, f, t.x, t.y, *out);
+    } else {
+      next.push_back(t);
+    }
   }
 }
 
@@ -372,7 +383,7 @@ void Descend(const Descent& d, const Task& root, Output& out) {
     if (HasLeaf(d, task)) {
       DescendFromLeaf(d, f, task.x, task.y, out);
     } else {
-      Expand(d, task, stack);
+      Expand(d, task, stack, &out);
     }
   }
 }
@@ -427,7 +438,7 @@ std::vector<Task> SeedTasks(const Descent& d, size_t target) {
       if (HasLeaf(d, task)) {
         next.push_back(task);  // descended from its leaf later, on the pool
       } else {
-        Expand(d, task, next);
+        Expand(d, task, next, nullptr);
       }
     }
     const bool growing = next.size() > tasks.size();
