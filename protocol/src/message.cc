@@ -281,99 +281,131 @@ Error ParseError(std::string_view type, const FieldSpec& field, const std::strin
   return MakeError(ErrorCode::kParseError, std::string(type) + "." + field.name + ": " + what);
 }
 
-// Walks the encoding after the fingerprint and proves that every length fits.
-Result<void> PreScan(const TypeInfo& info, const uint8_t* data, size_t size) {
-  std::array<int64_t, 64> counts{};
-  size_t pos = 8;  // after the fingerprint
-  auto left = [&] { return size - pos; };
-  auto string_at = [&](const FieldSpec& field, std::string_view element) -> Result<void> {
+// Walks the encoding after the fingerprint and proves that every length fits: the fields in
+// schema order, each checked against the bytes left; the counts read so far size the arrays
+// after them.
+class PreScanner {
+ public:
+  PreScanner(const TypeInfo& info, const uint8_t* data, size_t size)
+      : info_(info), data_(data), size_(size) {}
+
+  Result<void> Run() {
+    for (size_t i = 0; i < info_.schema.size(); ++i) {
+      const FieldSpec& field = info_.schema[i];
+      Result<void> ok;
+      switch (field.kind) {
+        case FieldKind::kScalar:
+        case FieldKind::kCount:
+          ok = Scalar(field, i);
+          break;
+        case FieldKind::kArray:
+          ok = Array(field);
+          break;
+        case FieldKind::kString:
+          ok = String(field, "");
+          break;
+        case FieldKind::kStringArray:
+          ok = StringArray(field);
+          break;
+      }
+      if (!ok) return ok;
+    }
+    if (pos_ != size_) {
+      return MakeError(ErrorCode::kParseError, std::string(info_.name) + ": " +
+                                                   std::to_string(size_ - pos_) +
+                                                   " trailing bytes after the last field");
+    }
+    return {};
+  }
+
+ private:
+  size_t left() const { return size_ - pos_; }
+
+  // A fixed-width field; a count (field i) is kept for the arrays that follow.
+  Result<void> Scalar(const FieldSpec& field, size_t i) {
+    if (left() < field.width) {
+      return ParseError(info_.name, field,
+                        "needs " + std::to_string(field.width) + " bytes, " +
+                            std::to_string(left()) + " left (truncated)");
+    }
+    if (field.kind == FieldKind::kCount) {
+      const int64_t count = ReadBigEndian(data_ + pos_, 4);
+      if (count < 0) return ParseError(info_.name, field, std::to_string(count) + " is negative");
+      counts_[i] = count;
+    }
+    pos_ += field.width;
+    return {};
+  }
+
+  Result<void> Array(const FieldSpec& field) {
+    // 64-bit arithmetic: count < 2^31 and width <= 8, no overflow.
+    const uint64_t count = static_cast<uint64_t>(counts_[field.count]);
+    const uint64_t bytes = count * field.width;
+    if (bytes > left()) {
+      return ParseError(info_.name, field,
+                        std::to_string(count) + " elements of " + std::to_string(field.width) +
+                            " bytes need " + std::to_string(bytes) + " bytes, " +
+                            std::to_string(left()) + " left (" + info_.schema[field.count].name +
+                            " is too large)");
+    }
+    pos_ += static_cast<size_t>(bytes);
+    return {};
+  }
+
+  // An LCM string: a 4-byte length that counts its final NUL, then the bytes, NUL only last.
+  Result<void> String(const FieldSpec& field, std::string_view element) {
     if (left() < 4) {
-      return ParseError(info.name, field,
+      return ParseError(info_.name, field,
                         std::string(element) + "string length needs 4 bytes, " +
                             std::to_string(left()) + " left");
     }
-    const int64_t length = ReadBigEndian(data + pos, 4);
-    pos += 4;
+    const int64_t length = ReadBigEndian(data_ + pos_, 4);
+    pos_ += 4;
     if (length < 1) {
-      return ParseError(info.name, field,
+      return ParseError(info_.name, field,
                         std::string(element) + "string length " + std::to_string(length) +
                             " is less than 1 (LCM strings include their NUL)");
     }
     if (static_cast<uint64_t>(length) > left()) {
-      return ParseError(info.name, field,
+      return ParseError(info_.name, field,
                         std::string(element) + "string length " + std::to_string(length) +
                             " runs past the end (" + std::to_string(left()) + " bytes left)");
     }
-    const auto* text = reinterpret_cast<const char*>(data + pos);
+    const auto* text = reinterpret_cast<const char*>(data_ + pos_);
     if (text[length - 1] != '\0') {
-      return ParseError(info.name, field, std::string(element) + "string lacks its final NUL");
+      return ParseError(info_.name, field, std::string(element) + "string lacks its final NUL");
     }
     if (std::memchr(text, '\0', static_cast<size_t>(length - 1)) != nullptr) {
-      return ParseError(info.name, field, std::string(element) + "string contains a NUL");
+      return ParseError(info_.name, field, std::string(element) + "string contains a NUL");
     }
-    pos += static_cast<size_t>(length);
+    pos_ += static_cast<size_t>(length);
     return {};
-  };
+  }
 
-  for (size_t i = 0; i < info.schema.size(); ++i) {
-    const FieldSpec& field = info.schema[i];
-    switch (field.kind) {
-      case FieldKind::kScalar:
-      case FieldKind::kCount: {
-        if (left() < field.width) {
-          return ParseError(info.name, field,
-                            "needs " + std::to_string(field.width) + " bytes, " +
-                                std::to_string(left()) + " left (truncated)");
-        }
-        if (field.kind == FieldKind::kCount) {
-          const int64_t count = ReadBigEndian(data + pos, 4);
-          if (count < 0) {
-            return ParseError(info.name, field, std::to_string(count) + " is negative");
-          }
-          counts[i] = count;
-        }
-        pos += field.width;
-        break;
-      }
-      case FieldKind::kArray: {
-        // 64-bit arithmetic: count < 2^31 and width <= 8, no overflow.
-        const uint64_t count = static_cast<uint64_t>(counts[field.count]);
-        const uint64_t bytes = count * field.width;
-        if (bytes > left()) {
-          return ParseError(info.name, field,
-                            std::to_string(count) + " elements of " + std::to_string(field.width) +
-                                " bytes need " + std::to_string(bytes) + " bytes, " +
-                                std::to_string(left()) + " left (" + info.schema[field.count].name +
-                                " is too large)");
-        }
-        pos += static_cast<size_t>(bytes);
-        break;
-      }
-      case FieldKind::kString:
-        if (auto ok = string_at(field, ""); !ok) return ok.error();
-        break;
-      case FieldKind::kStringArray: {
-        const int64_t count = counts[field.count];
-        // Each string takes at least 5 bytes; check before walking so a huge count fails fast.
-        if (static_cast<uint64_t>(count) * 5 > left()) {
-          return ParseError(info.name, field,
-                            std::to_string(count) + " strings need at least " +
-                                std::to_string(count * 5) + " bytes, " + std::to_string(left()) +
-                                " left (" + info.schema[field.count].name + " is too large)");
-        }
-        for (int64_t k = 0; k < count; ++k) {
-          if (auto ok = string_at(field, "[" + std::to_string(k) + "] "); !ok) return ok.error();
-        }
-        break;
-      }
+  Result<void> StringArray(const FieldSpec& field) {
+    const int64_t count = counts_[field.count];
+    // Each string takes at least 5 bytes; check before walking so a huge count fails fast.
+    if (static_cast<uint64_t>(count) * 5 > left()) {
+      return ParseError(info_.name, field,
+                        std::to_string(count) + " strings need at least " +
+                            std::to_string(count * 5) + " bytes, " + std::to_string(left()) +
+                            " left (" + info_.schema[field.count].name + " is too large)");
     }
+    for (int64_t k = 0; k < count; ++k) {
+      if (auto ok = String(field, "[" + std::to_string(k) + "] "); !ok) return ok.error();
+    }
+    return {};
   }
-  if (pos != size) {
-    return MakeError(ErrorCode::kParseError, std::string(info.name) + ": " +
-                                                 std::to_string(size - pos) +
-                                                 " trailing bytes after the last field");
-  }
-  return {};
+
+  const TypeInfo& info_;
+  const uint8_t* data_;
+  size_t size_;
+  size_t pos_ = 8;  // after the fingerprint
+  std::array<int64_t, 64> counts_{};
+};
+
+Result<void> PreScan(const TypeInfo& info, const uint8_t* data, size_t size) {
+  return PreScanner(info, data, size).Run();
 }
 
 }  // namespace
