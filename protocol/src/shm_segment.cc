@@ -132,18 +132,18 @@ Result<std::unique_ptr<ShmSegment>> ShmSegment::Create(uint64_t session_id,
   return segment;
 }
 
-Result<std::unique_ptr<ShmSegment>> ShmSegment::Open(int fd, uint64_t session_id) {
-  std::unique_ptr<ShmSegment> segment(new ShmSegment());
-  segment->name_ = "far-session-" + std::to_string(session_id);
-  segment->session_id_ = session_id;
-  if (fd < 0) return MakeError(ErrorCode::kInvalidArgument, "segment: no file descriptor");
+namespace {
+
+// The size of a segment file the daemon is handed, once it is known to be a memory file
+// sealed against resizing (nobody can change its size under the mapping) of a size within the
+// rings' bounds. Closes `fd` when it is not.
+Result<uint64_t> SealedSegmentSize(int fd) {
   struct stat info {};
   if (fstat(fd, &info) != 0) {
     const int error = errno;
     close(fd);
     return MakeError(ErrorCode::kUnavailable, "segment: fstat failed: " + ErrnoText(error));
   }
-  // A sealed regular file: nobody can change its size under this mapping.
   const int seals = fcntl(fd, F_GET_SEALS);
   if (!S_ISREG(info.st_mode) || seals < 0 ||
       (seals & (F_SEAL_SHRINK | F_SEAL_GROW)) != (F_SEAL_SHRINK | F_SEAL_GROW)) {
@@ -158,26 +158,12 @@ Result<std::unique_ptr<ShmSegment>> ShmSegment::Open(int fd, uint64_t session_id
     return MakeError(ErrorCode::kParseError,
                      "segment: size " + std::to_string(size) + " is out of bounds");
   }
-  void* base = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-  const int mmap_error = errno;
-  close(fd);
-  if (base == MAP_FAILED) {
-    return MakeError(ErrorCode::kUnavailable, "segment: mmap failed: " + ErrnoText(mmap_error));
-  }
-  segment->mapping_ = std::make_unique<internal::MappedRange>();
-  segment->mapping_->base = static_cast<uint8_t*>(base);
-  segment->mapping_->size = size;
+  return size;
+}
 
-  // The header's constant part, copied once and checked.
-  uint8_t constants[offsetof(SegmentHeader, update_write_index)];
-  {
-    internal::ScopedShmAccess access(segment->mapping_.get());
-    std::memcpy(constants, base, sizeof(constants));
-    if (access.faulted()) {
-      return MakeError(ErrorCode::kParseError, "segment: truncated while its header was read");
-    }
-  }
-  const HeaderCopy h = CopyHeader(constants);
+// Checks the header's constant part against the file's size and the session, and returns the
+// layout it describes.
+Result<SegmentLayout> CheckHeader(const HeaderCopy& h, uint64_t size, uint64_t session_id) {
   if (h.magic != kSegmentMagic) {
     return MakeError(ErrorCode::kParseError, "segment: magic " + Hex64(h.magic) +
                                                  " is not FARRING (" + Hex64(kSegmentMagic) + ")");
@@ -213,7 +199,41 @@ Result<std::unique_ptr<ShmSegment>> ShmSegment::Open(int fd, uint64_t session_id
                      "segment: ring offsets " + std::to_string(h.update_ring_offset) + ", " +
                          std::to_string(h.reply_ring_offset) + " do not match the layout");
   }
-  segment->layout_ = expected;
+  return expected;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<ShmSegment>> ShmSegment::Open(int fd, uint64_t session_id) {
+  std::unique_ptr<ShmSegment> segment(new ShmSegment());
+  segment->name_ = "far-session-" + std::to_string(session_id);
+  segment->session_id_ = session_id;
+  if (fd < 0) return MakeError(ErrorCode::kInvalidArgument, "segment: no file descriptor");
+  const Result<uint64_t> size = SealedSegmentSize(fd);
+  if (!size) return size.error();
+  void* base = mmap(nullptr, *size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+  const int mmap_error = errno;
+  close(fd);
+  if (base == MAP_FAILED) {
+    return MakeError(ErrorCode::kUnavailable, "segment: mmap failed: " + ErrnoText(mmap_error));
+  }
+  segment->mapping_ = std::make_unique<internal::MappedRange>();
+  segment->mapping_->base = static_cast<uint8_t*>(base);
+  segment->mapping_->size = *size;
+
+  // The header's constant part, copied once and checked.
+  uint8_t constants[offsetof(SegmentHeader, update_write_index)];
+  {
+    internal::ScopedShmAccess access(segment->mapping_.get());
+    std::memcpy(constants, base, sizeof(constants));
+    if (access.faulted()) {
+      return MakeError(ErrorCode::kParseError, "segment: truncated while its header was read");
+    }
+  }
+  const HeaderCopy h = CopyHeader(constants);
+  const Result<SegmentLayout> layout = CheckHeader(h, *size, session_id);
+  if (!layout) return layout.error();
+  segment->layout_ = *layout;
   std::memcpy(segment->key_.data(), h.session_key, kSessionKeyBytes);
   segment->header_ = static_cast<SegmentHeader*>(base);
   return segment;
