@@ -263,6 +263,41 @@ TEST(BvhStageTest, TouchingAtACornerUnderARotatedPose) {
   EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
 }
 
+// Object A: `triangles` random triangles placed near `offset`; object B: no triangles yet, under
+// another random pose there. The tests below give B triangles made in the world from A's and
+// mapped into B's own frame through X_BW (B's pose inverted), so that they land on A's only up
+// to the rounding of the two poses.
+void MakeMirrorPair(std::mt19937& rng, int triangles, double offset, Object& a, Object& b) {
+  a.id = 1;
+  b.id = 2;
+  RandomMesh(rng, triangles, 1.0, 0.2, a);
+  a.X_WM = RandomPose(rng, 0.1, offset);
+  a.Place();
+  b.X_WM = RandomPose(rng, 0.1, offset);
+}
+
+// Appends the world triangle (p, q, r) to B, mapped into B's frame.
+void AddWorldTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r,
+                      Object& b) {
+  const Eigen::Isometry3d X_BW = b.X_WM.inverse();
+  const auto base = static_cast<uint32_t>(b.p_MV.size());
+  for (const Eigen::Vector3d& p_W : {p, q, r}) b.p_MV.push_back(X_BW * p_W);
+  b.triangles.push_back({base, base + 1, base + 2});
+}
+
+// Places and builds both objects; the hierarchy stage must find the reference's contacts, of
+// which there must be more than `min_contacts`.
+void ExpectTheReferenceContacts(Object& a, Object& b, size_t min_contacts) {
+  for (Object* o : {&a, &b}) {
+    o->Place();
+    o->bvh.Build(o->p_MV, o->triangles);
+  }
+  const std::vector<Object> scene = {a, b};
+  const ExactResult expected = Reference(scene, std::nullopt);
+  EXPECT_GT(expected.contacts.size(), min_contacts);
+  EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
+}
+
 // Triangles of B that share a corner (or a point of an edge) with a triangle of A in the world:
 // B's mesh is that world geometry mapped into B's own rotated frame far from the origin, so its
 // world vertices, computed back through X_WB, land on A's only up to rounding. Whether each pair
@@ -276,15 +311,9 @@ TEST(BvhStageTest, CornersSharedThroughRoundedPosesFarFromTheOrigin) {
     SCOPED_TRACE(offset);
     SCOPED_TRACE(same_rotation);
     Object a, b;
-    a.id = 1;
-    b.id = 2;
-    RandomMesh(rng, 300, 1.0, 0.2, a);
-    a.X_WM = RandomPose(rng, 0.1, offset);
-    a.Place();
-    b.X_WM = RandomPose(rng, 0.1, offset);
+    MakeMirrorPair(rng, 300, offset, a, b);
     // The same rotation takes the hierarchy stage's translation-only path.
     if (same_rotation) b.X_WM.linear() = a.X_WM.linear();
-    const Eigen::Isometry3d X_BW = b.X_WM.inverse();
     for (uint32_t t = 0; t < a.triangles.size(); ++t) {
       const Eigen::Vector3d corner = a.p_WV[a.triangles[t][t % 3]];
       const Eigen::Vector3d edge_point =
@@ -292,20 +321,9 @@ TEST(BvhStageTest, CornersSharedThroughRoundedPosesFarFromTheOrigin) {
       const Eigen::Vector3d touch = t % 2 ? corner : edge_point;
       const Eigen::Vector3d d1(unit(rng), unit(rng), unit(rng)),
           d2(unit(rng), unit(rng), unit(rng));
-      const auto base = static_cast<uint32_t>(b.p_MV.size());
-      for (const Eigen::Vector3d& p_W :
-           {touch, Eigen::Vector3d(touch + 0.1 * d1), Eigen::Vector3d(touch + 0.1 * d2)})
-        b.p_MV.push_back(X_BW * p_W);
-      b.triangles.push_back({base, base + 1, base + 2});
+      AddWorldTriangle(touch, touch + 0.1 * d1, touch + 0.1 * d2, b);
     }
-    for (Object* o : {&a, &b}) {
-      o->Place();
-      o->bvh.Build(o->p_MV, o->triangles);
-    }
-    const std::vector<Object> scene = {a, b};
-    const ExactResult expected = Reference(scene, std::nullopt);
-    EXPECT_GT(expected.contacts.size(), 100u);
-    EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
+    ExpectTheReferenceContacts(a, b, 100);
   }
 }
 
@@ -402,31 +420,14 @@ TEST(BvhStageTest, CoplanarTrianglesOnTheirSlabsThroughRoundedPoses) {
   for (const double offset : {0.0, 1e4, 1e6}) {
     SCOPED_TRACE(offset);
     Object a, b;
-    a.id = 1;
-    b.id = 2;
-    RandomMesh(rng, 200, 1.0, 0.2, a);
-    a.X_WM = RandomPose(rng, 0.1, offset);
-    a.Place();
-    b.X_WM = RandomPose(rng, 0.1, offset);
-    const Eigen::Isometry3d X_BW = b.X_WM.inverse();
+    MakeMirrorPair(rng, 200, offset, a, b);
     for (const TriangleIndices& t : a.triangles) {
       const Eigen::Vector3d p = a.p_WV[t[0]], q = a.p_WV[t[1]], r = a.p_WV[t[2]];
       // Slid within A's plane along an edge: overlapping for s < 1, apart beyond.
-      const double s = 0.5 + unit(rng);
-      const Eigen::Vector3d shift = s * (q - p);
-      const auto base = static_cast<uint32_t>(b.p_MV.size());
-      for (const Eigen::Vector3d& p_W : {p, q, r})
-        b.p_MV.push_back(X_BW * Eigen::Vector3d(p_W + shift));
-      b.triangles.push_back({base, base + 1, base + 2});
+      const Eigen::Vector3d shift = (0.5 + unit(rng)) * (q - p);
+      AddWorldTriangle(p + shift, q + shift, r + shift, b);
     }
-    for (Object* o : {&a, &b}) {
-      o->Place();
-      o->bvh.Build(o->p_MV, o->triangles);
-    }
-    const std::vector<Object> scene = {a, b};
-    const ExactResult expected = Reference(scene, std::nullopt);
-    EXPECT_GT(expected.contacts.size(), 20u);  // 42-48 of the 200 slid triangles
-    EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
+    ExpectTheReferenceContacts(a, b, 20);  // 42-48 of the 200 slid triangles touch
   }
 }
 
