@@ -8,6 +8,8 @@
 //   (RunExactTests: what aabb does when the partner's box holds everything);
 // - BM_Pair_Fcl: FCL's collide of two prebuilt BVHModel<OBBRSS> (every contact), as the fcl
 //   method does per broadphase pair;
+// - BM_Pair_BvhFans / BM_Pair_FclFans: the same on two fans of slivers (a fractured piece's
+//   shape), bvh with its triangles' slabs (second argument 1) and without (0: refit in place);
 // - BM_Hierarchy_Build / _Refit: the one-off cost of a rigid object and the per-step cost of a
 //   deformable one.
 // All of them find the same contacts (checked once, outside the timing; FCL's only up to its
@@ -65,14 +67,36 @@ Mesh Ball(int n, double radius) {
   return mesh;
 }
 
-// Two balls, B moved half a radius off A's center and rotated: a deep, curved overlap.
+// A fractured fragment's shape: a wavy loop of n / 2 points closed by two fans of slivers, one
+// to an apex on each side (what far::scenes' Fracture closes a piece with): n long, thin,
+// slanted triangles, whose axis-aligned boxes are loose.
+Mesh Fans(int n) {
+  const int loop = std::max(3, n / 2);
+  const double pi = std::acos(-1.0);
+  Mesh mesh;
+  for (int i = 0; i < loop; ++i) {
+    const double angle = 2 * pi * i / loop;
+    mesh.p_MV.emplace_back(std::cos(angle), std::sin(angle), 0.15 * std::sin(9 * angle));
+  }
+  mesh.p_MV.emplace_back(0.2, -0.1, 0.5);
+  mesh.p_MV.emplace_back(-0.1, 0.2, -0.4);
+  const auto top = static_cast<uint32_t>(loop), bottom = top + 1;
+  for (uint32_t i = 0; i < top; ++i) {
+    mesh.triangles.push_back({i, (i + 1) % top, top});
+    mesh.triangles.push_back({(i + 1) % top, i, bottom});
+  }
+  return mesh;
+}
+
+// Two copies of a mesh (balls: a deep, curved overlap; fans: slivers crossing each other), B
+// moved half a radius off A's center and rotated.
 struct PairScene {
   Mesh mesh;
   Eigen::Isometry3d X_WA = Eigen::Isometry3d::Identity(), X_WB = Eigen::Isometry3d::Identity();
   std::vector<Eigen::Vector3d> p_WA, p_WB;
   TriangleBvh bvh;  // of the mesh in its own frame: both objects share it
 
-  explicit PairScene(int n) : mesh(Ball(n, 1.0)) {
+  explicit PairScene(Mesh shape) : mesh(std::move(shape)) {
     X_WB.linear() =
         Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
     X_WB.translation() = Eigen::Vector3d(0.5, 0.2, 0.1);
@@ -87,19 +111,19 @@ struct PairScene {
   }
 };
 
-const PairScene& Scene(int n) {
-  static std::map<int, std::unique_ptr<PairScene>> scenes;
-  auto& scene = scenes[n];
-  if (!scene) scene = std::make_unique<PairScene>(n);
+const PairScene& Scene(int n, bool fans = false) {
+  static std::map<std::pair<int, bool>, std::unique_ptr<PairScene>> scenes;
+  auto& scene = scenes[{n, fans}];
+  if (!scene) scene = std::make_unique<PairScene>(fans ? Fans(n) : Ball(n, 1.0));
   return *scene;
 }
 
 const std::vector<ObjectPair> kPairs = {{1, 2}};
 
-ExactResult RunBvh(const PairScene& scene, ThreadPool& pool) {
-  const std::vector<BvhObject> objects = {
-      {{1, scene.p_WA, scene.mesh.triangles}, &scene.bvh, scene.X_WA},
-      {{2, scene.p_WB, scene.mesh.triangles}, &scene.bvh, scene.X_WB}};
+ExactResult RunBvh(const PairScene& scene, ThreadPool& pool, const TriangleBvh* bvh = nullptr) {
+  if (bvh == nullptr) bvh = &scene.bvh;
+  const std::vector<BvhObject> objects = {{{1, scene.p_WA, scene.mesh.triangles}, bvh, scene.X_WA},
+                                          {{2, scene.p_WB, scene.mesh.triangles}, bvh, scene.X_WB}};
   BvhQuery query;
   query.objects = objects;
   query.object_pairs = kPairs;
@@ -142,6 +166,28 @@ void BM_Pair_Bvh(benchmark::State& state) {
   ThreadPool pool(static_cast<int>(state.range(1)));
   size_t contacts = 0;
   for (auto _ : state) contacts = RunBvh(scene, pool).contacts.size();
+  state.counters["contacts"] = static_cast<double>(contacts);
+}
+
+// Fans of slivers, with the hierarchy as built (with the triangles' slabs) or refit in place
+// (none: what a deformable object has); second argument 1 / 0.
+void BM_Pair_BvhFans(benchmark::State& state) {
+  const PairScene& scene = Scene(static_cast<int>(state.range(0)), /*fans=*/true);
+  TriangleBvh without_slabs = scene.bvh;
+  without_slabs.Refit(scene.mesh.p_MV, scene.mesh.triangles);
+  const TriangleBvh* bvh = state.range(1) ? &scene.bvh : &without_slabs;
+  ThreadPool pool(2);
+  ExactResult result;
+  for (auto _ : state) result = RunBvh(scene, pool, bvh);
+  state.counters["contacts"] = static_cast<double>(result.contacts.size());
+  state.counters["tested"] = static_cast<double>(result.pairs_tested);
+}
+
+void BM_Pair_FclFans(benchmark::State& state) {
+  const PairScene& scene = Scene(static_cast<int>(state.range(0)), /*fans=*/true);
+  const auto model = FclModel(scene.mesh);
+  size_t contacts = 0;
+  for (auto _ : state) contacts = RunFcl(scene, model);
   state.counters["contacts"] = static_cast<double>(contacts);
 }
 
@@ -199,6 +245,8 @@ BENCHMARK(BM_Pair_Bvh)
     ->Args({20000, 2})
     ->Args({80000, 2})
     ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Pair_BvhFans)->Args({4000, 1})->Args({4000, 0})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Pair_FclFans)->Arg(4000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Pair_SortSweep)->Args({20000, 2})->Args({80000, 2})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Pair_Fcl)->Args({20000, 1})->Args({80000, 1})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Hierarchy_Build)->Arg(20000)->Arg(80000)->Unit(benchmark::kMillisecond);
