@@ -19,7 +19,7 @@
 // axis can show a larger gap. The test below compares the gap along the face axes of both boxes
 // with margin = slack + 2^-40 (the boxes' and poses' magnitudes), which also covers the
 // rounding of the relative pose and of the test itself (tens of eps of the same magnitudes,
-// far below 2^-40 = 8192 eps). The same holds for a triangle's slab as the axis: the triangle's
+// far below 2^-40 = 8192 eps). The same holds for a triangle's slabs as axes: the triangle's
 // exact vertices project into [lo, hi] up to a few ulps, and a unit axis (up to rounding) shows
 // no gap larger than the distance.
 
@@ -131,12 +131,13 @@ struct Descent {
 
 // A leaf of one object (L) prepared for a descent of the other object's hierarchy (T): its
 // box and its triangles' slabs, moved into T's frame. A node of T is passed over when its box is
-// apart from the leaf's along T's axes, or when every slab of the leaf separates it: the node's
-// box, projected onto the triangle's normal, lies beyond the triangle's own projection. For the
-// thin, slanted triangles that make axis-aligned boxes loose (slivers, fans, tilted leaves)
-// that plane is the separating axis the boxes lack. Margins as for the boxes: the projections
-// below are dot products of the same magnitudes, a few ulps each, and an approximate unit
-// normal is still a valid axis (a gap along it is at most the distance, up to a few ulps).
+// apart from the leaf's along T's axes, or when every triangle of the leaf is apart from it
+// along one of its slabs' axes: the node's box, projected onto the axis (the triangle's normal,
+// or across it), lies beyond the triangle's own projection. For the thin, slanted triangles
+// that make axis-aligned boxes loose (slivers, fans, tilted leaves) those are the separating
+// axes the boxes lack. Margins as for the boxes: the projections below are dot products of the
+// same magnitudes, a few ulps each, and an approximate unit axis is still a valid axis (a gap
+// along it is at most the distance, up to a few ulps).
 struct LeafProbe {
   const Node* leaf = nullptr;
   bool leaf_in_a = true;                  // L is the pair's A (T is B), or the other way round
@@ -146,8 +147,9 @@ struct LeafProbe {
   Eigen::Vector3d center, half_extent;  // the leaf's box in T (an AABB around its OBB)
   uint32_t count = 0;
   bool has_slabs = false;
-  Eigen::Vector3d normal[TriangleBvh::kLeafSize];                 // in T
-  double lo[TriangleBvh::kLeafSize], hi[TriangleBvh::kLeafSize];  // along normal, in T
+  static constexpr int kAxes = TriangleBvh::Slab::kAxes;
+  Eigen::Vector3d axis[TriangleBvh::kLeafSize][kAxes];                          // in T
+  double lo[TriangleBvh::kLeafSize][kAxes], hi[TriangleBvh::kLeafSize][kAxes];  // along them, in T
 };
 
 LeafProbe MakeProbe(const PairFrame& f, const TriangleBvh& leaf_bvh, const Node& leaf,
@@ -171,10 +173,12 @@ LeafProbe MakeProbe(const PairFrame& f, const TriangleBvh& leaf_bvh, const Node&
   for (uint32_t i = 0; i < leaf.count && p.has_slabs; ++i) {
     // n . p_L = (R_TL n) . p_T + n . t_LT
     const TriangleBvh::Slab& slab = leaf_bvh.slabs()[leaf.first + i];
-    const double shift = slab.normal.dot(t_LT);
-    p.normal[i] = f.aligned ? slab.normal : Eigen::Vector3d(R_TL * slab.normal);
-    p.lo[i] = slab.lo - shift;
-    p.hi[i] = slab.hi - shift;
+    for (int k = 0; k < LeafProbe::kAxes; ++k) {
+      const double shift = slab.axis[k].dot(t_LT);
+      p.axis[i][k] = f.aligned ? slab.axis[k] : Eigen::Vector3d(R_TL * slab.axis[k]);
+      p.lo[i][k] = slab.lo[k] - shift;
+      p.hi[i][k] = slab.hi[k] - shift;
+    }
   }
   return p;
 }
@@ -185,10 +189,13 @@ uint32_t LiveAgainst(const LeafProbe& p, const Node& node, uint32_t live, double
   uint32_t kept = 0;
   for (uint32_t i = 0; i < p.count; ++i) {
     if (!(live >> i & 1)) continue;
-    const double middle = p.normal[i].dot(node.center);
-    const double radius = p.normal[i].cwiseAbs().dot(node.half_extent);
-    if (middle - radius > p.hi[i] + margin || middle + radius < p.lo[i] - margin) continue;
-    kept |= 1u << i;
+    bool apart = false;
+    for (int k = 0; k < LeafProbe::kAxes && !apart; ++k) {
+      const double middle = p.axis[i][k].dot(node.center);
+      const double radius = p.axis[i][k].cwiseAbs().dot(node.half_extent);
+      apart = middle - radius > p.hi[i][k] + margin || middle + radius < p.lo[i][k] - margin;
+    }
+    if (!apart) kept |= 1u << i;
   }
   return kept;
 }
@@ -201,13 +208,16 @@ uint32_t TreeLeafLive(const LeafProbe& p, const TriangleBvh& tree, const Node& l
   uint32_t kept = 0;
   for (uint32_t j = 0; j < leaf.count; ++j) {
     const TriangleBvh::Slab& slab = tree.slabs()[leaf.first + j];
-    const double middle = slab.normal.dot(p.center);
-    // |R_TL^T n| . e_L: the OBB's extent along n.
-    const Eigen::Vector3d n_L =
-        p.R_LT != nullptr ? Eigen::Vector3d(*p.R_LT * slab.normal) : slab.normal;
-    const double radius = n_L.cwiseAbs().dot(p.leaf->half_extent);
-    if (middle - radius > slab.hi + margin || middle + radius < slab.lo - margin) continue;
-    kept |= 1u << j;
+    bool apart = false;
+    for (int k = 0; k < TriangleBvh::Slab::kAxes && !apart; ++k) {
+      const double middle = slab.axis[k].dot(p.center);
+      // |R_TL^T n| . e_L: the OBB's extent along the axis.
+      const Eigen::Vector3d n_L =
+          p.R_LT != nullptr ? Eigen::Vector3d(*p.R_LT * slab.axis[k]) : slab.axis[k];
+      const double radius = n_L.cwiseAbs().dot(p.leaf->half_extent);
+      apart = middle - radius > slab.hi[k] + margin || middle + radius < slab.lo[k] - margin;
+    }
+    if (!apart) kept |= 1u << j;
   }
   return kept;
 }

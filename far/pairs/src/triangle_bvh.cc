@@ -61,13 +61,31 @@ TriangleBvh::Slab SlabOf(std::span<const Eigen::Vector3d> p, const TriangleIndic
   const Eigen::Vector3d& b = p[t[1]];
   const Eigen::Vector3d& c = p[t[2]];
   TriangleBvh::Slab slab;
-  slab.normal = (b - a).cross(c - a);
-  const double length = slab.normal.norm();
-  if (!(length > 0) || !std::isfinite(length)) return {Eigen::Vector3d::Zero(), 0, 0};
-  slab.normal *= 1 / length;
-  const double da = slab.normal.dot(a), db = slab.normal.dot(b), dc = slab.normal.dot(c);
-  slab.lo = std::min({da, db, dc});
-  slab.hi = std::max({da, db, dc});
+  Eigen::Vector3d normal = (b - a).cross(c - a);
+  const double length = normal.norm();
+  if (!(length > 0) || !std::isfinite(length)) {
+    for (auto& axis : slab.axis) axis.setZero();
+    return slab;
+  }
+  normal *= 1 / length;
+  // The longest edge's direction; across it, in the triangle's plane.
+  Eigen::Vector3d edge = b - a;
+  if ((c - b).squaredNorm() > edge.squaredNorm()) edge = c - b;
+  if ((a - c).squaredNorm() > edge.squaredNorm()) edge = a - c;
+  Eigen::Vector3d across = normal.cross(edge);
+  const double across_length = across.norm();
+  if (across_length > 0 && std::isfinite(across_length)) {
+    across *= 1 / across_length;
+  } else {
+    across.setZero();
+  }
+  slab.axis[0] = normal;
+  slab.axis[1] = across;
+  for (int k = 0; k < TriangleBvh::Slab::kAxes; ++k) {
+    const double da = slab.axis[k].dot(a), db = slab.axis[k].dot(b), dc = slab.axis[k].dot(c);
+    slab.lo[k] = std::min({da, db, dc});
+    slab.hi[k] = std::max({da, db, dc});
+  }
   return slab;
 }
 

@@ -39,7 +39,7 @@ struct BvhQuery {
 
 /// The answer, and the candidate triangles: per object (indexed like `objects`), sorted, the
 /// triangles whose world box is within the query's slack of a triangle box of a partner that
-/// no slab (a triangle's plane, see RunBvhTests) separates from it.
+/// no slab (a triangle's plane or the direction across it, see RunBvhTests) separates from it.
 struct BvhResult {
   ExactResult exact;
   std::vector<std::vector<uint32_t>> candidates;
@@ -49,9 +49,9 @@ struct BvhResult {
 /// the frame of each (the relative pose composed in double; boxes compared along the six face
 /// axes of both, with a margin that covers the query distance and every rounding of the world
 /// vertices and of the test itself). Once it reaches a leaf, the leaf descends the other
-/// hierarchy alone, and each of its triangles' slabs (TriangleBvh::slabs, the triangle's plane)
-/// is a further separating axis with the same margin: a triangle apart from a node is dropped
-/// for that node's subtree, and at the other hierarchy's leaves that leaf's slabs drop its
+/// hierarchy alone, and each of its triangles' slabs (TriangleBvh::slabs: the triangle's plane,
+/// and across it) are further separating axes with the same margin: a triangle apart from a node is
+/// dropped for that node's subtree, and at the other hierarchy's leaves that leaf's slabs drop its
 /// triangles apart from the first leaf's box. The triangle pairs left go to the world-box
 /// prefilter and the exact predicates of the exact stage (RunExactTests). Never drops a pair the
 /// exact predicates would accept: the answer equals BruteForceReference's for the same pairs.

@@ -16,9 +16,9 @@ namespace far {
 /// or static object builds it once; a deformable one refits it when its vertices move (and
 /// rebuilds it when refitting has made it much looser). Boxes hold the vertex coordinates
 /// themselves (min/max in double, exact), so every triangle lies in the closed box of each of
-/// its ancestors. A built tree also keeps each triangle's plane as a slab (slabs()): a descent
-/// uses it as a separating axis, which for thin and slanted triangles cuts far more than the
-/// boxes do.
+/// its ancestors. A built tree also keeps two slabs per triangle (slabs(): its plane, and across
+/// it): a descent uses them as separating axes, which for thin and slanted triangles cut far
+/// more than the boxes do.
 /// Thread safety: none (one owner); const methods may run concurrently.
 class TriangleBvh {
  public:
@@ -36,14 +36,19 @@ class TriangleBvh {
     bool leaf() const { return count > 0; }
   };
 
-  /// A triangle's plane as a separating axis: `normal` (unit length up to rounding, or zero for
-  /// a degenerate triangle, which then never separates anything) and [lo, hi], the computed
-  /// normal . p of its three vertices. The computed values are within a few ulps of the exact
-  /// projections of the vertices onto `normal`; a caller's margin must cover that (the
-  /// descent's 2^-40 of the coordinates' magnitude does, by a factor of over a thousand).
+  /// A triangle's two best separating axes, each with the triangle's extent along it: its
+  /// normal (a slab of zero thickness: its plane) and the direction across it in its plane,
+  /// perpendicular to its longest edge (for a sliver, a slab as thin as the sliver). Axes are
+  /// unit length up to rounding, or zero where the triangle has no plane (degenerate) or no
+  /// longest edge to cross, and then never separate anything. [lo[k], hi[k]] holds the computed
+  /// axis[k] . p of the three vertices, within a few ulps of the exact projections; a caller's
+  /// margin must cover that (the descent's 2^-40 of the coordinates' magnitude does, by a factor
+  /// of over a thousand). A third axis, along the longest edge, was measured and cut nothing
+  /// more (far_bvh_benchmark BM_Pair_BvhFans): the boxes already bound that direction.
   struct Slab {
-    Eigen::Vector3d normal;
-    double lo = 0, hi = 0;
+    static constexpr int kAxes = 2;
+    Eigen::Vector3d axis[kAxes];  ///< the normal; across the triangle (normal x longest edge)
+    double lo[kAxes] = {0, 0}, hi[kAxes] = {0, 0};
   };
 
   /// Builds the hierarchy of `triangles` over `p_MV` (@pre indices in range, finite).
@@ -54,7 +59,7 @@ class TriangleBvh {
   /// area they had when it was built. Returns true when it rebuilt. A refit tree keeps no slabs
   /// (slabs() is empty until the next Build): a deformable object refits every step, and its
   /// slabs would cost as much again as the refit (far_bvh_benchmark BM_Hierarchy_Refit: 0.33 ms
-  /// without, 0.70 ms with, 20K triangles) for the one step they would serve.
+  /// without, 0.70 ms with the plane alone, 20K triangles) for the one step they would serve.
   bool Refit(std::span<const Eigen::Vector3d> p_MV, std::span<const TriangleIndices> triangles);
 
   const std::vector<Node>& nodes() const { return nodes_; }
