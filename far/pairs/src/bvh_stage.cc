@@ -154,6 +154,7 @@ struct LeafProbe {
 
 LeafProbe MakeProbe(const PairFrame& f, const TriangleBvh& leaf_bvh, const Node& leaf,
                     bool leaf_in_a) {
+  assert(leaf.count <= TriangleBvh::kLeafSize);  // Build makes no larger leaf
   LeafProbe p;
   p.leaf = &leaf;
   p.leaf_in_a = leaf_in_a;
@@ -163,8 +164,10 @@ LeafProbe MakeProbe(const PairFrame& f, const TriangleBvh& leaf_bvh, const Node&
   const Eigen::Matrix3d& abs_R_TL = leaf_in_a ? f.abs_R_BA : f.abs_R_AB;
   const Eigen::Vector3d& t_TL = leaf_in_a ? f.t_BA : f.t_AB;
   const Eigen::Vector3d& t_LT = leaf_in_a ? f.t_AB : f.t_BA;
-  if (!f.aligned) p.R_LT = leaf_in_a ? &f.R_AB : &f.R_BA;
-  if (!f.aligned) p.abs_R_LT = leaf_in_a ? &f.abs_R_AB : &f.abs_R_BA;
+  if (!f.aligned) {
+    p.R_LT = leaf_in_a ? &f.R_AB : &f.R_BA;
+    p.abs_R_LT = leaf_in_a ? &f.abs_R_AB : &f.abs_R_BA;
+  }
   p.t_LT = t_LT;
   p.center =
       f.aligned ? Eigen::Vector3d(leaf.center + t_TL) : Eigen::Vector3d(R_TL * leaf.center + t_TL);
