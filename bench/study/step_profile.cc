@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   }
   far::StepRequest request;
   request.method = *method;
-  std::printf("step,ms,repeat_ms,contacts,object_pairs,pairs_considered,pairs_tested\n");
+  std::printf("step,ms,repeat_ms,contacts,object_pairs,pairs_considered,pairs_tested,stages_ms\n");
   for (size_t s = 0; s <= scene.frames.size(); ++s) {
     const auto start = Clock::now();
     if (s > 0) {
@@ -99,10 +99,17 @@ int main(int argc, char** argv) {
     }
     std::sort(repeats.begin(), repeats.end());
     const double repeat_ms = repeats.empty() ? ms : repeats[repeats.size() / 2];
-    std::printf("%zu,%.3f,%.3f,%zu,%lld,%lld,%lld\n", s, ms, repeat_ms, result->contacts.size(),
+    // The first run's stage timers, "name=ms" separated by spaces.
+    std::string stages;
+    for (const far::StageStats& stage : result->stats.stages) {
+      char ms_text[32];
+      std::snprintf(ms_text, sizeof ms_text, "%.3f", stage.ms);
+      stages += (stages.empty() ? "" : " ") + stage.name + "=" + ms_text;
+    }
+    std::printf("%zu,%.3f,%.3f,%zu,%lld,%lld,%lld,%s\n", s, ms, repeat_ms, result->contacts.size(),
                 static_cast<long long>(result->stats.object_pairs),
                 static_cast<long long>(result->stats.pairs_considered),
-                static_cast<long long>(result->stats.pairs_tested));
+                static_cast<long long>(result->stats.pairs_tested), stages.c_str());
   }
   return 0;
 }

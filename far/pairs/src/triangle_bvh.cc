@@ -179,6 +179,7 @@ struct TriangleBvh::Builder {
 void TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
                         std::span<const TriangleIndices> triangles) {
   nodes_.clear();
+  slabs_.clear();  // no stale slabs when there are no triangles
   order_.resize(triangles.size());
   if (triangles.empty()) return;
   for (uint32_t t = 0; t < order_.size(); ++t) order_[t] = t;

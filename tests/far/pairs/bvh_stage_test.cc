@@ -215,6 +215,10 @@ TEST(TriangleBvhTest, SlabsHoldTheirTrianglesAndRefitDropsThem) {
   EXPECT_TRUE(object.bvh.slabs().empty());
   object.bvh.Build(object.p_MV, object.triangles);
   EXPECT_EQ(object.bvh.slabs().size(), object.triangles.size());
+  // Rebuilt with no triangles (every one removed), it keeps none of the old slabs.
+  object.bvh.Build(object.p_MV, {});
+  EXPECT_TRUE(object.bvh.empty());
+  EXPECT_TRUE(object.bvh.slabs().empty());
 }
 
 TEST(BvhStageTest, ContactsMatchTheReferenceUnderRandomPoses) {
