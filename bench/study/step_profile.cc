@@ -4,6 +4,7 @@
 // step by step on the same scene; far-study is the interleaved study of record.
 //   far-step-profile --scene breaking --method bvh --steps 4
 //   perf record -g far-step-profile --scene breaking --steps 4 --repeat 50 --repeat-from 3
+//   far-step-profile --scene breaking --repeat 50 --repeat-from 3 --cold   (first-run caches)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -19,6 +20,13 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// Writes a buffer larger than the last-level cache (32 MiB on the EPYC this was written on),
+// evicting the step's data.
+void EvictCaches() {
+  static std::vector<char> buffer(64 << 20);
+  for (size_t i = 0; i < buffer.size(); i += 64) buffer[i]++;
+}
 
 }  // namespace
 
@@ -44,6 +52,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--repeat-from", repeat_from, "repeat only steps from this one on")
       ->capture_default_str();
+  bool cold = false;
+  app.add_flag("--cold", cold,
+               "write a 64 MiB buffer before each repeat, so that every repeat starts with caches "
+               "as cold as a first run's (a run's repeats otherwise find the step's data cached)");
   app.add_option("--bunny", scene_options.bunny_path, "bunny mesh")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
@@ -93,6 +105,7 @@ int main(int argc, char** argv) {
     // The same step again (no new updates): the median of the repeats' Step times.
     std::vector<double> repeats;
     for (int r = 1; r < repeat && static_cast<int>(s) >= repeat_from; ++r) {
+      if (cold) EvictCaches();
       const auto again = Clock::now();
       if (!(*pipeline)->Step(request).ok()) return 1;
       repeats.push_back(std::chrono::duration<double, std::milli>(Clock::now() - again).count());
