@@ -210,7 +210,17 @@ Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
   if (!recorder) return recorder.error();
   c.recorder = std::move(*recorder);
   // The session's channels are where the daemon says, unless the caller insists.
-  auto bus = protocol::LcmBus::Create(options.lcm_url.empty() ? reply.lcm_url : options.lcm_url);
+  const std::string& lcm_url = options.lcm_url.empty() ? reply.lcm_url : options.lcm_url;
+  if (protocol::IsInProcessUrl(lcm_url)) {
+    // Every step would wait out its timeout: no message leaves a memq:// LCM instance.
+    return MakeError(ErrorCode::kUnavailable,
+                     "the session's LCM URL is " + lcm_url +
+                         ", which carries messages only within one LCM instance: no client can "
+                         "reach the daemon's channels. Start far-daemon with a udpm:// URL "
+                         "(its default) or give the client one with --lcm-url / "
+                         "ClientOptions::lcm_url");
+  }
+  auto bus = protocol::LcmBus::Create(lcm_url);
   if (!bus) return bus.error();
   c.bus = std::move(*bus);
   Impl* raw = impl.get();

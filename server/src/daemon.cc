@@ -123,6 +123,13 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
       "lcm_url={} max_sessions={}",
       d.config.name, SocketPathOf(d.config), d.renderer, device, d.config.lcm_url,
       d.config.max_sessions);
+  if (protocol::IsInProcessUrl(d.config.lcm_url)) {
+    spdlog::warn(
+        "event=lcm_in_process lcm_url={} message=\"no client can reach the session channels "
+        "of an in-process LCM URL: clients connect and get an error; use udpm:// to serve "
+        "them\"",
+        d.config.lcm_url);
+  }
   d.ServeMessages(stop_flag);
   spdlog::info("event=daemon_stopping sessions={}", d.sessions.size());
   d.CloseEverySession();

@@ -2,6 +2,7 @@
 // brute-force reference's answers; concurrent sessions with the same ids and interpenetrating
 // geometry never see each other; far-client status reports what happened.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <future>
 
@@ -178,6 +179,30 @@ TEST_F(EndToEndTest, LoadRunsEveryClientForItsStepsAndTime) {
   report = nlohmann::json::parse(load.out);
   for (const auto& client : report["per_client"])
     EXPECT_GT(client["steps"].get<int>(), 0) << client.dump();
+}
+
+// A daemon on memq:// (an LCM URL that carries messages only within one LCM instance) can
+// serve no client: the client library and far-client say so at once, instead of every step
+// waiting out its timeout, and the daemon's log warns at start.
+TEST_F(EndToEndTest, ClientRefusesADaemonOnAnInProcessLcmUrlAtOnce) {
+  DaemonProcess* daemon = StartDaemon({"--lcm-url", "memq://"});
+  ASSERT_NE(daemon, nullptr);
+  const auto start = std::chrono::steady_clock::now();
+  auto client = client::Client::Connect(TestClientOptions("in-process-url"));
+  ASSERT_FALSE(client.ok());
+  EXPECT_EQ(client.error().code, ErrorCode::kUnavailable);
+  EXPECT_NE(client.error().message.find("memq://"), std::string::npos) << client.error().message;
+  EXPECT_NE(client.error().message.find("udpm://"), std::string::npos) << client.error().message;
+
+  TempDir dir;
+  const auto path = dir.path() / "soup.json";
+  ASSERT_FALSE(WriteAndReadBack(ContactSoup(2), path).empty());
+  const ProcessResult run = RunFarClient({"collide", path.string()});
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.err.find("memq://"), std::string::npos) << run.err;
+  // Both answers came well inside one step's timeout (5 s for the library, 60 s for far-client).
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+  EXPECT_NE(daemon->Log().find("event=lcm_in_process"), std::string::npos) << daemon->Log();
 }
 
 // The client library sends quaternions written with four decimals as the unit quaternions they

@@ -94,7 +94,8 @@ struct DaemonStatus {
 class Client {
  public:
   /// Opens a session, retrying with backoff for options.connect_timeout while no daemon
-  /// answers (one may be starting). Errors: kUnavailable ("no far-daemon named ..."), the
+  /// answers (one may be starting). Errors: kUnavailable ("no far-daemon named ...", or the
+  /// session's LCM URL is memq://, which no other LCM instance can reach), the
   /// daemon's refusal (kLimitExceeded when it has too many sessions, kBusy when this user opens
   /// too fast), kPermissionDenied when its socket or segment cannot be trusted, kIoError when
   /// the recording (record_path, FAR_RECORD) cannot be created.

@@ -13,6 +13,11 @@
 
 namespace far::protocol {
 
+/// True for a URL whose messages stay inside one LCM instance: memq:// (each instance is its own
+/// queue, so even another LcmBus in the same process never sees them). A daemon on such a URL
+/// serves no client; it is for tests that drive the daemon's own bus.
+inline bool IsInProcessUrl(std::string_view url) { return url.starts_with("memq://"); }
+
 /// A thin owner of an LCM instance through LCM's C API. The C++ wrapper's subscribe is avoided:
 /// its callback trampolines are miscompiled by GCC 12 under -fsanitize=vptr (docs/protocol.md),
 /// and its typed handlers decode without our size guards. Handlers get raw bytes.
