@@ -26,6 +26,23 @@ std::vector<Candidate> AllCandidates(bool has_gpu) {
   return candidates;
 }
 
+// "; not tried (predicted over 3x the best): A, B 1205 ms; C 600 ms": the candidates skipped
+// as hopeless, those with the same prediction named together.
+template <typename Entry>
+std::string NotTried(const std::vector<const Entry*>& skipped) {
+  if (skipped.empty()) return "";
+  char factor[16];
+  std::snprintf(factor, sizeof(factor), "%g", AutoSelector::kTryFactor);
+  std::string text = std::string("; not tried (predicted over ") + factor + "x the best): ";
+  for (size_t i = 0; i < skipped.size(); ++i) {
+    const std::string ms = Ms(*skipped[i]->predicted_ms);
+    text += skipped[i]->candidate.Name();
+    const bool last_of_group = i + 1 == skipped.size() || Ms(*skipped[i + 1]->predicted_ms) != ms;
+    text += last_of_group ? " " + ms + (i + 1 < skipped.size() ? "; " : "") : ", ";
+  }
+  return text;
+}
+
 bool Changed(int64_t now, int64_t then, double fraction) {
   return std::abs(static_cast<double>(now - then)) >
          fraction * static_cast<double>(std::max<int64_t>(then, 1));
@@ -85,14 +102,14 @@ const AutoSelector::Entry* AutoSelector::Fastest() const {
 Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
   if (!calibrated_ || NeedsRecheck(scene)) Calibrate(scene);
   const Entry* best = Fastest();
-  std::string skipped;
+  std::vector<const Entry*> skipped;
   // The next untried candidate that may be fastest.
   for (Entry& entry : entries_) {
     if (entry.measured_ms) continue;
     const bool hopeless = best != nullptr && entry.predicted_ms &&
                           *entry.predicted_ms > kTryFactor * *best->measured_ms;
     if (hopeless) {
-      skipped += "; " + entry.candidate.Name() + " predicted " + Ms(*entry.predicted_ms);
+      skipped.push_back(&entry);
       continue;
     }
     *reason =
@@ -108,7 +125,7 @@ Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
     if (&entry != best && entry.measured_ms)
       *reason += "; " + entry.candidate.Name() + " measured " + Ms(*entry.measured_ms);
   }
-  *reason += skipped;
+  *reason += NotTried(skipped);
   return best->candidate;
 }
 

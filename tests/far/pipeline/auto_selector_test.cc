@@ -45,7 +45,12 @@ TEST(AutoSelectorTest, ASlowGpuIsNeverTriedOnALargeScene) {
   std::string reason;
   const auto chosen = Steps(selector, {150, 40000}, {{"bvh", 5.0}}, 6, &reason);
   for (const std::string& name : chosen) EXPECT_EQ(name, "bvh");
-  EXPECT_NE(reason.find("far/id-buffer/256 predicted 1205 ms"), std::string::npos) << reason;
+  // Every GPU configuration has the probe's prediction: named once, together.
+  EXPECT_NE(reason.find("; not tried (predicted over 3x the best): far/id-buffer/256, "
+                        "far/occlusion-query/256, far/id-buffer/1024, far/occlusion-query/1024, "
+                        "far-exact-offset/id-buffer/256 1205 ms"),
+            std::string::npos)
+      << reason;
 }
 
 TEST(AutoSelectorTest, AFastGpuIsTriedAndTheFastestMeasuredKept) {
@@ -69,9 +74,18 @@ TEST(AutoSelectorTest, AFastGpuIsTriedAndTheFastestMeasuredKept) {
 TEST(AutoSelectorTest, OneSlowGpuStepRulesOutTheOtherGpuConfigurations) {
   // The probe was optimistic; the first GPU step shows 50 ms against bvh's 2 ms.
   AutoSelector selector(true, [] { return std::optional<GpuCost>(GpuCost{0.1, 0.0}); });
-  const auto chosen = Steps(selector, {10, 1000}, {{"bvh", 2.0}, {"far/id-buffer/256", 50.0}}, 6);
+  std::string reason;
+  const auto chosen =
+      Steps(selector, {10, 1000}, {{"bvh", 2.0}, {"far/id-buffer/256", 50.0}}, 6, &reason);
   EXPECT_EQ(chosen[1], "far/id-buffer/256");
   for (size_t i = 2; i < chosen.size(); ++i) EXPECT_EQ(chosen[i], "bvh");
+  // The reason names what ran and what the GPU step predicts for the others (half its time).
+  EXPECT_NE(reason.find("auto: bvh is the fastest measured (2.00 ms); far/id-buffer/256 "
+                        "measured 50 ms; not tried (predicted over 3x the best): "
+                        "far/occlusion-query/256, far/id-buffer/1024, far/occlusion-query/1024, "
+                        "far-exact-offset/id-buffer/256 25 ms"),
+            std::string::npos)
+      << reason;
 }
 
 TEST(AutoSelectorTest, RecalibratesWhenTheSceneGrowsOrTheChoiceDrifts) {
