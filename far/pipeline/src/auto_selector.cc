@@ -60,9 +60,16 @@ AutoSelector::AutoSelector(bool has_gpu, std::function<std::optional<GpuCost>()>
     : has_gpu_(has_gpu), probe_gpu_(std::move(gpu_cost)) {}
 
 void AutoSelector::Calibrate(const SceneSize& scene) {
-  entries_.clear();
-  for (const Candidate& candidate : AllCandidates(has_gpu_))
-    entries_.push_back({candidate, {}, {}});
+  if (entries_.empty()) {
+    for (const Candidate& candidate : AllCandidates(has_gpu_)) {
+      entries_.push_back({candidate, {}, {}, {}, {}});
+    }
+  }
+  for (Entry& entry : entries_) {  // which structure each ran on stays known
+    entry.measured_ms.reset();
+    entry.first_ms.reset();
+    entry.predicted_ms.reset();
+  }
   if (has_gpu_ && !probed_) {
     gpu_cost_ = probe_gpu_();
     probed_ = true;
@@ -100,6 +107,7 @@ const AutoSelector::Entry* AutoSelector::Fastest() const {
 }
 
 Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
+  structure_ = scene.structure;
   if (!calibrated_ || NeedsRecheck(scene)) Calibrate(scene);
   const Entry* best = Fastest();
   std::vector<const Entry*> skipped;
@@ -112,9 +120,14 @@ Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
       skipped.push_back(&entry);
       continue;
     }
+    const std::string trying =
+        entry.first_ms
+            ? entry.candidate.Name() + " again (its first run on these objects took " +
+                  Ms(*entry.first_ms) + ", one-off work included)"
+            : "trying " + entry.candidate.Name() +
+                  (entry.predicted_ms ? " (predicted " + Ms(*entry.predicted_ms) + ")" : "");
     *reason =
-        "auto: calibrating: trying " + entry.candidate.Name() +
-        (entry.predicted_ms ? " (predicted " + Ms(*entry.predicted_ms) + ")" : "") +
+        "auto: calibrating: " + trying +
         (best ? "; best so far " + best->candidate.Name() + " " + Ms(*best->measured_ms) : "");
     return entry.candidate;
   }
@@ -131,14 +144,26 @@ Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
 
 void AutoSelector::Record(const Candidate& candidate, double ms) {
   ++steps_since_calibration_;
+  bool steady = false;  // a time without one-off work in it
   for (Entry& entry : entries_) {
     if (!(entry.candidate == candidate)) continue;
-    // A moving average for the one that keeps running; the first measurement as it is.
-    entry.measured_ms = entry.measured_ms ? 0.8 * *entry.measured_ms + 0.2 * ms : ms;
+    const bool first_on_structure = entry.ran_on != structure_;
+    entry.ran_on = structure_;
+    if (entry.measured_ms) {
+      // A moving average for the one that keeps running, without its first steps on new
+      // objects (their one-off work is no step's steady cost).
+      if (!first_on_structure) entry.measured_ms = 0.8 * *entry.measured_ms + 0.2 * ms;
+    } else if (first_on_structure && !entry.first_ms) {
+      entry.first_ms = ms;  // it runs again before it counts
+    } else {
+      // The faster of its two runs (also when objects change at every step: never a third).
+      entry.measured_ms = entry.first_ms ? std::min(*entry.first_ms, ms) : ms;
+      steady = true;
+    }
   }
   // A GPU candidate that ran tells more about the other GPU ones than the probe did: they are
   // predicted at half its time (resolution and mechanism change it by a factor, not by 10).
-  if (candidate.gpu()) {
+  if (candidate.gpu() && steady) {
     for (Entry& entry : entries_) {
       if (entry.candidate.gpu() && !entry.measured_ms) entry.predicted_ms = 0.5 * ms;
     }

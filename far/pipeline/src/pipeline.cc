@@ -390,7 +390,7 @@ Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request,
   if (!selector) {
     selector.emplace(gpu != nullptr, [] { return internal::ProbeGpuCost(); });
   }
-  internal::SceneSize size{cache.size(), 0};
+  internal::SceneSize size{cache.size(), 0, cache.structure()};
   for (const CachedObject* object : cache.Objects()) size.triangles += object->mesh.num_triangles();
   std::string reason;
   const internal::Candidate chosen = selector->Choose(size, &reason);

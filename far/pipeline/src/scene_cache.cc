@@ -11,6 +11,7 @@ int64_t SceneCache::Apply(SceneUpdate update) {
       [this](auto& u) -> int64_t {
         using T = std::decay_t<decltype(u)>;
         if constexpr (std::is_same_v<T, AddObject>) {
+          ++structure_;
           CachedObject object;
           object.id = u.id;
           object.motion = u.motion;
@@ -25,6 +26,7 @@ int64_t SceneCache::Apply(SceneUpdate update) {
           RefreshGeometry(object);
           objects_.insert_or_assign(u.id, std::move(object));
         } else if constexpr (std::is_same_v<T, RemoveObject>) {
+          ++structure_;
           auto it = objects_.find(u.id);
           const uint32_t slot = it->second.slot;
           free_slots_.push_back(slot);

@@ -64,6 +64,8 @@ class SceneCache {
   std::vector<WorldObjectView> WorldViews() const;
 
   int size() const { return static_cast<int>(objects_.size()); }
+  /// Changes whenever an object is added or removed.
+  uint64_t structure() const { return structure_; }
   const SceneCounters& counters() const { return counters_; }
   SceneCounters& counters() { return counters_; }
 
@@ -75,6 +77,7 @@ class SceneCache {
   std::vector<uint32_t> free_slots_;
   uint32_t next_slot_ = 0;
   uint64_t next_stamp_ = 1;
+  uint64_t structure_ = 0;
   SceneCounters counters_;
 };
 

@@ -38,18 +38,26 @@ struct GpuCost {
 struct SceneSize {
   int64_t objects = 0;
   int64_t triangles = 0;
+  /// Changes whenever an object is added or removed: a configuration's first step on a new set
+  /// of objects does one-off work (builds their hierarchies, uploads their geometry).
+  uint64_t structure = 0;
 };
 
 /// Chooses, step by step, the fastest reliable configuration for one pipeline's renderer and
 /// scene, from costs it measures:
-///  - it calibrates on the first steps: each candidate that may be fastest runs once and its
-///    time is recorded (bvh always first: it is reliable on every host and rarely slow);
+///  - it calibrates on the first steps: each candidate that may be fastest runs and its time
+///    is recorded (bvh always first: it is reliable on every host and rarely slow). A run that
+///    is the candidate's first on the current set of objects (SceneSize::structure) also did
+///    one-off work, hierarchies built or geometry uploaded (bvh's first step on paper-bunnies
+///    takes 23 ms, its next ones 3 ms), so the candidate runs once more and the faster of the
+///    two runs counts;
 ///  - a GPU candidate runs only when its predicted time (the renderer's fixed cost per step
 ///    plus its cost per triangle times the scene's triangles, both measured once per process
 ///    on two fixed probe scenes) is within kTryFactor of the best measured time: on a software
 ///    rasterizer the GPU methods cost milliseconds per step and tens of microseconds per
 ///    triangle, so they are not tried where the CPU is clearly faster;
-///  - then it runs the fastest measured one, and re-calibrates when the scene's object or
+///  - then it runs the fastest measured one, with a moving average of its time that leaves out
+///    its first steps on new objects, and re-calibrates when the scene's object or
 ///    triangle count changed by more than kRecheckChange since, when the chosen one's time has
 ///    drifted above kRecheckDrift times what it measured, or every kRecheckSteps steps.
 /// Every candidate is reliable: cullide, fcl and exact are never chosen.
@@ -67,14 +75,16 @@ class AutoSelector {
 
   /// The configuration for the next step, and why (filled into the step's stats).
   Candidate Choose(const SceneSize& scene, std::string* reason);
-  /// Records the time of a step that ran `candidate`.
+  /// Records the time of a step that ran `candidate` (the one Choose just gave).
   void Record(const Candidate& candidate, double ms);
 
  private:
   struct Entry {
     Candidate candidate;
     std::optional<double> measured_ms;   // last measured since the calibration
+    std::optional<double> first_ms;      // a first run on the structure, with its one-off work
     std::optional<double> predicted_ms;  // GPU candidates: from the probe
+    std::optional<uint64_t> ran_on;      // the structure it last ran on (kept across calibrations)
   };
   void Calibrate(const SceneSize& scene);
   bool NeedsRecheck(const SceneSize& scene) const;
@@ -86,6 +96,7 @@ class AutoSelector {
   bool probed_ = false;
   std::vector<Entry> entries_;
   SceneSize calibrated_for_;
+  uint64_t structure_ = 0;  // of the scene of the last Choose
   bool calibrated_ = false;
   int64_t steps_since_calibration_ = 0;
   double chosen_calibration_ms_ = 0;
