@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "study_run.h"
@@ -52,6 +53,13 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--repeat-from", repeat_from, "repeat only steps from this one on")
       ->capture_default_str();
+  int idle_ms = 0;
+  app.add_option("--idle-ms", idle_ms,
+                 "sleep this long before each step, as a simulator's own work would between "
+                 "steps (far-study's other configurations run there): the cores go idle and the "
+                 "caches cold")
+      ->check(CLI::Range(0, 10000))
+      ->capture_default_str();
   bool cold = false;
   app.add_flag("--cold", cold,
                "write a 64 MiB buffer before each repeat, so that every repeat starts with caches "
@@ -89,6 +97,7 @@ int main(int argc, char** argv) {
   request.method = *method;
   std::printf("step,ms,repeat_ms,contacts,object_pairs,pairs_considered,pairs_tested,stages_ms\n");
   for (size_t s = 0; s <= scene.frames.size(); ++s) {
+    if (idle_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(idle_ms));
     const auto start = Clock::now();
     if (s > 0) {
       if (auto ok = (*pipeline)->Apply(far_study::ToUpdates(scene.frames[s - 1])); !ok.ok()) {
