@@ -45,8 +45,9 @@ std::string Heading(const std::string& title, const RunInfo& info) {
 void AutoBar(const std::vector<SceneReport>& reports, const RunInfo& info, Out& out) {
   std::ostringstream md, worst_text;
   md << Heading("auto's choice per scene", info)
-     << "What `auto` ran at the measured steps (its first steps calibrate: it tries each "
-        "candidate once), its median time per step, and the fastest reliable configuration of "
+     << "What `auto` ran at the measured steps (its first steps calibrate: each candidate it "
+        "tries runs once, twice when that was its first step on the scene's objects), its "
+        "median time per step, and the fastest reliable configuration of "
         "the same run (a reliable method other than auto, 0 misses against exact; where a "
         "scaling size has no reference, misses are not checked). The bar compares wall-clock "
         "medians; the process CPU ratio beside it shows how much of a difference is waiting for "
