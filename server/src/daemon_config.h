@@ -37,7 +37,7 @@ struct DaemonConfig {
   uint64_t reply_bytes = 16ull << 20;       ///< reply ring per session (power of two): the same
   // Steps.
   int max_resolution = 4096;              ///< larger requests are refused
-  double max_requests_per_second = 2000;  ///< per session, sustained
+  double max_requests_per_second = 2000;  ///< per session, sent while one waits; sustained
   int max_queued_per_session = 4;
   int64_t max_reply_pairs = 2'000'000;  ///< contacts + distance pairs in one reply
   int step_deadline_ms = 60'000;        ///< the longest a step may wait and run

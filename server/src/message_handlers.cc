@@ -94,7 +94,15 @@ void MessageHandlers::Queue(Session& session, protocol::StepCommand command) {
                           ? std::min(command.timeout_ms, config_.step_deadline_ms)
                           : config_.step_deadline_ms;
   StepJob job{std::move(command), now, now + std::chrono::milliseconds(wait_ms)};
-  if (!session.request_rate.Allow(now)) {
+  // The rate is for requests sent without waiting: one that finds none of the session's steps
+  // waiting in its queue (a client that waits for each answer, however fast its steps) is
+  // never refused for it, and takes no token.
+  bool others_waiting;
+  {
+    std::lock_guard lock(session.mutex);
+    others_waiting = !session.queue.empty();
+  }
+  if (others_waiting && !session.request_rate.Allow(now)) {
     return replier_.StepError(
         session, job.command,
         MakeError(ErrorCode::kBusy, "session is over its request rate (" +

@@ -165,8 +165,7 @@ TEST_F(MemoryTest, ThousandsOfStepsDoNotGrowTheDaemon) {
   // warm-up, so that what remains is what steps allocate and keep. (With the default 64 MiB
   // ring, VmRSS grows by the bytes each step writes until the ring has wrapped once: bounded by
   // the ring, and freed with the session; docs/daemon.md.)
-  // (No request rate limit: the steps come faster than the default 2000 per second.)
-  DaemonProcess* daemon = StartDaemon({"--ring-bytes", "1048576", "--max-rate", "1000000"});
+  DaemonProcess* daemon = StartDaemon({"--ring-bytes", "1048576"});
   ASSERT_NE(daemon, nullptr);
   auto client = Connect("long-runner");
   ASSERT_NE(client, nullptr);

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -16,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "far/client/client.h"
+#include "far/protocol/convert.h"
 
 namespace far::integration {
 namespace {
@@ -130,6 +132,55 @@ std::optional<OtherUserReport> ReadReport(ChildProcess& child, std::string* fail
   }
   *failure = "no report (the child printed nothing more)";
   return std::nullopt;
+}
+
+// max_requests_per_second holds requests sent without waiting for the answers; a client that
+// waits for each answer is never refused for its rate, however fast its steps come (a small
+// scene stepped back to back: well over 20 per second here, thousands by default).
+TEST_F(UserLimitsTest, AClientThatWaitsForEachAnswerIsNeverRefusedForItsRate) {
+  ASSERT_NE(StartDaemon({"--max-rate", "20"}), nullptr);
+  auto client = HealthySession("synchronous");
+  ASSERT_NE(client, nullptr);
+  const auto start = std::chrono::steady_clock::now();
+  for (int step = 0; step < 100; ++step) ASSERT_TRUE(StepsWithTheReference(*client)) << step;
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 100 / 20.0) << "the steps came slower than the rate: nothing was tested";
+}
+
+TEST_F(UserLimitsTest, RequestsSentWithoutWaitingAreHeldToTheRate) {
+  // A queue long enough that only the rate refuses: 60 requests at once, a bucket of 8.
+  TempDir dir;
+  const auto config = dir.path() / "far.json";
+  {
+    std::ofstream out(config);
+    out << R"({"max_requests_per_second": 20, "max_queued_per_session": 100})";
+  }
+  ASSERT_NE(StartDaemon({"--config", config.string()}), nullptr);
+  auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "eager");
+  ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
+  ASSERT_TRUE((*raw)->writer().AddObject(1, TriangleRow(20), Motion::kRigid, Pose{}).ok());
+  constexpr int kSteps = 60;
+  for (int step = 0; step < kSteps; ++step)
+    ASSERT_TRUE((*raw)->SendStep(step, SmallRequest()).ok());
+  int ok = 0, over_rate = 0;
+  for (int step = 0; step < kSteps; ++step) {
+    auto reply = (*raw)->WaitStepReply(step);
+    ASSERT_TRUE(reply.has_value()) << "no reply to step " << step;
+    if (reply->status == 0) {
+      ++ok;
+      continue;
+    }
+    EXPECT_EQ(reply->status, protocol::ToWireStatus(ErrorCode::kBusy)) << reply->message;
+    EXPECT_NE(reply->message.find("over its request rate (20/s)"), std::string::npos)
+        << reply->message;
+    ++over_rate;
+  }
+  EXPECT_GT(ok, 0);
+  EXPECT_GT(over_rate, 0) << "60 requests at once should overflow a bucket of 8";
+  // The session goes on: a request once the queue has drained is served.
+  auto client = HealthySession("after-the-burst");
+  ASSERT_NE(client, nullptr);
 }
 
 TEST_F(UserLimitsTest, AnotherUserIsServedAndSeesOnlyItsOwnSessionsWhileRootIsAtItsLimit) {
