@@ -224,24 +224,15 @@ main() {
     echo "ldd: every library of the bundle's binaries resolves"
   fi
 
-  # The renderer, from far-daemon's startup line (an in-process LCM URL: no network needed).
+  # The renderer, from far-daemon's startup line (deploy/gl-renderer.sh).
   echo
   echo "=== GL context through the EGL $platform platform (far-daemon startup)"
-  local probe pid renderer
-  probe=$(mktemp)
-  env LD_LIBRARY_PATH="$lib_path" "$bundle/bin/far-daemon" --lcm-url memq:// \
-    --gl-platform "$platform" --log-level info >"$probe" 2>&1 &
-  pid=$!
-  for _ in $(seq 300); do
-    grep -q daemon_ready "$probe" && break
-    kill -0 "$pid" 2>/dev/null || break
-    sleep 0.1
-  done
-  kill "$pid" 2>/dev/null || true
-  wait "$pid" 2>/dev/null || true
-  cat "$probe"
-  renderer=$(sed -n 's/.*daemon_ready gl_renderer="\([^"]*\)".*/\1/p' "$probe")
-  rm -f "$probe"
+  local renderer probe_log
+  probe_log=$(mktemp)
+  renderer=$(bash "$here/gl-renderer.sh" "$platform" env LD_LIBRARY_PATH="$lib_path" \
+    "$bundle/bin/far-daemon" 2>"$probe_log") || true
+  cat "$probe_log"
+  rm -f "$probe_log"
   [ -n "$renderer" ] ||
     stop "no OpenGL context through the EGL $platform platform (the daemon's message is above): the NVIDIA EGL driver (libEGL_nvidia.so.0 and its vendor file) was not found or failed"
   echo "GL_RENDERER: $renderer"

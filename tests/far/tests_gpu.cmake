@@ -18,6 +18,14 @@ add_test(NAME GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried
          COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gpu/no_driver_test.sh $<TARGET_FILE:far-daemon>)
 set_tests_properties(GlContextTest.NoDriverGivesAClearErrorNamingWhatWasTried PROPERTIES LABELS gpu)
 
+# deploy/gl-renderer.sh (gpu-run.sh's first check on a GPU machine) reads the renderer from the
+# daemon's ready line as the daemon writes it today; it once stopped matching when the line
+# gained fields, and every GPU run would have stopped at "no OpenGL context".
+add_test(NAME GpuRunTest.GlRendererReadsTheDaemonsReadyLine
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gpu/gl_renderer_test.sh
+                 ${PROJECT_SOURCE_DIR}/deploy/gl-renderer.sh $<TARGET_FILE:far-daemon>)
+set_tests_properties(GpuRunTest.GlRendererReadsTheDaemonsReadyLine PROPERTIES LABELS gpu)
+
 # --gl-platform device on a machine without a GPU: a clear error, never llvmpipe. Skipped (77)
 # where a hardware EGL device exists.
 add_test(NAME GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe

@@ -19,7 +19,7 @@ if grep -q daemon_ready "$log"; then
   kill "$pid" 2>/dev/null
   wait "$pid" 2>/dev/null
   cat "$log"
-  renderer=$(sed -n 's/.*daemon_ready gl_renderer="\([^"]*\)".*/\1/p' "$log")
+  renderer=$(sed -n '/event=daemon_ready/ s/.* gl_renderer="\([^"]*\)".*/\1/p' "$log")
   if grep -Eqi 'llvmpipe|softpipe|swrast' <<<"$renderer"; then
     echo "FAIL: --gl-platform device started on a software renderer: $renderer"
     exit 1
