@@ -48,9 +48,9 @@ struct SceneSize {
 ///  - it calibrates on the first steps: each candidate that may be fastest runs and its time
 ///    is recorded (bvh always first: it is reliable on every host and rarely slow). A run that
 ///    is the candidate's first on the current set of objects (SceneSize::structure) also did
-///    one-off work, hierarchies built or geometry uploaded (bvh's first step on paper-bunnies
-///    takes 23 ms, its next ones 3 ms), so the candidate runs once more and the faster of the
-///    two runs counts;
+///    one-off work, hierarchies built or geometry uploaded (bvh's first step on far-client's
+///    bunnies scene took 85 ms, its next 15 ms), so the candidate runs once more and the faster of
+///    the two runs counts;
 ///  - a GPU candidate runs only when its predicted time (the renderer's fixed cost per step
 ///    plus its cost per triangle times the scene's triangles, both measured once per process
 ///    on two fixed probe scenes) is within kTryFactor of the best measured time: on a software
