@@ -75,5 +75,40 @@ TEST(ThreadPoolTest, BackgroundLoopsUseAtMostTheirThreadsAndIdlePriority) {
   EXPECT_EQ(ThreadsOfOneLoop(pool, 50), std::set<std::thread::id>{std::this_thread::get_id()});
 }
 
+// A worker queued on the caller's CPU waits while the caller runs the loop (on a VM, 40% of the
+// loops after an idle gap ran on one thread): the pool keeps its workers off that CPU.
+TEST(ThreadPoolTest, WorkersRunOffTheCallersCpu) {
+  cpu_set_t saved;
+  ASSERT_EQ(sched_getaffinity(0, sizeof saved, &saved), 0);
+  if (CPU_COUNT(&saved) < 2) GTEST_SKIP() << "one CPU allowed";
+  ThreadPool pool(3);
+  for (int round = 0; round < 3; ++round) {
+    // Pin the caller to one of its CPUs, a different one each round.
+    int caller_cpu = -1;
+    for (int cpu = 0, seen = 0; cpu < CPU_SETSIZE && caller_cpu < 0; ++cpu) {
+      if (CPU_ISSET(cpu, &saved) && seen++ == round % CPU_COUNT(&saved)) caller_cpu = cpu;
+    }
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(caller_cpu, &one);
+    ASSERT_EQ(sched_setaffinity(0, sizeof one, &one), 0);
+    const std::thread::id caller = std::this_thread::get_id();
+    std::atomic<int> worker_chunks = 0, on_caller_cpu = 0, allowed_caller_cpu = 0;
+    pool.ParallelFor(100, 1, [&](size_t, size_t) {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      if (std::this_thread::get_id() == caller) return;
+      ++worker_chunks;
+      if (sched_getcpu() == caller_cpu) ++on_caller_cpu;
+      cpu_set_t mask;
+      if (sched_getaffinity(0, sizeof mask, &mask) == 0 && CPU_ISSET(caller_cpu, &mask))
+        ++allowed_caller_cpu;
+    });
+    ASSERT_EQ(sched_setaffinity(0, sizeof saved, &saved), 0);
+    EXPECT_GT(worker_chunks.load(), 0) << "round " << round;
+    EXPECT_EQ(on_caller_cpu.load(), 0) << "round " << round;
+    EXPECT_EQ(allowed_caller_cpu.load(), 0) << "round " << round;
+  }
+}
+
 }  // namespace
 }  // namespace far

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <sched.h>
+
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
@@ -25,6 +27,8 @@ class ThreadPool {
 
   /// Runs body(begin, end) over [0, count) split into chunks of at most `grain` indices, on the
   /// workers and the calling thread; returns when all chunks are done. `body` must not throw.
+  /// The workers run on the CPUs the pool's constructor was allowed, except the one the caller
+  /// calls from (when there is another), so that none waits for a core the caller holds.
   void ParallelFor(size_t count, size_t grain, const std::function<void(size_t, size_t)>& body);
 
   /// Makes the pool background work from its next loop on: each ParallelFor runs on at most
@@ -45,6 +49,8 @@ class ThreadPool {
  private:
   void WorkerLoop(size_t index);
   void RunChunks();
+  // Restricts the workers to worker_cpus_ but the CPU the caller runs on (Linux).
+  void KeepWorkersOffThisCpu();
 
   std::vector<std::thread> workers_;
   std::mutex mutex_;
@@ -55,6 +61,8 @@ class ThreadPool {
   size_t helpers_ = 0;  // workers that take part in the current loop (index < helpers_)
   uint64_t generation_ = 0;
   bool stopping_ = false;
+  cpu_set_t worker_cpus_;  // the CPUs the constructing thread was allowed (empty: unknown)
+  int excluded_cpu_ = -1;  // the CPU the workers are kept off (-1: none yet)
   // Workers with an index below this take part in a loop; and whether they go to the background.
   std::atomic<size_t> taking_part_;
   std::atomic<bool> background_{false};
