@@ -3,8 +3,8 @@
 // pipeline step does after a simulator's own work or far-study's other configurations. The
 // counter `one_thread` is the fraction of loops in which the worker ran no chunk: it woke on
 // the caller's CPU and waited there while the caller did the whole loop (ThreadPool keeps its
-// workers off the caller's CPU for this reason; on the 2-vCPU development VM, 40% of the loops
-// after 1-6 ms idle ran on one thread before it did). Time is the loop's wall time only.
+// workers off the caller's CPU for this reason; on the 2-vCPU development VM, 32-42% of the
+// loops after 1-6 ms idle ran on one thread before it did). Time is the loop's wall time only.
 // Run:
 //   build/<dir>/bench/pairs/far_thread_pool_benchmark --benchmark_repetitions=3
 //       --benchmark_report_aggregates_only=true

@@ -58,10 +58,11 @@ void ThreadPool::ParallelFor(size_t count, size_t grain,
 }
 
 // Why: a worker woken while the caller runs may be queued on the caller's own CPU, and wait
-// there while the caller does the whole loop. On a 2-vCPU KVM guest that happened in 40% of the
-// loops after an idle gap of 1 ms or more (the scheduler does not take a vCPU the host has
-// descheduled as idle), and those loops ran on one thread. Keeping the workers off the caller's
-// CPU makes the wake-up put them elsewhere. The masks change only when the caller has moved.
+// there while the caller does the whole loop. On a 2-vCPU KVM guest that happened in 32-42% of
+// the loops after an idle gap of 1-6 ms (far_thread_pool_benchmark; probably because the
+// scheduler does not count a vCPU the host has descheduled as idle), and those loops ran on
+// one thread. Keeping the workers off the caller's CPU makes the wake-up put them elsewhere.
+// The masks change only when the caller has moved.
 void ThreadPool::KeepWorkersOffThisCpu() {
   const int cpu = sched_getcpu();
   if (cpu < 0 || cpu == excluded_cpu_) return;
