@@ -521,7 +521,7 @@ BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
   // Seed tasks on this thread, then descend them on the pool. About 16 tasks per thread: the
   // workers wait while this thread seeds, and each level seeded breadth-first is a level not
   // descended depth-first in cache (far-step-profile --idle-ms 6 on 2 threads, against 64 per
-  // thread: scaling-5000 7-11% and breaking 1-15% faster; 4 per thread balanced worse).
+  // thread: scaling-5000 7-11% and breaking 1-15% faster; 4 per thread was slower on breaking).
   constexpr size_t kTasksPerThread = 16;
   const size_t threads = static_cast<size_t>(pool.num_threads());
   const std::vector<Task> tasks = SeedTasks(descent, kTasksPerThread * threads);
