@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Prints the GL_RENDERER far-daemon gets on an EGL platform, read from its daemon_ready log line
-# (an in-process LCM URL: no network needed); the daemon's own output goes to stderr. Exits 1
-# when the daemon made no GL context. Used by gpu-run.sh; ctest runs it on the build's daemon.
+# (an in-process LCM URL: no network needed); the daemon's own output goes to stderr. When the
+# daemon made no GL context it prints nothing and exits with the daemon's own nonzero status
+# (1 when the daemon did not stop by itself, or stopped with 0). Used by gpu-run.sh and by the
+# ctest checks of the device platform.
 #   deploy/gl-renderer.sh PLATFORM DAEMON_COMMAND...   (PLATFORM: device, surfaceless, auto)
 #   deploy/gl-renderer.sh surfaceless env LD_LIBRARY_PATH=bundle/lib bundle/bin/far-daemon
 set -euo pipefail
@@ -17,10 +19,17 @@ for _ in $(seq 300); do
   kill -0 "$pid" 2>/dev/null || break
   sleep 0.1
 done
-kill "$pid" 2>/dev/null || true
-wait "$pid" 2>/dev/null || true
+status=0
+if grep -q event=daemon_ready "$log" || kill -0 "$pid" 2>/dev/null; then
+  kill "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  status=1
+else
+  wait "$pid" || status=$?
+  [ "$status" -ne 0 ] || status=1
+fi
 cat "$log" >&2
 # event=daemon_ready name=... socket=... gl_renderer="..." ...: the field, wherever it is.
 renderer=$(sed -n '/event=daemon_ready/ s/.* gl_renderer="\([^"]*\)".*/\1/p' "$log")
-[ -n "$renderer" ] || exit 1
+[ -n "$renderer" ] || exit "$status"
 echo "$renderer"

@@ -29,6 +29,7 @@ set_tests_properties(GpuRunTest.GlRendererReadsTheDaemonsReadyLine PROPERTIES LA
 # --gl-platform device on a machine without a GPU: a clear error, never llvmpipe. Skipped (77)
 # where a hardware EGL device exists.
 add_test(NAME GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe
-         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gpu/device_platform_test.sh $<TARGET_FILE:far-daemon>)
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/far/gpu/device_platform_test.sh
+                 ${PROJECT_SOURCE_DIR}/deploy/gl-renderer.sh $<TARGET_FILE:far-daemon>)
 set_tests_properties(GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe PROPERTIES
                      LABELS gpu SKIP_RETURN_CODE 77)
