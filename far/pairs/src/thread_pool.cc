@@ -45,7 +45,7 @@ void ThreadPool::ParallelFor(size_t count, size_t grain,
     count_ = count;
     grain_ = grain;
     next_ = 0;
-    active_ = helpers + 1;
+    active_ = 1;  // this thread; each worker that joins while chunks are left adds itself
     helpers_ = helpers;
     ++generation_;
   }
@@ -100,6 +100,11 @@ void ThreadPool::WorkerLoop(size_t index) {
       if (stopping_) return;
       seen = generation_;
       if (index >= helpers_) continue;  // not taking part in this loop
+      // A worker that wakes after every chunk was taken stays out, and the caller does not wait
+      // for it: a small loop the caller finished alone does not wait for a wake-up (on the 2-vCPU
+      // VM, 20-40 us after an idle gap).
+      if (next_ >= count_) continue;
+      ++active_;
     }
     if (background_.load()) MoveCallingThreadToBackground();
     RunChunks();

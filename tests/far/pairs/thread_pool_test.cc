@@ -36,6 +36,25 @@ TEST(ThreadPoolTest, RunsManyLoopsInSequence) {
   EXPECT_EQ(sum.load(), 200L * 4950L);
 }
 
+// A loop returns only when every chunk has run, also when a worker wakes after the caller has
+// taken every chunk (the caller does not wait for such a worker; it must not run anything of a
+// loop that has returned). Tiny loops, some after an idle gap that lets the workers sleep;
+// each loop's counts live on the stack and die when it returns, which the sanitizer builds
+// would catch a late chunk writing to.
+TEST(ThreadPoolTest, TinyLoopsFinishBeforeTheyReturn) {
+  ThreadPool pool(3);
+  for (int round = 0; round < 20000; ++round) {
+    if (round % 1000 == 999) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    const size_t count = 1 + round % 3;
+    std::atomic<int> visits[3] = {0, 0, 0};
+    pool.ParallelFor(count, 1, [&](size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) visits[i].fetch_add(1);
+    });
+    for (size_t i = 0; i < 3; ++i)
+      ASSERT_EQ(visits[i].load(), i < count ? 1 : 0) << "round " << round << ", index " << i;
+  }
+}
+
 // The threads that ran chunks of one loop of `count` indices (each chunk sleeps a little, so
 // that every thread allowed to take part gets some), and the scheduling policy of each chunk
 // a worker ran.
