@@ -1,5 +1,7 @@
 #include "triangle_pair_test.h"
 
+#include "far/pairs/internal/pair_sort.h"
+
 namespace far::internal {
 
 void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
@@ -45,8 +47,8 @@ ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered, Stopp
                                  partial.distance_pairs.end());
     result.pairs_tested += partial.pairs_tested;
   }
-  std::sort(result.contacts.begin(), result.contacts.end());
-  std::sort(result.distance_pairs.begin(), result.distance_pairs.end());
+  SortPairs(result.contacts);
+  SortPairs(result.distance_pairs);
   return result;
 }
 
