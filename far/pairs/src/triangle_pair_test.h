@@ -51,10 +51,14 @@ inline TriangleBox BoxOf(const WorldObjectView& object, uint32_t triangle) {
 /// True iff the closed boxes are within `slack` of each other on every axis (slack 0: they
 /// share a point). Exact for slack 0; never stricter than the exact gap for slack > 0.
 inline bool BoxesWithin(const TriangleBox& a, const TriangleBox& b, double slack) {
+  // All six comparisons, then one branch: an exit per axis mispredicts more (far-step-profile
+  // --idle-ms 6, 2 threads, medians: scaling-5000 0.467 -> 0.446 and 0.484 -> 0.477 ms,
+  // paper-leaves 3.36 -> 3.18 ms, breaking equal).
+  bool apart = false;
   for (int axis = 0; axis < 3; ++axis) {
-    if (b.lo[axis] - a.hi[axis] > slack || a.lo[axis] - b.hi[axis] > slack) return false;
+    apart |= (b.lo[axis] - a.hi[axis] > slack) | (a.lo[axis] - b.hi[axis] > slack);
   }
-  return true;
+  return !apart;
 }
 
 /// The prefilter slack for a distance query whose triangles have coordinates of magnitude at
