@@ -6,18 +6,26 @@
 // - BM_ExactStage_*: the exact stage on two interpenetrating triangle soups, with the per-object
 //   sort-and-sweep prefilter (RunExactTests) against the all-pairs brute force
 //   (BruteForceReference), on 1 and on all threads.
+// - BM_SortContacts: the merge's sort of a step's contacts (far::internal::SortPairs, a radix
+//   sort, against std::sort) for n contacts between 13 objects of up to 100K triangles, right
+//   after the thread slept range(1) us, as a step's merge runs after an idle gap (manual time:
+//   the sort only).
 // Run:
 //   build/<dir>/bench/pairs/far_pairs_benchmark --benchmark_repetitions=5
 //       --benchmark_report_aggregates_only=true
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include "far/pairs/exact_stage.h"
+#include "far/pairs/internal/pair_sort.h"
 #include "far/pairs/sweep_and_prune.h"
 
 namespace far {
@@ -140,6 +148,39 @@ BENCHMARK(BM_ExactStage_BruteForce)
     ->Args({1000, 1})
     ->Args({10000, 0})
     ->Unit(benchmark::kMillisecond);
+
+// range(0) contacts, range(1) us idle before each sort, range(2): 0 std::sort, 1 SortPairs.
+void BM_SortContacts(benchmark::State& state) {
+  const auto n = static_cast<size_t>(state.range(0));
+  const auto idle = std::chrono::microseconds(state.range(1));
+  std::mt19937 rng(11);
+  std::vector<ContactPair> input(n);
+  for (ContactPair& p : input) {
+    p.object_a = 1 + rng() % 13;
+    p.object_b = p.object_a + 1 + rng() % 3;
+    p.triangle_a = rng() % 100000;
+    p.triangle_b = rng() % 3000;
+  }
+  for (auto _ : state) {
+    std::vector<ContactPair> pairs = input;
+    if (idle.count() > 0) std::this_thread::sleep_for(idle);
+    const auto start = std::chrono::steady_clock::now();
+    if (state.range(2) == 0) {
+      std::sort(pairs.begin(), pairs.end());
+    } else {
+      internal::SortPairs(pairs);
+    }
+    state.SetIterationTime(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    benchmark::DoNotOptimize(pairs.data());
+  }
+}
+BENCHMARK(BM_SortContacts)
+    ->ArgsProduct({{620, 1500, 20000}, {0, 6000}, {0, 1}})
+    ->ArgNames({"n", "idle_us", "radix"})
+    ->Iterations(100)
+    ->UseManualTime()
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace far

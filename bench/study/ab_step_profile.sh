@@ -1,0 +1,29 @@
+#!/bin/bash
+# A/B of far-step-profile binaries on one scene: runs each binary in turn, RUNS times, and
+# prints per binary the median and quartiles of the step times of steps 1-4 of all its runs.
+# The binaries alternate so that the machine's drift (20-40% on a shared VM) hits them alike.
+# Usage: bench/study/ab_step_profile.sh SCENE RUNS THREADS IDLE_MS BINARY...
+#   e.g. cp build/release/bench/study/far-step-profile /tmp/old  (then rebuild the change)
+#        bench/study/ab_step_profile.sh scaling-5000 8 2 6 /tmp/old build/release/bench/study/far-step-profile
+set -euo pipefail
+if [[ $# -lt 5 ]]; then
+  sed -n '2,7p' "$0" >&2
+  exit 2
+fi
+scene=$1 runs=$2 threads=$3 idle_ms=$4
+shift 4
+declare -A times
+for _ in $(seq "$runs"); do
+  for binary in "$@"; do
+    steps=$("$binary" --scene "$scene" --method bvh --threads "$threads" --steps 4 \
+      --idle-ms "$idle_ms" | awk -F, 'NR > 1 && $1 >= 1 { printf "%s ", $2 }')
+    times[$binary]="${times[$binary]:-} $steps"
+  done
+done
+for binary in "$@"; do
+  # shellcheck disable=SC2086  # word splitting intended: one time per line
+  printf '%s %s t=%s idle=%s ms: %s\n' "$binary" "$scene" "$threads" "$idle_ms" \
+    "$(printf '%s\n' ${times[$binary]} | sort -n | awk '{ t[NR] = $1 } END {
+      printf "median %.3f p25 %.3f p75 %.3f n %d", t[int(NR / 2) + 1], t[int(NR / 4) + 1],
+        t[int(3 * NR / 4) + 1], NR }')"
+done
