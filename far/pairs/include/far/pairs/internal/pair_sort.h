@@ -4,10 +4,14 @@
 // triangle_b), the order every stage reports in, whatever the number of threads.
 //
 // Why not std::sort: a step's merge sorts right after the pool went idle between steps, and on
-// the 2-vCPU VM a comparison sort then pays for a cold branch predictor: 620 contacts took
-// 21-30 us in far-step-profile --scene scaling-5000 --idle-ms 6 (4 us back to back). A least
-// significant digit radix sort has almost no data-dependent branches: 2.5-3.5x faster after
-// the same idle gap (bench/RESULTS.md, "Sorting a step's contacts").
+// the 2-vCPU VM a comparison sort is then several times slower (most likely its branches run on a
+// cold predictor: its data was just written, and no counters show it here): 620 contacts took
+// 21-30 us in far-step-profile --scene scaling-5000 --idle-ms 6 (4-9 us back to back). A least
+// significant digit radix sort has almost no data-dependent branches: 2-4x faster after the
+// same idle gap, and as fast back to back (far_pairs_benchmark BM_SortContacts; bench/RESULTS.md,
+// "bvh: the serial parts of a small step").
+//
+// far::internal: visible to tests, not part of the API.
 
 #include <vector>
 
