@@ -4,9 +4,10 @@
 #   asan  build/ci-asan: ASan + UBSan. The unit tests of every layer that reads outside input
 #         (protocol, server, io, model), the integration tests that play hostile clients, and a
 #         smoke run of every libFuzzer target from its committed corpus.
-#   tsan  build/ci-tsan: ThreadSanitizer. The protocol and server unit tests and the integration
-#         tests of the daemon's threads (sessions opening and closing, dispatch, hostile
-#         clients writing shared memory while the daemon reads it).
+#   tsan  build/ci-tsan: ThreadSanitizer. The protocol, server and pairs unit tests (the last:
+#         the CPU pool and the stages that run on it) and the integration tests of the daemon's
+#         threads (sessions opening and closing, dispatch, hostile clients writing shared
+#         memory while the daemon reads it).
 #   bash deploy/run-sanitizers.sh            # both
 #   bash deploy/run-sanitizers.sh asan       # one
 # Assumes deploy/install-deps.sh has run. Prints each stage's wall and CPU time.
@@ -27,7 +28,7 @@ source deploy/stage-timer.sh
 asan_unit_targets=(far_protocol_test far_server_test far_io_test far_model_test)
 # Integration tests that send the daemon what a hostile or careless client would.
 asan_integration='^(BadInputTest|LimitsTest|LcmForgedDatagramTest)\.'
-tsan_unit_targets=(far_protocol_test far_server_test)
+tsan_unit_targets=(far_protocol_test far_server_test far_pairs_test)
 tsan_integration='^(SessionLifetimeTest|DispatchTest|BadInputTest|LimitsTest)\.'
 
 configure() {

@@ -230,8 +230,9 @@ TEST(BvhStageTest, ContactsMatchTheReferenceUnderRandomPoses) {
     EXPECT_EQ(got.exact.contacts, expected.contacts);
     // Every contact's triangles are candidates.
     for (const ContactPair& c : expected.contacts) {
-      for (const auto& [id, t] :
+      for (const auto& [object_id, t] :
            {std::pair{c.object_a, c.triangle_a}, {c.object_b, c.triangle_b}}) {
+        const uint32_t id = object_id;  // a lambda may not capture a structured binding in clang 15
         const size_t o = static_cast<size_t>(
             std::find_if(scene.begin(), scene.end(), [&](const Object& x) { return x.id == id; }) -
             scene.begin());
