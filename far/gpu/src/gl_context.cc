@@ -149,10 +149,7 @@ bool IsSoftwareRenderer(const std::string& renderer) {
 // The EGL devices, in EGL's order (the index far-daemon --gpu takes); empty when the device
 // platform is not offered.
 std::vector<EGLDeviceEXT> QueryDevices(const char* client_extensions) {
-  if (!HasExtension(client_extensions, "EGL_EXT_platform_device") ||
-      !HasExtension(client_extensions, "EGL_EXT_device_enumeration")) {
-    return {};
-  }
+  if (!internal::OffersEglDevicePlatform(client_extensions)) return {};
   EGLint num_devices = 0;
   eglQueryDevicesEXT(0, nullptr, &num_devices);
   std::vector<EGLDeviceEXT> devices(static_cast<size_t>(std::max(num_devices, 0)));
@@ -205,8 +202,7 @@ bool TryOneDevice(const char* client_extensions, int index, EglState* state,
 // never used). True with `state` current; else every attempt is added to `attempts`.
 bool TryDevicePlatform(const char* client_extensions, bool hardware_only, EglState* state,
                        std::vector<std::string>* attempts) {
-  if (!HasExtension(client_extensions, "EGL_EXT_platform_device") ||
-      !HasExtension(client_extensions, "EGL_EXT_device_enumeration")) {
+  if (!internal::OffersEglDevicePlatform(client_extensions)) {
     attempts->push_back("EGL device platform: not offered by this EGL");
     return false;
   }
@@ -242,6 +238,12 @@ bool TryDevicePlatform(const char* client_extensions, bool hardware_only, EglSta
 }
 
 }  // namespace
+
+bool internal::OffersEglDevicePlatform(const char* client_extensions) {
+  return HasExtension(client_extensions, "EGL_EXT_platform_device") &&
+         (HasExtension(client_extensions, "EGL_EXT_device_enumeration") ||
+          HasExtension(client_extensions, "EGL_EXT_device_base"));
+}
 
 struct GlContext::Impl : EglState {};
 

@@ -5,6 +5,21 @@
 namespace far {
 namespace {
 
+// NVIDIA's EGL (driver 580, through glvnd) names EGL_EXT_device_base and not the two extensions
+// it stands for; Mesa names all three. Both offer the device platform.
+TEST(GlContextTest, DevicePlatformIsOfferedUnderEitherExtensionName) {
+  EXPECT_TRUE(internal::OffersEglDevicePlatform(
+      "EGL_EXT_platform_base EGL_EXT_device_base EGL_KHR_client_get_all_proc_addresses "
+      "EGL_EXT_client_extensions EGL_KHR_debug EGL_EXT_platform_device "
+      "EGL_MESA_platform_surfaceless EGL_EXT_explicit_device"));
+  EXPECT_TRUE(internal::OffersEglDevicePlatform(
+      "EGL_EXT_device_enumeration EGL_EXT_device_query EGL_EXT_platform_device"));
+  EXPECT_FALSE(internal::OffersEglDevicePlatform("EGL_EXT_device_base EGL_EXT_platform_base"));
+  EXPECT_FALSE(internal::OffersEglDevicePlatform("EGL_EXT_platform_device"));
+  EXPECT_FALSE(internal::OffersEglDevicePlatform("EGL_EXT_platform_device_base"));
+  EXPECT_FALSE(internal::OffersEglDevicePlatform(nullptr));
+}
+
 TEST(GlContextTest, CreatesCoreContextAndReportsRenderer) {
   auto context = GlContext::Create();
   ASSERT_TRUE(context.ok()) << ToString(context.error());

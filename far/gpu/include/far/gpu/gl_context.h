@@ -56,4 +56,11 @@ class GlContext {
   std::unique_ptr<Impl> impl_;
 };
 
+namespace internal {
+/// Whether EGL's client extension string offers the EGL device platform with device
+/// enumeration: EGL_EXT_platform_device, and EGL_EXT_device_enumeration or EGL_EXT_device_base
+/// (the two device extensions in one; NVIDIA's driver names only that one).
+bool OffersEglDevicePlatform(const char* client_extensions);
+}  // namespace internal
+
 }  // namespace far
