@@ -256,7 +256,7 @@ main() {
   study_large=${FAR_STUDY_ARGS:---scenes soup,bunnies,leaves,bunnies-fine --bunny-subdivisions 1 --soup-objects 128 --leaves 150 --leaf-cells 8 --resolutions 256,512,1024,1400,2048 --steps 8}
   export FAR_SCENE_ARGS="--kind leaves --frames 20" FAR_RESOLUTION=1024
   if [ "$smoke" = 1 ]; then
-    tests_args+=(--gtest_filter='GlContextTest.*:PipelineCullingTest.RejectsBadRequests')
+    tests_args+=(--gtest_filter='GlContextTest.*:PipelineCullingTest.RejectsBadRequests:SnapshotCommandTest.*')
     bench_args=(--benchmark_filter=scene:1 --benchmark_repetitions=1 --benchmark_min_time=0.01)
     study_small=(--scenes 'soup,leaves' --steps 1 --resolutions 64 --soup-objects 8 --leaves 10
       --leaf-cells 2)
@@ -264,7 +264,9 @@ main() {
     FAR_SCENE_ARGS="--kind demo --frames 3 --leaves 6" FAR_RESOLUTION=128
   fi
 
-  stage "gpu tests" 150 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}"
+  # FAR_CLIENT: the snapshot tests run far-client, from the bundle (not the build tree).
+  stage "gpu tests" 150 "${far_env[@]}" FAR_CLIENT="$bin/far-client" "$bin/far_gpu_test" \
+    "${tests_args[@]}"
   stage "far-study" 200 "${far_env[@]}" "${study[@]}" "${study_small[@]}" \
     --csv study.csv --results study.md
   stage "culling benchmark" 120 "${far_env[@]}" "$bin/far_culling_benchmark" \

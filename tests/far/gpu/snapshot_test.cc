@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 
@@ -85,9 +86,12 @@ TEST_F(SnapshotRendererTest, RejectsBadInput) {
   EXPECT_EQ(RenderSnapshot(objects).error().code, ErrorCode::kInvalidArgument);
 }
 
-// Runs far-client with `args`; returns its exit status and stdout + stderr.
+// Runs far-client with `args`; returns its exit status and stdout + stderr. The build tree's
+// far-client, or $FAR_CLIENT where the test runs elsewhere (deploy/gpu-run.sh, from a bundle).
 std::pair<int, std::string> RunFarClient(const std::string& args) {
-  const std::string command = std::string(FAR_CLIENT_PATH) + " " + args + " 2>&1";
+  const char* client = std::getenv("FAR_CLIENT");
+  const std::string command =
+      std::string(client != nullptr ? client : FAR_CLIENT_PATH) + " " + args + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return {-1, "popen failed"};
   std::string out;
