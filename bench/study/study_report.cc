@@ -30,7 +30,8 @@ void WriteCsvHeader(std::ofstream& out) {
   out << ",cull_ms,pcs_objects,pcs_primitives,object_pairs,pairs_considered,pairs_tested,"
          "subobject_input,contacts_total,reference_total,missed_total,false_positives_total,"
          "distance_pairs_total,distance_reference_total,distance_missed_total,"
-         "distance_spurious_total,queries,draws,primitives_rendered,object_pairs_total,"
+         "distance_spurious_total,queries,draws,primitives_rendered,gl_prepare_ms,gl_passes_ms,"
+         "gl_gpu_ms,object_pairs_total,"
          "pairs_considered_total,checked,checked_steps,method_run,method_reason\n";
 }
 
@@ -53,6 +54,7 @@ void WriteCsvRow(std::ofstream& out, const SceneReport& report, const Row& r) {
     out << ",,,";
   }
   out << "," << r.queries << "," << r.draws << "," << r.primitives_rendered << ","
+      << r.gl_prepare_ms << "," << r.gl_passes_ms << "," << r.gl_gpu_ms << ","
       << r.object_pairs_total << "," << r.pairs_considered_total << "," << (r.checked ? 1 : 0)
       << "," << r.checked_steps << "," << r.method_run << "," << CsvText(r.method_reason) << "\n";
 }
@@ -120,6 +122,11 @@ std::string StageText(const Row& r) {
   text << "ingest " << Ms(r.ingest_ms);
   for (size_t i = 0; i < kStages.size(); ++i) {
     if (r.stage_ms[i] >= 0.005) text << ", " << kStages[i] << " " << Ms(r.stage_ms[i]);
+  }
+  // The GPU methods' views inside the culling stages (StepStats::gl_*_ms).
+  if (r.gl_passes_ms > 0) {
+    text << "; GL views: prepare " << Ms(r.gl_prepare_ms) << ", passes " << Ms(r.gl_passes_ms)
+         << " (GPU " << Ms(r.gl_gpu_ms) << ")";
   }
   return text.str();
 }

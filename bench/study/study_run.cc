@@ -225,6 +225,9 @@ void Record(far::StepResult& result, const std::map<uint32_t, int64_t>& triangle
   sample.queries = result.stats.queries;
   sample.draws = result.stats.draws;
   sample.primitives_rendered = result.stats.primitives_rendered;
+  sample.gl_prepare_ms = result.stats.gl_prepare_ms;
+  sample.gl_passes_ms = result.stats.gl_passes_ms;
+  sample.gl_gpu_ms = result.stats.gl_gpu_ms;
   sample.contacts = static_cast<int64_t>(result.contacts.size());
   sample.distance_pairs = static_cast<int64_t>(result.distance_pairs.size());
   sample.method_run = result.stats.method;
@@ -322,6 +325,9 @@ void SummarizeCounts(const std::vector<Sample>& s, Row& row) {
   row.queries = MedianOf(s, [](const Sample& x) { return x.queries; });
   row.draws = MedianOf(s, [](const Sample& x) { return x.draws; });
   row.primitives_rendered = MedianOf(s, [](const Sample& x) { return x.primitives_rendered; });
+  row.gl_prepare_ms = MedianOf(s, [](const Sample& x) { return x.gl_prepare_ms; });
+  row.gl_passes_ms = MedianOf(s, [](const Sample& x) { return x.gl_passes_ms; });
+  row.gl_gpu_ms = MedianOf(s, [](const Sample& x) { return x.gl_gpu_ms; });
   row.contacts = SumOf(s, [](const Sample& x) { return x.contacts; });
   row.reference_contacts = SumOf(s, [](const Sample& x) { return x.reference; });
   row.missed = SumOf(s, [](const Sample& x) { return x.missed; });

@@ -68,6 +68,7 @@ struct Sample {
   std::map<std::string, double> stage_ms;
   int64_t pcs_objects = 0, pcs_primitives = 0, object_pairs = 0, pairs_considered = 0;
   int64_t pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
+  double gl_prepare_ms = 0, gl_passes_ms = 0, gl_gpu_ms = 0;  ///< StepStats' GL split
   int64_t contacts = 0, reference = 0, missed = 0, false_positives = 0;
   int64_t distance_pairs = 0, distance_reference = 0, distance_missed = 0, distance_spurious = 0;
   bool checked = false;  ///< the reference ran at this step: the four counts above are known
@@ -88,6 +89,7 @@ struct Row {
   std::array<double, kStages.size()> stage_ms{};
   double pcs_objects = 0, pcs_primitives = 0, object_pairs = 0, pairs_considered = 0;
   double pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
+  double gl_prepare_ms = 0, gl_passes_ms = 0, gl_gpu_ms = 0;  ///< medians
   int64_t contacts = 0, reference_contacts = 0, missed = 0, false_positives = 0;
   int64_t distance_pairs = 0, distance_reference = 0, distance_missed = 0, distance_spurious = 0;
   int64_t object_pairs_total = 0, pairs_considered_total = 0;

@@ -1,6 +1,7 @@
 #include "far/gpu/culling_renderer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <string>
 
@@ -116,10 +117,12 @@ struct CullingRenderer::Impl {
   std::unique_ptr<CullingPrograms> programs;
   std::unique_ptr<CullTargets> targets;
   GLuint object_buffer = 0, alive_buffer = 0;
+  GLuint timer_query = 0;  // GL_TIME_ELAPSED of a view's passes
 
   ~Impl() {
     GLuint buffers[] = {object_buffer, alive_buffer};
     glDeleteBuffers(2, buffers);
+    glDeleteQueries(1, &timer_query);
   }
 
   // Per-object data for the shaders (indexed by slot; slots outside the view are inactive) and
@@ -196,6 +199,7 @@ Result<std::unique_ptr<CullingRenderer>> CullingRenderer::Create(const RasterFor
   impl->pieces = std::make_unique<PieceBuffers>();
   glCreateBuffers(1, &impl->object_buffer);
   glCreateBuffers(1, &impl->alive_buffer);
+  glCreateQueries(GL_TIME_ELAPSED, 1, &impl->timer_query);
   // Depth in [0, 1] straight from clip z: the orthographic map is affine, no precision lost.
   glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
   if (auto status = CheckGl("creating the culling renderer"); !status.ok()) return status.error();
@@ -211,6 +215,11 @@ void CullingRenderer::RemoveSlot(uint32_t slot) { impl_->pieces->RemoveSlot(slot
 Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
                                                          QueryMechanism mechanism,
                                                          RenderCounters* counters) {
+  using Clock = std::chrono::steady_clock;
+  const auto ms_since = [](Clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  };
+  const Clock::time_point prepare_start = Clock::now();
   Impl& gl = *impl_;
   for (PieceSet set : view.sets) gl.pieces->Sync(set, counters);
   gl.UploadViewData(view, counters);
@@ -218,11 +227,20 @@ Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
   for (PieceSet set : view.sets)
     gl.pieces->PrepareViewDraws(set, view.objects, view.alive, view.triangles_per_primitive,
                                 &counters->bytes_uploaded);
+  counters->prepare_ms += ms_since(prepare_start);
+  const Clock::time_point passes_start = Clock::now();
+  glBeginQuery(GL_TIME_ELAPSED, gl.timer_query);
   ViewPass pass(view, *gl.pieces, *gl.programs, counters);
   std::vector<uint8_t> stays = mechanism == QueryMechanism::kIdBuffer
                                    ? CullWithIdBuffer(pass, *gl.targets)
                                    : CullWithOcclusionQueries(pass, *gl.targets);
+  glEndQuery(GL_TIME_ELAPSED);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  counters->passes_ms += ms_since(passes_start);
+  // The mechanism read its result back, so the passes are done and this does not wait on them.
+  GLuint64 gpu_ns = 0;
+  glGetQueryObjectui64v(gl.timer_query, GL_QUERY_RESULT, &gpu_ns);
+  counters->gpu_ms += static_cast<double>(gpu_ns) * 1e-6;
   if (auto status = CheckGl("rendering a culling view"); !status.ok()) return status.error();
   return stays;
 }

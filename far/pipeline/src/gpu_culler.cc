@@ -203,6 +203,9 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
     stats.draws += counters.draws;
     stats.queries += counters.queries;
     stats.bytes_uploaded += counters.bytes_uploaded;
+    stats.gl_prepare_ms += counters.prepare_ms;
+    stats.gl_passes_ms += counters.passes_ms;
+    stats.gl_gpu_ms += counters.gpu_ms;
     AddView(view.projection, bounds, request.resolution, fattened, level);
   }
   return {};

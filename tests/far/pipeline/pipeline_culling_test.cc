@@ -342,6 +342,35 @@ TEST_F(PipelineCullingTest, StagesPastTheDeepestOutputDoNotRun) {
   }
 }
 
+// The GL split of the culling stages: a GPU method's views take time on the CPU and the GPU
+// (timer queries), inside the culling stages' own time; a CPU method has no views.
+TEST_F(PipelineCullingTest, GlViewTimesAreInsideTheCullingStages) {
+  Load(RandomSoup(11, 6, 10, 2.0, 0.6));
+  for (Method method : {Method::kFar, Method::kBvh}) {
+    for (QueryMechanism mechanism : {QueryMechanism::kIdBuffer, QueryMechanism::kOcclusionQuery}) {
+      StepRequest request;
+      request.method = method;
+      request.mechanism = mechanism;
+      const StepResult result = Run(request);
+      const StepStats& stats = result.stats;
+      const std::string what =
+          std::string(ToString(method)) + " " + std::string(ToString(mechanism));
+      double cull_ms = 0;
+      for (const auto& stage : stats.stages) {
+        if (stage.name == "object_cull" || stage.name == "primitive_cull") cull_ms += stage.ms;
+      }
+      if (method == Method::kBvh) {
+        EXPECT_EQ(stats.gl_prepare_ms + stats.gl_passes_ms + stats.gl_gpu_ms, 0.0) << what;
+        continue;
+      }
+      EXPECT_GT(stats.gl_prepare_ms, 0.0) << what;
+      EXPECT_GT(stats.gl_passes_ms, 0.0) << what;
+      EXPECT_GT(stats.gl_gpu_ms, 0.0) << what;
+      EXPECT_LE(stats.gl_prepare_ms + stats.gl_passes_ms, cull_ms) << what;
+    }
+  }
+}
+
 // On llvmpipe a FAR step costs milliseconds plus tens of microseconds per triangle: on a scene
 // of thousands of triangles auto runs bvh, and its reason says what it measured and predicted.
 TEST_F(PipelineCullingTest, AutoRunsTheFastestReliableConfigurationAndSaysWhy) {

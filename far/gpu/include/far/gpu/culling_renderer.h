@@ -85,6 +85,13 @@ struct RenderCounters {
   int64_t queries = 0;
   int64_t instances = 0;       ///< piece instances submitted
   int64_t bytes_uploaded = 0;  ///< piece and per-object data sent to the GPU
+  /// Where the view's time went: the CPU preparing it (uploads, draw commands), the CPU in its
+  /// passes (issuing them, then waiting for and reading back the result), and the GPU's own
+  /// time for the passes (a GL_TIME_ELAPSED query). passes_ms well above gpu_ms means the
+  /// driver and the round trip cost more than the rendering.
+  double prepare_ms = 0;
+  double passes_ms = 0;
+  double gpu_ms = 0;
 };
 
 /// The GL side of culling: persistent piece buffers (src/piece_buffers.h) and the two

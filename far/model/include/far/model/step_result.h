@@ -55,6 +55,13 @@ struct StepStats {
   int64_t draws = 0;
   int64_t queries = 0;
   int64_t bytes_uploaded = 0;  ///< to the GPU this step
+  /// The GPU methods' culling views, all of them: CPU time preparing them (uploads, draw
+  /// commands), CPU time in their passes (issuing the GL calls, waiting for and reading back
+  /// the results), and the GPU's own time for those passes (GL timer queries). The rest of the
+  /// culling stages is CPU work around the views. Not sent over the wire (study measurements).
+  double gl_prepare_ms = 0;
+  double gl_passes_ms = 0;
+  double gl_gpu_ms = 0;
   /// Candidate object pairs after sweep-and-prune. fcl: the pairs its broadphase passed to
   /// collide; exact: the pairs in its answer (it has no candidates).
   int64_t object_pairs = 0;
