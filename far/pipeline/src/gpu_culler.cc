@@ -126,35 +126,54 @@ Result<GpuCuller::RendererEntry*> GpuCuller::RendererFor(const StepRequest& requ
   return &it->second;
 }
 
-// Builds the GPU pieces of every object that lacks them or whose vertices changed.
+namespace {
+
+// The GPU pieces of one object in one set, in the object's anchored frame.
+std::vector<PieceInstance> BuildPieces(const CachedObject& object, PieceSet set) {
+  std::vector<PieceInstance> pieces;
+  if (set == PieceSet::kProxyBoxes) {
+    // @pre the hierarchy is up to date (SceneCache::RefreshHierarchies).
+    for (const TriangleBvh::Node* node : HierarchyCut(object.bvh, ProxyBoxesFor(object)))
+      pieces.push_back(
+          ProxyBoxPiece(object.slot, node->center - object.anchor_M, node->half_extent));
+    return pieces;
+  }
+  pieces.reserve(object.mesh.triangles.size() * InstancesPerTriangle(set));
+  for (size_t t = 0; t < object.mesh.triangles.size(); ++t) {
+    const auto& tri = object.mesh.triangles[t];
+    AppendPieces(set, object.slot, static_cast<uint32_t>(t),
+                 object.mesh.p_MV[tri[0]] - object.anchor_M,
+                 object.mesh.p_MV[tri[1]] - object.anchor_M,
+                 object.mesh.p_MV[tri[2]] - object.anchor_M, &pieces);
+  }
+  return pieces;
+}
+
+}  // namespace
+
+// Builds the GPU pieces of every object that lacks them or whose vertices changed: on the pool
+// (deformable objects change every step: 150 leaves rebuild 19K triangles' pieces), then
+// handed to the renderer on this thread, the GL thread.
 void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
                              std::span<const PieceSet> sets) {
+  std::vector<std::pair<const CachedObject*, PieceSet>> stale;
   for (const CachedObject* object : objects) {
     for (PieceSet set : sets) {
-      auto key = std::make_pair(object->slot, static_cast<int>(set));
-      auto it = entry.built.find(key);
-      if (it != entry.built.end() && it->second == object->geometry_stamp) continue;
-      std::vector<PieceInstance> pieces;
-      if (set == PieceSet::kProxyBoxes) {
-        // @pre the hierarchy is up to date (SceneCache::RefreshHierarchies).
-        for (const TriangleBvh::Node* node : HierarchyCut(object->bvh, ProxyBoxesFor(*object)))
-          pieces.push_back(
-              ProxyBoxPiece(object->slot, node->center - object->anchor_M, node->half_extent));
-      } else {
-        pieces.reserve(object->mesh.triangles.size() * InstancesPerTriangle(set));
-        for (size_t t = 0; t < object->mesh.triangles.size(); ++t) {
-          const auto& tri = object->mesh.triangles[t];
-          AppendPieces(set, object->slot, static_cast<uint32_t>(t),
-                       object->mesh.p_MV[tri[0]] - object->anchor_M,
-                       object->mesh.p_MV[tri[1]] - object->anchor_M,
-                       object->mesh.p_MV[tri[2]] - object->anchor_M, &pieces);
-        }
-      }
-      counters_.piece_builds++;
-      counters_.piece_bytes += static_cast<int64_t>(pieces.size() * sizeof(PieceInstance));
-      entry.renderer->SetPieces(set, object->slot, std::move(pieces));
-      entry.built[key] = object->geometry_stamp;
+      auto it = entry.built.find({object->slot, static_cast<int>(set)});
+      if (it == entry.built.end() || it->second != object->geometry_stamp)
+        stale.emplace_back(object, set);
     }
+  }
+  std::vector<std::vector<PieceInstance>> built(stale.size());
+  pool_.ParallelFor(stale.size(), 1, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) built[i] = BuildPieces(*stale[i].first, stale[i].second);
+  });
+  for (size_t i = 0; i < stale.size(); ++i) {
+    const auto [object, set] = stale[i];
+    counters_.piece_builds++;
+    counters_.piece_bytes += static_cast<int64_t>(built[i].size() * sizeof(PieceInstance));
+    entry.renderer->SetPieces(set, object->slot, std::move(built[i]));
+    entry.built[{object->slot, static_cast<int>(set)}] = object->geometry_stamp;
   }
 }
 
@@ -174,12 +193,13 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
     Eigen::AlignedBox3d bounds;
     int live = 0;
     for (const ViewObject& object : view_objects) {
+      const int live_before = live;
       for (uint32_t j = 0; j < PrimitivesOf(object, k); ++j) {
         if (!alive[object.first_primitive + j]) continue;
-        groups.insert(object.group);
         bounds.extend(primitive_boxes_W[object.first_primitive + j]);
         ++live;
       }
+      if (live > live_before) groups.insert(object.group);
     }
     if (groups.size() < 2) {
       std::fill(alive.begin(), alive.end(), 0);
@@ -247,24 +267,29 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
   // Sub-objects of k triangles of the paired objects, each object its own group.
   const int k = request.subobject_size;
   std::vector<ViewObject> view_objects;
-  std::vector<Eigen::AlignedBox3d> boxes;
+  uint32_t num_primitives = 0;
   for (size_t i : paired) {
-    const CachedObject& object = *objects[i];
-    view_objects.push_back(
-        MakeViewObject(object, static_cast<uint32_t>(i), static_cast<uint32_t>(boxes.size())));
-    const size_t n = object.mesh.triangles.size();
-    for (size_t first = 0; first < n; first += static_cast<size_t>(k)) {
-      Eigen::AlignedBox3d box_M;
-      for (size_t t = first; t < std::min(n, first + static_cast<size_t>(k)); ++t)
-        box_M.extend(object.rect_boxes_M[t]);
-      boxes.push_back(TransformBox(object.X_WM, box_M));
-    }
+    view_objects.push_back(MakeViewObject(*objects[i], static_cast<uint32_t>(i), num_primitives));
+    num_primitives += PrimitivesOf(view_objects.back(), k);
   }
   // Only the sub-objects holding a candidate triangle take part: the others are not drawn.
-  std::vector<uint8_t> alive(boxes.size(), candidates.empty() ? 1 : 0);
+  std::vector<uint8_t> alive(num_primitives, candidates.empty() ? 1 : 0);
   if (!candidates.empty()) {
     for (const ViewObject& view : view_objects) {
       for (uint32_t t : candidates[view.group]) alive[view.first_primitive + t / k] = 1;
+    }
+  }
+  // World boxes of those only (CullLevel reads no other): a paper-scale bunny has 92K
+  // sub-objects, of which the hierarchy leaves a few thousand near the other bunny.
+  std::vector<Eigen::AlignedBox3d> boxes(num_primitives);
+  for (const ViewObject& view : view_objects) {
+    const CachedObject& object = *objects[view.group];
+    for (uint32_t j = 0; j < PrimitivesOf(view, k); ++j) {
+      if (!alive[view.first_primitive + j]) continue;
+      Eigen::AlignedBox3d box_M;
+      for (uint32_t t = j * k; t < std::min(view.num_triangles, (j + 1) * k); ++t)
+        box_M.extend(object.rect_boxes_M[t]);
+      boxes[view.first_primitive + j] = TransformBox(object.X_WM, box_M);
     }
   }
   LevelCertificate level{.level = "sub-object"};

@@ -24,8 +24,9 @@ namespace far::internal {
 /// Owned by the GL thread (see far::GlContext).
 class GpuCuller {
  public:
-  /// `counters` gets the piece builds; aliased, must outlive *this.
-  explicit GpuCuller(SceneCounters& counters) : counters_(counters) {}
+  /// `counters` gets the piece builds; `pool` builds the pieces of changed objects in
+  /// parallel. Both aliased, must outlive *this.
+  GpuCuller(SceneCounters& counters, ThreadPool& pool) : counters_(counters), pool_(pool) {}
 
   /// Culls whole objects: returns, indexed like `objects`, 1 for objects in the object PCS.
   /// @pre the objects' hierarchies are up to date (SceneCache::RefreshHierarchies): the FAR
@@ -62,6 +63,7 @@ class GpuCuller {
                          std::vector<uint8_t>& alive, StepStats& stats, LevelCertificate& level);
 
   SceneCounters& counters_;
+  ThreadPool& pool_;
   std::map<std::tuple<int, int, int>, RendererEntry> renderers_;
 };
 

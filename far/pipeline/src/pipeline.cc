@@ -483,7 +483,8 @@ Result<std::unique_ptr<Pipeline>> Pipeline::Create(const PipelineOptions& option
                        "use_current_context: no GL context is current on this thread");
     }
   }
-  if (options.use_gl) impl->gpu = std::make_unique<internal::GpuCuller>(impl->cache.counters());
+  if (options.use_gl)
+    impl->gpu = std::make_unique<internal::GpuCuller>(impl->cache.counters(), impl->pool);
   return std::unique_ptr<Pipeline>(new Pipeline(std::move(impl)));
 }
 
