@@ -1,7 +1,6 @@
 #include "gpu_culler.h"
 
 #include <algorithm>
-#include <set>
 #include <string>
 
 #include "far/offsets/bounding_offset.h"
@@ -188,8 +187,9 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
   const bool proxies = !sets.empty() && sets[0] == PieceSet::kProxyBoxes;
   const bool fattened = sets.empty() || sets[0] != PieceSet::kTriangles;
   for (int axis = 0; axis < 3; ++axis) {
-    // A primitive can only be kept by another group: stop when one group or none is left.
-    std::set<uint32_t> groups;
+    // A primitive can only be kept by another group: stop when one group or none is left
+    // (each view object is its own group).
+    int live_groups = 0;
     Eigen::AlignedBox3d bounds;
     int live = 0;
     for (const ViewObject& object : view_objects) {
@@ -199,9 +199,9 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
         bounds.extend(primitive_boxes_W[object.first_primitive + j]);
         ++live;
       }
-      if (live > live_before) groups.insert(object.group);
+      live_groups += live > live_before;
     }
-    if (groups.size() < 2) {
+    if (live_groups < 2) {
       std::fill(alive.begin(), alive.end(), 0);
       return {};
     }
