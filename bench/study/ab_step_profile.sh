@@ -5,9 +5,10 @@
 # Usage: bench/study/ab_step_profile.sh SCENE RUNS THREADS IDLE_MS BINARY...
 #   e.g. cp build/release/bench/study/far-step-profile /tmp/old  (then rebuild the change)
 #        bench/study/ab_step_profile.sh scaling-5000 8 2 6 /tmp/old build/release/bench/study/far-step-profile
+# FAR_STEP_PROFILE_ARGS adds flags to every run (e.g. '--distance-fraction 0.001').
 set -euo pipefail
 if [[ $# -lt 5 ]]; then
-  sed -n '2,7p' "$0" >&2
+  sed -n '2,8p' "$0" >&2
   exit 2
 fi
 scene=$1 runs=$2 threads=$3 idle_ms=$4
@@ -16,7 +17,7 @@ declare -A times
 for _ in $(seq "$runs"); do
   for binary in "$@"; do
     steps=$("$binary" --scene "$scene" --method bvh --threads "$threads" --steps 4 \
-      --idle-ms "$idle_ms" | awk -F, 'NR > 1 && $1 >= 1 { printf "%s ", $2 }')
+      --idle-ms "$idle_ms" ${FAR_STEP_PROFILE_ARGS:-} | awk -F, 'NR > 1 && $1 >= 1 { printf "%s ", $2 }')
     times[$binary]="${times[$binary]:-} $steps"
   done
 done

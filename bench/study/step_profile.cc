@@ -5,6 +5,7 @@
 //   far-step-profile --scene breaking --method bvh --steps 4
 //   perf record -g far-step-profile --scene breaking --steps 4 --repeat 50 --repeat-from 3
 //   far-step-profile --scene breaking --repeat 50 --repeat-from 3 --cold   (first-run caches)
+//   far-step-profile --scene scaling-5000 --distance-fraction 0.001  (the distance pass)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -64,6 +65,12 @@ int main(int argc, char** argv) {
   app.add_flag("--cold", cold,
                "write a 64 MiB buffer before each repeat, so that every repeat starts with caches "
                "as cold as a first run's (a run's repeats otherwise find the step's data cached)");
+  double distance_fraction = 0;
+  app.add_option("--distance-fraction", distance_fraction,
+                 "ask for the distance pairs too, with D this fraction of the diagonal of the "
+                 "scene's world box (far-study's --distance-fraction; 0: contacts only)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   app.add_option("--bunny", scene_options.bunny_path, "bunny mesh")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
@@ -95,7 +102,17 @@ int main(int argc, char** argv) {
   }
   far::StepRequest request;
   request.method = *method;
-  std::printf("step,ms,repeat_ms,contacts,object_pairs,pairs_considered,pairs_tested,stages_ms\n");
+  if (distance_fraction > 0) {
+    if (*method == far::Method::kFcl) {
+      std::fprintf(stderr, "far-step-profile: fcl answers no distance queries\n");
+      return 2;
+    }
+    request.distance = distance_fraction * study_scene->diagonal;
+    request.output = far::Output::kDistancePairs;
+  }
+  std::printf(
+      "step,ms,repeat_ms,contacts,distance_pairs,object_pairs,pairs_considered,pairs_tested,"
+      "stages_ms\n");
   for (size_t s = 0; s <= scene.frames.size(); ++s) {
     if (idle_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(idle_ms));
     const auto start = Clock::now();
@@ -128,7 +145,8 @@ int main(int argc, char** argv) {
       std::snprintf(ms_text, sizeof ms_text, "%.3f", stage.ms);
       stages += (stages.empty() ? "" : " ") + stage.name + "=" + ms_text;
     }
-    std::printf("%zu,%.3f,%.3f,%zu,%lld,%lld,%lld,%s\n", s, ms, repeat_ms, result->contacts.size(),
+    std::printf("%zu,%.3f,%.3f,%zu,%zu,%lld,%lld,%lld,%s\n", s, ms, repeat_ms,
+                result->contacts.size(), result->distance_pairs.size(),
                 static_cast<long long>(result->stats.object_pairs),
                 static_cast<long long>(result->stats.pairs_considered),
                 static_cast<long long>(result->stats.pairs_tested), stages.c_str());

@@ -40,6 +40,9 @@
 // overestimate bound: it NEVER misses a pair with d <= D, and it may include pairs with
 // d <= D + 288 eps L (for L = 1 that is 3.2e-14; for a pair 1e6 across, 3.2e-8).
 // Intersecting pairs are found by the exact test and are always within.
+// Before the exact work the predicate rejects pairs that a cheap lower bound already shows
+// farther than the limit: the largest box gap, and the gap along each triangle's normal
+// (NormalGapExceeds below, which proves distance > limit > D for every pair it rejects).
 // For the bound to hold the arithmetic must not overflow or underflow: the input range of the
 // predicates (far/internal/predicates.h) suffices. Tests check "never misses" and the two-sided
 // bound against exact rational distances on random and hard cases
@@ -50,6 +53,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <Eigen/Geometry>
 
@@ -187,6 +191,35 @@ double BoxGap(const TrianglePoints& s, const TrianglePoints& t) {
   return (t_min - s_max).max(s_min - t_max).maxCoeff();
 }
 
+// True when the gap between the projections of the two triangles onto `n` (any nonzero
+// vector; here a triangle's normal in plain floating point) proves distance(s, t) > limit.
+// For any axis n, distance >= gap / |n|. Error: each projection n . (x - o), with x - o and the
+// dot product rounded, is within 4.01 eps |n| L of its exact value (Cauchy-Schwarz, |x - o| <= L
+// for x and o among the six vertices), so the exact gap is >= the computed one (1 - eps) minus
+// 8.02 eps |n| L; |n| computed is within 3 eps of |n|, and the product and sum below add a few
+// eps. A gap accepted against limit + 64 eps L therefore gives distance > (1 - 8 eps) limit +
+// 55 eps L, and limit < 1.01 L whenever a gap passes (no projection gap exceeds |n| L), so
+// distance > limit: the rejected pair is farther than the limit, hence than D, and
+// TrianglesWithinDistance never misses because of it.
+bool NormalGapExceeds(const Vector3d& n, const TrianglePoints& s, const TrianglePoints& t,
+                      double limit, double scale) {
+  const double length = n.norm();
+  if (!(length > 0) || !std::isfinite(length)) return false;
+  const Vector3d& o = s.a;
+  const double s1 = n.dot(s.b - o), s2 = n.dot(s.c - o);
+  const double t0 = n.dot(t.a - o), t1 = n.dot(t.b - o), t2 = n.dot(t.c - o);
+  const double s_lo = std::min({0.0, s1, s2}), s_hi = std::max({0.0, s1, s2});
+  const double t_lo = std::min({t0, t1, t2}), t_hi = std::max({t0, t1, t2});
+  const double gap = std::max(t_lo - s_hi, s_lo - t_hi);
+  return gap > length * (limit + 64 * kEps * scale);
+}
+
+// The normals of both triangles as separating axes (a degenerate triangle's is zero: skipped).
+bool NormalsSeparate(const TrianglePoints& s, const TrianglePoints& t, double limit, double scale) {
+  return NormalGapExceeds((s.b - s.a).cross(s.c - s.a), s, t, limit, scale) ||
+         NormalGapExceeds((t.b - t.a).cross(t.c - t.a), s, t, limit, scale);
+}
+
 }  // namespace
 
 double TriangleDistance(const TrianglePoints& s, const TrianglePoints& t) {
@@ -194,15 +227,24 @@ double TriangleDistance(const TrianglePoints& s, const TrianglePoints& t) {
   return DisjointDistance(s, t, PairScale(s, t));
 }
 
-bool TrianglesWithinDistance(const TrianglePoints& s, const TrianglePoints& t,
-                             double max_distance) {
+std::optional<double> TriangleDistanceIfWithin(const TrianglePoints& s, const TrianglePoints& t,
+                                               double max_distance) {
   const double scale = PairScale(s, t);
   const double limit = max_distance + kSlack * kEps * scale;
   // Boxes farther apart than the limit: the distance is larger (the gap is a lower bound, and
   // the slack covers its rounding; see the bound at the top of this file).
-  if (BoxGap(s, t) > limit) return false;
-  if (TrianglesIntersect(s, t)) return true;
-  return DisjointDistance(s, t, scale) <= limit;
+  if (BoxGap(s, t) > limit) return std::nullopt;
+  if (NormalsSeparate(s, t, limit, scale)) return std::nullopt;
+  if (TrianglesIntersect(s, t)) return 0.0;
+  // TriangleDistance's value: DisjointDistance at the same scale.
+  const double distance = DisjointDistance(s, t, scale);
+  if (distance <= limit) return distance;
+  return std::nullopt;
+}
+
+bool TrianglesWithinDistance(const TrianglePoints& s, const TrianglePoints& t,
+                             double max_distance) {
+  return TriangleDistanceIfWithin(s, t, max_distance).has_value();
 }
 
 }  // namespace far

@@ -23,8 +23,8 @@ void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
     // Intersecting triangles are within any distance, at distance 0.
     if (intersects) {
       out.distance_pairs.push_back({pair, 0.0});
-    } else if (TrianglesWithinDistance(s, t, wanted.max_distance)) {
-      out.distance_pairs.push_back({pair, TriangleDistance(s, t)});
+    } else if (auto distance = TriangleDistanceIfWithin(s, t, wanted.max_distance)) {
+      out.distance_pairs.push_back({pair, *distance});
     }
   }
   // The pair cap is checked in batches: at most this many pairs per thread go uncounted.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -9,6 +10,7 @@
 #include "exact_reference.h"
 #include "hard_cases.h"
 #include "triangle_test_scenes.h"
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include "far/geometry/triangle_tests.h"
@@ -69,10 +71,17 @@ std::string CheckPair(const TrianglePoints& s, const TrianglePoints& t) {
   // The predicate never misses: at D = d (rounded up) it must answer true.
   const double tight = SmallestDoubleAtLeast(exact2);
   if (!TrianglesWithinDistance(s, t, tight)) return "predicate missed a pair at D = d";
+  // The combined call accepts it too, with TriangleDistance's value.
+  const std::optional<double> within = TriangleDistanceIfWithin(s, t, tight);
+  if (!within) return "TriangleDistanceIfWithin missed a pair at D = d";
+  if (*within != computed) return "TriangleDistanceIfWithin gave another distance";
   // And it rejects pairs farther than D + 288 eps L.
   const double far_below = tight - 2 * kIncludeWindow * kEps * scale;
   if (far_below > 0 && TrianglesWithinDistance(s, t, far_below)) {
     return "predicate included a pair beyond its documented window";
+  }
+  if (far_below > 0 && TriangleDistanceIfWithin(s, t, far_below)) {
+    return "TriangleDistanceIfWithin included a pair beyond the predicate's window";
   }
   return {};
 }
@@ -112,6 +121,32 @@ TEST(TriangleDistanceTest, WithinDistanceIsExactForIntersectingAndFarPairs) {
   EXPECT_TRUE(TrianglesWithinDistance(base, lifted, 1.0));
   EXPECT_FALSE(TrianglesWithinDistance(base, lifted, 0.999));
   EXPECT_FALSE(TrianglesWithinDistance(base, lifted, 0.0));
+}
+
+// Slanted parallel triangles whose boxes overlap, so that only the normal axis (or the full
+// distance) separates them: far from the origin too, at separations from 1e-9 to 1, each
+// accepted at D just above the separation and rejected just below, with the same distance
+// TriangleDistance gives.
+TEST(TriangleDistanceTest, SlantedParallelPairsAreSplitAtTheirSeparation) {
+  const Vector3d normal = Vector3d(1, 2, 3).normalized();
+  for (const double offset : {0.0, 1e3, 1e6}) {
+    const Vector3d o = Vector3d::Constant(offset);
+    const TrianglePoints s =
+        Tri(o + Vector3d(0, 0, 0), o + Vector3d(3, 0, -1), o + Vector3d(0, 3, -2));
+    for (const double h : {1e-9, 1e-6, 1e-3, 0.1, 1.0}) {
+      const Vector3d shift = h * normal + Vector3d(0.1, 0.2, 0).cross(normal);
+      const TrianglePoints t = Tri(s.a + shift, s.b + shift, s.c + shift);
+      const double d = TriangleDistance(s, t);
+      ASSERT_NEAR(d, h, 1e-9 * (1 + offset)) << "offset " << offset << " h " << h;
+      const std::optional<double> above = TriangleDistanceIfWithin(s, t, d * (1 + 1e-6));
+      ASSERT_TRUE(above.has_value()) << "offset " << offset << " h " << h;
+      EXPECT_EQ(*above, d);
+      if (h > 1e-6 * (1 + offset)) {  // far enough above the rounding of the coordinates
+        EXPECT_FALSE(TriangleDistanceIfWithin(s, t, d * (1 - 1e-3)).has_value())
+            << "offset " << offset << " h " << h;
+      }
+    }
+  }
 }
 
 TEST(TriangleDistanceTest, MatchesExactDistanceOnRandomizedScenes) {

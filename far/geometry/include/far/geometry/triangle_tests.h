@@ -1,5 +1,7 @@
 #pragma once
 
+#include <optional>
+
 #include <Eigen/Core>
 
 namespace far {
@@ -28,5 +30,11 @@ double TriangleDistance(const TrianglePoints& s, const TrianglePoints& t);
 /// Returns true iff distance(s, t) <= max_distance, up to the error bound documented in
 /// triangle_distance.cc (intersecting triangles are always within). @pre max_distance >= 0.
 bool TrianglesWithinDistance(const TrianglePoints& s, const TrianglePoints& t, double max_distance);
+
+/// Both at once: TriangleDistance(s, t) when TrianglesWithinDistance(s, t, max_distance), else
+/// nullopt. One intersection test and one distance evaluation where the two calls make two each
+/// (a distance query reports the distance of every pair it accepts). @pre max_distance >= 0.
+std::optional<double> TriangleDistanceIfWithin(const TrianglePoints& s, const TrianglePoints& t,
+                                               double max_distance);
 
 }  // namespace far
