@@ -304,10 +304,34 @@ bool Collinear3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen
 
 // --- Accurate cross product ----------------------------------------------------------------
 
+namespace {
+
+// x1 y1 - x2 y2 for double inputs, by Kahan's algorithm with a fused multiply-add: e is the
+// rounding error of x2 y2, exactly. Its relative error is at most 2u = 2^-52 (Jeannerod, Louvet
+// and Muller, "Further analysis of Kahan's algorithm for the accurate computation of 2x2
+// determinants", Math. Comp. 2013), so it is 0 iff the exact value is (and then f = -e
+// exactly). Without underflow, as for every predicate here.
+inline double KahanMinor(double x1, double y1, double x2, double y2) {
+  const double w = x2 * y2;
+  const double e = std::fma(-x2, y2, w);
+  const double f = std::fma(x1, y1, -w);
+  return f + e;
+}
+
+}  // namespace
+
 Eigen::Vector3d RoundedCross(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                              const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
   const Diff ux = MakeDiff(b.x(), a.x()), uy = MakeDiff(b.y(), a.y()), uz = MakeDiff(b.z(), a.z());
   const Diff vx = MakeDiff(d.x(), c.x()), vy = MakeDiff(d.y(), c.y()), vz = MakeDiff(d.z(), c.z());
+  // Differences without a rounding error (the usual case: the ends of an edge are close, so
+  // Sterbenz's lemma applies): each minor of the exact differences, to 2^-52 relative, at a
+  // fraction of the expansions' cost (the distance pass spent 42% of its time in them).
+  if (ux.n == 1 && uy.n == 1 && uz.n == 1 && vx.n == 1 && vy.n == 1 && vz.n == 1) {
+    return {KahanMinor(uy.v[0], vz.v[0], uz.v[0], vy.v[0]),
+            KahanMinor(uz.v[0], vx.v[0], ux.v[0], vz.v[0]),
+            KahanMinor(ux.v[0], vy.v[0], uy.v[0], vx.v[0])};
+  }
   double component[16];
   Eigen::Vector3d n;
   int len = MinorExpansion(uy, vz, uz, vy, component);

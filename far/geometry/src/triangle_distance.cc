@@ -12,11 +12,13 @@
 //
 // Robustness. Every vector is a difference of two input points computed directly (never via a
 // translated copy), so its rounding error is relative to its own length. Plane and line
-// normals come from internal::RoundedCross, which evaluates the cross product exactly and
-// rounds it, so their directions are accurate to a few ulps even for slivers (aspect 1e8) and
-// nearly parallel edges. Every vertex-edge and edge-edge candidate is the length of a vector
-// between two actual points of the two segments (parameters clamped to [0, 1]), so it never
-// underestimates by more than its evaluation error, whatever the conditioning.
+// normals come from internal::RoundedCross, whose components are within 2^-52 relative of
+// the exact cross product's (exact expansions, or Kahan's determinant with a fused
+// multiply-add where the differences are exact), so their directions are accurate to a few
+// ulps even for slivers (aspect 1e8) and nearly parallel edges. Every vertex-edge and edge-edge
+// candidate is the length of a vector between two actual points of the two segments (parameters
+// clamped to [0, 1]), so it never underestimates by more than its evaluation error, whatever the
+// conditioning.
 //   - Edge-edge: s is where line 1 crosses the plane through line 2 spanned by the common
 //     normal n (a lateral formula, well conditioned in the numerator), t is the best t for
 //     that s. For nearly parallel edges s may be far off, but (s, t(s)) stays in the "valley"

@@ -179,5 +179,32 @@ TEST(PredicatesTest, RoundedCrossIsWithinTwoUlpsOfExact) {
   }
 }
 
+// Coordinates on a grid, so that every difference is exact (the fused multiply-add path):
+// parallel edges give exactly zero, and one grid step off parallel gives the exact minors.
+TEST(PredicatesTest, RoundedCrossIsExactOnGridPoints) {
+  std::mt19937_64 rng(17);
+  std::uniform_int_distribution<int> coordinate(-1000, 1000);
+  const auto grid_point = [&](double step, const Vector3d& offset) {
+    return Vector3d(Vector3d(coordinate(rng), coordinate(rng), coordinate(rng)) * step + offset);
+  };
+  for (int i = 0; i < 5000; ++i) {
+    const double step = i % 3 == 0 ? 1.0 : (i % 3 == 1 ? 0x1p-20 : 0x1p10);
+    const Vector3d offset =
+        i % 2 ? Vector3d(Vector3d(0x1p20, -0x1p18, 0x1p19) * step) : Vector3d::Zero();
+    const Vector3d a = grid_point(step, offset);
+    const Vector3d b = grid_point(step, offset);
+    const Vector3d c = grid_point(step, offset);
+    const int k = coordinate(rng) % 7 + 8;  // 1..14
+    const Vector3d d = c + k * (b - a);
+    const Vector3d parallel = RoundedCross(a, b, c, d);
+    ASSERT_EQ(parallel, Vector3d::Zero()) << "case " << i;
+    const Vector3d d_off = d + Vector3d(0, step, 0);
+    const Vector3d n = RoundedCross(a, b, c, d_off);
+    // (b - a) x (d_off - c) = (b - a) x (0, step, 0) exactly, for the parallel part vanishes.
+    const Vector3d u = b - a;
+    ASSERT_EQ(n, Vector3d(-u.z() * step, 0.0, u.x() * step)) << "case " << i;
+  }
+}
+
 }  // namespace
 }  // namespace far::internal

@@ -80,10 +80,11 @@ class PlaneSide {
   Eigen::Vector3d permanent_;  // per component, the sum of the magnitudes of those two products
 };
 
-/// Returns (b - a) x (d - c) with every component evaluated exactly and then rounded to the
-/// nearest double (relative error at most 2^-52 per component; exactly zero iff the two
-/// difference vectors are parallel or one is zero). Used where a direction must be accurate
-/// to a few ulps even for slivers and nearly parallel edges.
+/// Returns (b - a) x (d - c) with every component accurate to a relative error of at most
+/// 2^-52 and exactly zero iff the two difference vectors are parallel or one is zero: from the
+/// exact expansion, or, where both differences are exact in double, from Kahan's 2x2
+/// determinant with a fused multiply-add (the same bound). Used where a direction must be
+/// accurate to a few ulps even for slivers and nearly parallel edges.
 Eigen::Vector3d RoundedCross(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                              const Eigen::Vector3d& c, const Eigen::Vector3d& d);
 
