@@ -16,8 +16,10 @@ shift 4
 declare -A times
 for _ in $(seq "$runs"); do
   for binary in "$@"; do
+    # shellcheck disable=SC2086 # FAR_STEP_PROFILE_ARGS is a list of flags
     steps=$("$binary" --scene "$scene" --method bvh --threads "$threads" --steps 4 \
-      --idle-ms "$idle_ms" ${FAR_STEP_PROFILE_ARGS:-} | awk -F, 'NR > 1 && $1 >= 1 { printf "%s ", $2 }')
+      --idle-ms "$idle_ms" ${FAR_STEP_PROFILE_ARGS:-} |
+      awk -F, 'NR > 1 && $1 >= 1 { printf "%s ", $2 }')
     times[$binary]="${times[$binary]:-} $steps"
   done
 done

@@ -194,7 +194,7 @@ TEST(PredicatesTest, RoundedCrossIsExactOnGridPoints) {
     const Vector3d a = grid_point(step, offset);
     const Vector3d b = grid_point(step, offset);
     const Vector3d c = grid_point(step, offset);
-    const int k = coordinate(rng) % 7 + 8;  // 1..14
+    const int k = coordinate(rng) % 7 + 8;  // 2..14
     const Vector3d d = c + k * (b - a);
     const Vector3d parallel = RoundedCross(a, b, c, d);
     ASSERT_EQ(parallel, Vector3d::Zero()) << "case " << i;
