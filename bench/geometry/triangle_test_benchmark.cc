@@ -13,11 +13,16 @@
 // Counters: per_pair (seconds per tested pair); for far, the fraction of pairs that meet
 // ("meet"); for FCL, the fraction of pairs where it disagrees with far's exact answer
 // ("disagree").
+// The distance benchmarks time far::TriangleDistanceIfWithin (the distance pass's test: the
+// distance of a pair within D, with a bounded error, else nothing) at D = 0.01 on the close and
+// far sets, against FCL's plain floating-point TriangleDistance::triDistance, which always
+// computes the distance ("within": the fraction far accepts).
 
 #include <random>
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#include <fcl/narrowphase/detail/primitive_shape_algorithm/triangle_distance.h>
 #include <fcl/narrowphase/detail/traversal/collision/intersect.h>
 
 #include "far/geometry/triangle_tests.h"
@@ -109,12 +114,55 @@ void BM_FclIntersectTriangle_Close(benchmark::State& state) { RunFcl(state, Kind
 void BM_FarTrianglesIntersect_Far(benchmark::State& state) { RunFar(state, Kind::kFar); }
 void BM_FclIntersectTriangle_Far(benchmark::State& state) { RunFcl(state, Kind::kFar); }
 
+constexpr double kDistance = 0.01;
+
+void RunFarDistance(benchmark::State& state, Kind kind) {
+  const std::vector<Pair>& pairs = Pairs(kind);
+  double sum = 0;
+  for (auto _ : state) {
+    for (const Pair& p : pairs)
+      sum += far::TriangleDistanceIfWithin(p.s, p.t, kDistance).value_or(0);
+    benchmark::DoNotOptimize(sum);
+  }
+  Report(state, pairs.size());
+  int within = 0;
+  for (const Pair& p : pairs) within += far::TrianglesWithinDistance(p.s, p.t, kDistance);
+  state.counters["within"] = static_cast<double>(within) / static_cast<double>(pairs.size());
+}
+
+void RunFclDistance(benchmark::State& state, Kind kind) {
+  const std::vector<Pair>& pairs = Pairs(kind);
+  double sum = 0;
+  Vector3d closest_s, closest_t;
+  for (auto _ : state) {
+    for (const Pair& p : pairs) {
+      sum += fcl::detail::TriangleDistance<double>::triDistance(p.s.a, p.s.b, p.s.c, p.t.a, p.t.b,
+                                                                p.t.c, closest_s, closest_t);
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  Report(state, pairs.size());
+}
+
+void BM_FarTriangleDistanceIfWithin_Close(benchmark::State& state) {
+  RunFarDistance(state, Kind::kClose);
+}
+void BM_FclTriangleDistance_Close(benchmark::State& state) { RunFclDistance(state, Kind::kClose); }
+void BM_FarTriangleDistanceIfWithin_Far(benchmark::State& state) {
+  RunFarDistance(state, Kind::kFar);
+}
+void BM_FclTriangleDistance_Far(benchmark::State& state) { RunFclDistance(state, Kind::kFar); }
+
 BENCHMARK(BM_FarTrianglesIntersect_Random);
 BENCHMARK(BM_FclIntersectTriangle_Random);
 BENCHMARK(BM_FarTrianglesIntersect_Close);
 BENCHMARK(BM_FclIntersectTriangle_Close);
 BENCHMARK(BM_FarTrianglesIntersect_Far);
 BENCHMARK(BM_FclIntersectTriangle_Far);
+BENCHMARK(BM_FarTriangleDistanceIfWithin_Close);
+BENCHMARK(BM_FclTriangleDistance_Close);
+BENCHMARK(BM_FarTriangleDistanceIfWithin_Far);
+BENCHMARK(BM_FclTriangleDistance_Far);
 
 }  // namespace
 

@@ -149,6 +149,34 @@ TEST(TriangleDistanceTest, SlantedParallelPairsAreSplitAtTheirSeparation) {
   }
 }
 
+// Two triangles whose closest features are crossing edges (one along x, the other along y, h
+// above it, each triangle hanging away from the other), turned and moved far from the origin:
+// the cross product of the two edges is the only axis that shows their gap, so the separating
+// axes in front of the exact distance are tight here. Each pair is accepted at D just above its
+// distance and rejected just below, with the distance TriangleDistance gives.
+TEST(TriangleDistanceTest, CrossingEdgesAreSplitAtTheirSeparation) {
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(0.7, Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  for (const double offset : {0.0, 1e3, 1e6}) {
+    const Vector3d o = Vector3d(offset, -offset, 0.5 * offset);
+    for (const double h : {1e-9, 1e-6, 1e-3, 0.1, 1.0}) {
+      const TrianglePoints s = Tri(o + turn * Vector3d(-1, 0, 0), o + turn * Vector3d(1, 0, 0),
+                                   o + turn * Vector3d(0.3, 0, -1));
+      const TrianglePoints t = Tri(o + turn * Vector3d(0, -1, h), o + turn * Vector3d(0, 1, h),
+                                   o + turn * Vector3d(0, -0.2, h + 1));
+      const double d = TriangleDistance(s, t);
+      ASSERT_NEAR(d, h, 1e-9 * (1 + offset)) << "offset " << offset << " h " << h;
+      const std::optional<double> above = TriangleDistanceIfWithin(s, t, d * (1 + 1e-6));
+      ASSERT_TRUE(above.has_value()) << "offset " << offset << " h " << h;
+      EXPECT_EQ(*above, d);
+      if (h > 1e-6 * (1 + offset)) {  // far enough above the rounding of the coordinates
+        EXPECT_FALSE(TriangleDistanceIfWithin(s, t, d * (1 - 1e-3)).has_value())
+            << "offset " << offset << " h " << h;
+      }
+    }
+  }
+}
+
 TEST(TriangleDistanceTest, MatchesExactDistanceOnRandomizedScenes) {
   for (const reference::PairScene& scene : reference::MakePairScenes()) {
     std::mt19937_64 rng(777);
