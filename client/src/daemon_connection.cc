@@ -33,7 +33,10 @@ Result<protocol::LocalMessage> Ask(protocol::LocalConnection& connection,
   if (auto sent = connection.Send(request); !sent) return sent.error();
   auto reply = connection.Receive(max_reply, kAnswerTimeout, accept_fd);
   if (!reply && reply.error().code == ErrorCode::kUnavailable) {
-    return MakeError(ErrorCode::kUnavailable, "far-daemon closed the connection without an answer");
+    return MakeError(ErrorCode::kUnavailable,
+                     "far-daemon closed the connection without an answer: it is stopping, or this "
+                     "user has more connections waiting than it may hold sessions (far-client "
+                     "status counts them under errors, too_many_connections)");
   }
   return reply;
 }

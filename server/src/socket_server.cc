@@ -61,12 +61,14 @@ int SocketServer::PendingOf(uid_t uid) const {
                                         [uid](const Pending& p) { return p.peer.uid == uid; }));
 }
 
+int SocketServer::MaxPendingPerUser() const { return std::max(4, config_.max_sessions_per_user); }
+
 void SocketServer::AcceptAll() {
   while (auto connection = listener_->Accept()) {
     const protocol::PeerCredentials peer = connection->peer();
-    if (PendingOf(peer.uid) >= kMaxPendingPerUser) {
+    if (PendingOf(peer.uid) >= MaxPendingPerUser()) {
       stats_.CountRejected("too_many_connections", "user " + std::to_string(peer.uid) + " has " +
-                                                       std::to_string(kMaxPendingPerUser) +
+                                                       std::to_string(MaxPendingPerUser()) +
                                                        " connections waiting");
       continue;  // closed as it goes out of scope
     }

@@ -26,11 +26,10 @@ namespace far::server {
 /// connections, answers status requests, opens sessions (handing each client its segment) and
 /// watches each session's connection, closing the session the moment its client goes away.
 /// Per user (as the kernel reports it, SO_PEERCRED): at most max_sessions_per_user sessions,
-/// max_opens_per_second_per_user opens, and kMaxPendingPerUser connections that have not said
+/// max_opens_per_second_per_user opens, and MaxPendingPerUser() connections that have not said
 /// what they want yet; a connection that says nothing within kHandshakeTimeout is dropped.
 class SocketServer {
  public:
-  static constexpr int kMaxPendingPerUser = 4;
   static constexpr std::chrono::milliseconds kHandshakeTimeout{2000};
 
   SocketServer(std::unique_ptr<protocol::LocalListener> listener, const DaemonConfig& config,
@@ -57,6 +56,10 @@ class SocketServer {
   void Open(Pending& pending, std::span<const uint8_t> bytes);
   void DropClosedSessions();
   int PendingOf(uid_t uid) const;
+  // As many as the sessions a user may hold (at least 4, for status requests): clients of one
+  // user started together all connect before the daemon hears from any of them, and each of
+  // them must be heard (the cap was a fixed 4, and dropped the fifth of a burst unanswered).
+  int MaxPendingPerUser() const;
 
   std::unique_ptr<protocol::LocalListener> listener_;
   const DaemonConfig& config_;

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <latch>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -80,6 +81,38 @@ TEST_F(UserLimitsTest, AUserOverItsSessionLimitIsRefusedWhileItsSessionsWork) {
   ASSERT_TRUE(mine.back()->Close().ok());
   ASSERT_TRUE(WaitUntil([] { return SessionsOpen() == 2; }, 3s));
   EXPECT_NE(HealthySession("again"), nullptr);
+}
+
+// Several simulators of one user started together (or `far-client load --clients 6`) connect
+// before the daemon has heard what any of them wants: every one of them is served, up to the
+// sessions the user may hold. The daemon used to drop the fifth connection waiting at once.
+TEST_F(UserLimitsTest, ClientsOfOneUserThatConnectAtOnceAreAllServed) {
+  ASSERT_NE(StartDaemon(), nullptr);  // 16 sessions per user, opens in bursts of 20
+  constexpr int kClients = 12;
+  std::latch start(kClients);
+  std::vector<std::string> failures(kClients);
+  std::vector<std::thread> threads;
+  for (int i = 0; i < kClients; ++i) {
+    threads.emplace_back([&, i] {
+      start.arrive_and_wait();
+      auto client = client::Client::Connect(TestClientOptions("burst-" + std::to_string(i)));
+      if (!client) {
+        failures[i] = far::ToString(client.error());
+        return;
+      }
+      Scene scene;
+      scene.objects = ContactSoup(kHealthySeed);
+      if (auto loaded = (*client)->LoadScene(scene); !loaded) {
+        failures[i] = far::ToString(loaded.error());
+        return;
+      }
+      if (auto stepped = StepsWithTheReference(**client); !stepped) {
+        failures[i] = stepped.message();
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  for (int i = 0; i < kClients; ++i) EXPECT_EQ(failures[i], "") << "client " << i;
 }
 
 TEST_F(UserLimitsTest, OpeningFasterThanTheOpenRateIsBusyAndTheRateRefills) {
