@@ -123,6 +123,22 @@ TEST(TriangleDistanceTest, WithinDistanceIsExactForIntersectingAndFarPairs) {
   EXPECT_FALSE(TrianglesWithinDistance(base, lifted, 0.0));
 }
 
+// A pair h apart, `offset` from the origin: TriangleDistance gives h (up to the rounding of the
+// coordinates), TriangleDistanceIfWithin accepts it just above that distance with the same value,
+// and rejects it just below where h is well above the coordinates' rounding.
+void ExpectSplitAtSeparation(const TrianglePoints& s, const TrianglePoints& t, double h,
+                             double offset) {
+  SCOPED_TRACE(::testing::Message() << "offset " << offset << " h " << h);
+  const double d = TriangleDistance(s, t);
+  ASSERT_NEAR(d, h, 1e-9 * (1 + offset));
+  const std::optional<double> above = TriangleDistanceIfWithin(s, t, d * (1 + 1e-6));
+  ASSERT_TRUE(above.has_value());
+  EXPECT_EQ(*above, d);
+  if (h > 1e-6 * (1 + offset)) {
+    EXPECT_FALSE(TriangleDistanceIfWithin(s, t, d * (1 - 1e-3)).has_value());
+  }
+}
+
 // Slanted parallel triangles whose boxes overlap, so that only the normal axis (or the full
 // distance) separates them: far from the origin too, at separations from 1e-9 to 1, each
 // accepted at D just above the separation and rejected just below, with the same distance
@@ -136,15 +152,7 @@ TEST(TriangleDistanceTest, SlantedParallelPairsAreSplitAtTheirSeparation) {
     for (const double h : {1e-9, 1e-6, 1e-3, 0.1, 1.0}) {
       const Vector3d shift = h * normal + Vector3d(0.1, 0.2, 0).cross(normal);
       const TrianglePoints t = Tri(s.a + shift, s.b + shift, s.c + shift);
-      const double d = TriangleDistance(s, t);
-      ASSERT_NEAR(d, h, 1e-9 * (1 + offset)) << "offset " << offset << " h " << h;
-      const std::optional<double> above = TriangleDistanceIfWithin(s, t, d * (1 + 1e-6));
-      ASSERT_TRUE(above.has_value()) << "offset " << offset << " h " << h;
-      EXPECT_EQ(*above, d);
-      if (h > 1e-6 * (1 + offset)) {  // far enough above the rounding of the coordinates
-        EXPECT_FALSE(TriangleDistanceIfWithin(s, t, d * (1 - 1e-3)).has_value())
-            << "offset " << offset << " h " << h;
-      }
+      ExpectSplitAtSeparation(s, t, h, offset);
     }
   }
 }
@@ -164,15 +172,7 @@ TEST(TriangleDistanceTest, CrossingEdgesAreSplitAtTheirSeparation) {
                                    o + turn * Vector3d(0.3, 0, -1));
       const TrianglePoints t = Tri(o + turn * Vector3d(0, -1, h), o + turn * Vector3d(0, 1, h),
                                    o + turn * Vector3d(0, -0.2, h + 1));
-      const double d = TriangleDistance(s, t);
-      ASSERT_NEAR(d, h, 1e-9 * (1 + offset)) << "offset " << offset << " h " << h;
-      const std::optional<double> above = TriangleDistanceIfWithin(s, t, d * (1 + 1e-6));
-      ASSERT_TRUE(above.has_value()) << "offset " << offset << " h " << h;
-      EXPECT_EQ(*above, d);
-      if (h > 1e-6 * (1 + offset)) {  // far enough above the rounding of the coordinates
-        EXPECT_FALSE(TriangleDistanceIfWithin(s, t, d * (1 - 1e-3)).has_value())
-            << "offset " << offset << " h " << h;
-      }
+      ExpectSplitAtSeparation(s, t, h, offset);
     }
   }
 }
