@@ -71,7 +71,8 @@ struct CommandLine {
     Add("--max-rate", &DaemonConfig::max_requests_per_second,
         "step requests per second per session");
     Add("--max-sessions-per-user", &DaemonConfig::max_sessions_per_user,
-        "sessions one user may hold");
+        "sessions one user may hold (also the connections it may have waiting to say what they "
+        "want)");
     Add("--max-opens-per-second", &DaemonConfig::max_opens_per_second_per_user,
         "sessions one user may open per second, sustained (bursts of as many)");
     Add("--max-triangles-total", &DaemonConfig::max_triangles_total,

@@ -73,20 +73,21 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kFaceMargin = 32.0;  // a face foot is accepted this far inside, in eps * L
 constexpr double kSlack = 256.0;      // predicate slack, in eps * L (2x the overestimate bound)
 
-// The diagonal of the bounding box of the six vertices.
-double PairScale(const TrianglePoints& s, const TrianglePoints& t) {
-  const Eigen::Array3d lo = s.a.array()
-                                .min(s.b.array())
-                                .min(s.c.array())
-                                .min(t.a.array())
-                                .min(t.b.array().min(t.c.array()));
-  const Eigen::Array3d hi = s.a.array()
-                                .max(s.b.array())
-                                .max(s.c.array())
-                                .max(t.a.array())
-                                .max(t.b.array().max(t.c.array()));
-  return (hi - lo).matrix().norm();
-}
+// The bounding boxes of the two triangles, from which both the pair's scale L and the box gap
+// are read (computed once per pair).
+struct PairBoxes {
+  explicit PairBoxes(const TrianglePoints& s, const TrianglePoints& t)
+      : s_min(s.a.array().min(s.b.array()).min(s.c.array())),
+        s_max(s.a.array().max(s.b.array()).max(s.c.array())),
+        t_min(t.a.array().min(t.b.array()).min(t.c.array())),
+        t_max(t.a.array().max(t.b.array()).max(t.c.array())) {}
+  // L: the diagonal of the bounding box of the six vertices.
+  double Scale() const { return (s_max.max(t_max) - s_min.min(t_min)).matrix().norm(); }
+  // The largest gap between the two boxes along a coordinate axis (<= 0 if they overlap): a
+  // lower bound of the distance.
+  double Gap() const { return (t_min - s_max).max(s_min - t_max).maxCoeff(); }
+  Eigen::Array3d s_min, s_max, t_min, t_max;
+};
 
 // Returns n / |n| without overflow or underflow in the norm. @pre n != 0.
 inline Vector3d Normalized(const Vector3d& n) {
@@ -198,16 +199,6 @@ double DisjointDistance(const TrianglePoints& s, const TrianglePoints& t, double
   return best;
 }
 
-// The largest gap between the two bounding boxes along a coordinate axis (<= 0 if they overlap):
-// a lower bound of the distance.
-double BoxGap(const TrianglePoints& s, const TrianglePoints& t) {
-  const Eigen::Array3d s_min = s.a.array().min(s.b.array()).min(s.c.array());
-  const Eigen::Array3d s_max = s.a.array().max(s.b.array()).max(s.c.array());
-  const Eigen::Array3d t_min = t.a.array().min(t.b.array()).min(t.c.array());
-  const Eigen::Array3d t_max = t.a.array().max(t.b.array()).max(t.c.array());
-  return (t_min - s_max).max(s_min - t_max).maxCoeff();
-}
-
 // The five other vertices relative to s.a, shared by every axis tried on one pair.
 struct PairOffsets {
   explicit PairOffsets(const TrianglePoints& s, const TrianglePoints& t)
@@ -240,9 +231,9 @@ bool GapExceeds(const Vector3d& n, const PairOffsets& d, double limit, double sc
 // Separating axes that prove the pair farther than the limit, cheapest and likeliest first:
 // both triangles' normals (a degenerate triangle's is zero: skipped), the line between their
 // centroids, and the nine cross products of an edge of each (the axes on which two disjoint
-// convex polyhedra always show a gap, with the normals). Together they reject about nine in ten
-// of the pairs that reach the distance stage and are beyond the limit, at about a fourth of the
-// exact distance's cost (paper-leaves, D = 0.001 of the scene's diagonal).
+// convex polyhedra always show a gap, with the normals). Of the pairs the normals leave that are
+// beyond the limit, the others reject about nine in ten, at about a fourth of the exact
+// distance's cost (paper-leaves, D = 0.001 of the scene's diagonal; bench/RESULTS.md).
 bool AxesSeparate(const TrianglePoints& s, const TrianglePoints& t, double limit, double scale) {
   const PairOffsets d(s, t);
   if (GapExceeds(d.sb.cross(d.sc), d, limit, scale)) return true;
@@ -262,16 +253,17 @@ bool AxesSeparate(const TrianglePoints& s, const TrianglePoints& t, double limit
 
 double TriangleDistance(const TrianglePoints& s, const TrianglePoints& t) {
   if (TrianglesIntersect(s, t)) return 0.0;
-  return DisjointDistance(s, t, PairScale(s, t));
+  return DisjointDistance(s, t, PairBoxes(s, t).Scale());
 }
 
 std::optional<double> TriangleDistanceIfWithin(const TrianglePoints& s, const TrianglePoints& t,
                                                double max_distance) {
-  const double scale = PairScale(s, t);
+  const PairBoxes boxes(s, t);
+  const double scale = boxes.Scale();
   const double limit = max_distance + kSlack * kEps * scale;
   // Boxes farther apart than the limit: the distance is larger (the gap is a lower bound, and
   // the slack covers its rounding; see the bound at the top of this file).
-  if (BoxGap(s, t) > limit) return std::nullopt;
+  if (boxes.Gap() > limit) return std::nullopt;
   if (AxesSeparate(s, t, limit, scale)) return std::nullopt;
   if (TrianglesIntersect(s, t)) return 0.0;
   // TriangleDistance's value: DisjointDistance at the same scale.
