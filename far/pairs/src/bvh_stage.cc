@@ -21,7 +21,10 @@
 // rounding of the relative pose and of the test itself (tens of eps of the same magnitudes,
 // far below 2^-40 = 8192 eps). The same holds for a triangle's slabs as axes: the triangle's
 // exact vertices project into [lo, hi] up to a few ulps, and a unit axis (up to rounding) shows
-// no gap larger than the distance.
+// no gap larger than the distance. At two leaves a slab turned into the world (axis R_WM n,
+// bounds shifted by that axis . t_WM) is compared with the other triangle's world corners, the
+// very points the predicates test: the rounding of the pose's product, a few eps of the same
+// magnitudes, is inside the margin too.
 
 namespace far {
 namespace {
@@ -43,6 +46,8 @@ struct PairFrame {
   // Both frames have the same rotation (static, deformable and unrotated objects): B's boxes
   // are A's boxes translated, and the test along A's axes is the whole test.
   bool aligned = false;
+  // Whether A's and B's poses rotate (a triangle's slabs then turn into the world with them).
+  bool rotated_a = false, rotated_b = false;
 };
 
 // max |coordinate| of a node box.
@@ -63,6 +68,8 @@ PairFrame MakePairFrame(const BvhObject& a, const BvhObject& b, uint32_t ia, uin
   f.abs_R_AB = f.R_AB.cwiseAbs();
   f.abs_R_BA = f.R_BA.cwiseAbs();
   f.aligned = a.X_WM.linear() == b.X_WM.linear();
+  f.rotated_a = a.X_WM.linear() != Eigen::Matrix3d::Identity();
+  f.rotated_b = b.X_WM.linear() != Eigen::Matrix3d::Identity();
   const double scale = 2 * (BoxMagnitude(a.bvh->nodes()[0]) + BoxMagnitude(b.bvh->nodes()[0])) +
                        a.X_WM.translation().cwiseAbs().maxCoeff() +
                        b.X_WM.translation().cwiseAbs().maxCoeff();
@@ -225,23 +232,77 @@ uint32_t TreeLeafLive(const LeafProbe& p, const TriangleBvh& tree, const Node& l
   return kept;
 }
 
-// The live triangle pairs of two leaves (x of A, y of B): world boxes, prefilter, exact tests.
+// A triangle's slabs (TriangleBvh::Slab) moved into the world frame, made when first needed.
+struct WorldSlab {
+  bool made = false;
+  bool valid = false;  // false: the object keeps no slabs (refit), nothing is separated
+  Eigen::Vector3d axis[TriangleBvh::Slab::kAxes];
+  double lo[TriangleBvh::Slab::kAxes], hi[TriangleBvh::Slab::kAxes];
+};
+
+void MakeWorldSlab(const BvhObject& object, bool rotated, uint32_t leaf_index, WorldSlab& w) {
+  w.made = true;
+  if (object.bvh->slabs().empty()) return;
+  const TriangleBvh::Slab& slab = object.bvh->slabs()[leaf_index];
+  w.valid = true;
+  for (int k = 0; k < TriangleBvh::Slab::kAxes; ++k) {
+    w.axis[k] = rotated ? Eigen::Vector3d(object.X_WM.linear() * slab.axis[k]) : slab.axis[k];
+    const double shift = w.axis[k].dot(object.X_WM.translation());
+    w.lo[k] = slab.lo[k] + shift;
+    w.hi[k] = slab.hi[k] + shift;
+  }
+}
+
+// Whether one of s's slabs has all of the triangle's world corners beyond it (by more than the
+// margin).
+bool SlabSeparates(const WorldSlab& s, const WorldObjectView& object, uint32_t triangle,
+                   double margin) {
+  if (!s.valid) return false;
+  const TriangleIndices& v = object.triangles[triangle];
+  const Eigen::Vector3d& a = object.p_WV[v[0]];
+  const Eigen::Vector3d& b = object.p_WV[v[1]];
+  const Eigen::Vector3d& c = object.p_WV[v[2]];
+  for (int k = 0; k < TriangleBvh::Slab::kAxes; ++k) {
+    const double da = s.axis[k].dot(a), db = s.axis[k].dot(b), dc = s.axis[k].dot(c);
+    if (std::min({da, db, dc}) > s.hi[k] + margin || std::max({da, db, dc}) < s.lo[k] - margin)
+      return true;
+  }
+  return false;
+}
+
+// The live triangle pairs of two leaves (x of A, y of B): world boxes, then each triangle's
+// slabs against the other's world corners, then the exact tests. The slabs turned into the
+// world are made once per triangle and call, and only for triangles whose box met a partner's:
+// computing the axes anew from the world corners cut as many tests and saved no time
+// (docs/culling.md).
 void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t live_x, const Node& y,
                 uint32_t live_y, Output& out) {
   const BvhObject& a = d.query.objects[f.a];
   const BvhObject& b = d.query.objects[f.b];
   TriangleBox boxes_a[TriangleBvh::kLeafSize], boxes_b[TriangleBvh::kLeafSize];
+  uint32_t index_a[TriangleBvh::kLeafSize], index_b[TriangleBvh::kLeafSize];
+  WorldSlab slabs_a[TriangleBvh::kLeafSize], slabs_b[TriangleBvh::kLeafSize];
   uint32_t na = 0, nb = 0;
   for (uint32_t i = 0; i < x.count; ++i) {
-    if (live_x >> i & 1) boxes_a[na++] = BoxOf(a.world, a.bvh->order()[x.first + i]);
+    if (live_x >> i & 1) {
+      index_a[na] = x.first + i;
+      boxes_a[na++] = BoxOf(a.world, a.bvh->order()[x.first + i]);
+    }
   }
   for (uint32_t j = 0; j < y.count; ++j) {
-    if (live_y >> j & 1) boxes_b[nb++] = BoxOf(b.world, b.bvh->order()[y.first + j]);
+    if (live_y >> j & 1) {
+      index_b[nb] = y.first + j;
+      boxes_b[nb++] = BoxOf(b.world, b.bvh->order()[y.first + j]);
+    }
   }
   out.considered += size_t{na} * nb;
   for (uint32_t i = 0; i < na; ++i) {
     for (uint32_t j = 0; j < nb; ++j) {
       if (!BoxesWithin(boxes_a[i], boxes_b[j], d.wanted.slack)) continue;
+      if (!slabs_a[i].made) MakeWorldSlab(a, f.rotated_a, index_a[i], slabs_a[i]);
+      if (SlabSeparates(slabs_a[i], b.world, boxes_b[j].triangle, f.margin)) continue;
+      if (!slabs_b[j].made) MakeWorldSlab(b, f.rotated_b, index_b[j], slabs_b[j]);
+      if (SlabSeparates(slabs_b[j], a.world, boxes_a[i].triangle, f.margin)) continue;
       if (!d.marks.empty()) {
         d.Mark(f.a, boxes_a[i].triangle);
         d.Mark(f.b, boxes_b[j].triangle);

@@ -415,10 +415,11 @@ TEST(BvhStageTest, SliverFansMatchTheReferenceAndTheirSlabsPrune) {
       }
       const BvhResult without_slabs = RunStage(plain, distance);
       EXPECT_EQ(without_slabs.exact.contacts, expected.contacts);
-      // The slabs cut the candidate pairs to about a third here (measured: 0.34-0.38) and the
-      // exact tests by a third (0.61-0.64 of them are left).
+      // The slabs cut the candidate pairs to about a third here (measured: 0.34-0.38). Tested
+      // pair by pair as well, they leave a fifth of the exact tests (0.18-0.22; 0.61-0.64
+      // when only the descent used them).
       EXPECT_LT(2 * with_slabs.exact.pairs_considered, without_slabs.exact.pairs_considered);
-      EXPECT_LT(4 * with_slabs.exact.pairs_tested, 3 * without_slabs.exact.pairs_tested);
+      EXPECT_LT(3 * with_slabs.exact.pairs_tested, without_slabs.exact.pairs_tested);
     }
   }
 }

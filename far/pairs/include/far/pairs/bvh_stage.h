@@ -38,8 +38,9 @@ struct BvhQuery {
 };
 
 /// The answer, and the candidate triangles: per object (indexed like `objects`), sorted, the
-/// triangles whose world box is within the query's slack of a triangle box of a partner that
-/// no slab (a triangle's plane or the direction across it, see RunBvhTests) separates from it.
+/// triangles whose world box is within the query's slack of a triangle box of a partner, where
+/// no slab of either triangle (its plane or the direction across it, see RunBvhTests) separates
+/// the two.
 struct BvhResult {
   ExactResult exact;
   std::vector<std::vector<uint32_t>> candidates;
@@ -52,8 +53,10 @@ struct BvhResult {
 /// hierarchy alone, and each of its triangles' slabs (TriangleBvh::slabs: the triangle's plane,
 /// and across it) are further separating axes with the same margin: a triangle apart from a node is
 /// dropped for that node's subtree, and at the other hierarchy's leaves that leaf's slabs drop its
-/// triangles apart from the first leaf's box. The triangle pairs left go to the world-box
-/// prefilter and the exact predicates of the exact stage (RunExactTests). Never drops a pair the
+/// triangles apart from the first leaf's box. Of the triangle pairs left, those whose world
+/// boxes meet (the exact stage's prefilter) are tested once more along both triangles' slabs,
+/// turned into the world, against the other triangle's world corners; the pairs no slab
+/// separates go to the exact predicates of the exact stage (RunExactTests). Never drops a pair the
 /// exact predicates would accept: the answer equals BruteForceReference's for the same pairs.
 /// Runs on `pool`; the output does not depend on the number of threads.
 BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool);
