@@ -322,8 +322,8 @@ void DescendLeaf(const Descent& d, const PairFrame& f, const LeafProbe& p, uint3
   const BvhObject& tree_object = d.query.objects[p.leaf_in_a ? f.b : f.a];
   const TriangleBvh& tree = *tree_object.bvh;
   const auto& nodes = tree.nodes();
-  // Stack entries: a node of T and the probe's triangles still live above it (bits 0-3), with
-  // kBoxesTested set for the root, whose box the caller has already found overlapping.
+  // Stack entries: a node of T and the probe's triangles still live above it (bit i: triangle i),
+  // with kBoxesTested set for the root, whose box the caller has already found overlapping.
   constexpr uint32_t kBoxesTested = 1u << 31;
   const uint32_t all = (1u << p.count) - 1;
   std::vector<std::pair<uint32_t, uint32_t>>& stack = out.leaf_stack;

@@ -22,7 +22,9 @@ namespace far {
 /// Thread safety: none (one owner); const methods may run concurrently.
 class TriangleBvh {
  public:
-  static constexpr int kLeafSize = 4;
+  static constexpr int kLeafSize = 8;
+  // A descent keeps a leaf's live triangles as bits of a 32-bit word, one bit kept for a flag.
+  static_assert(kLeafSize < 32);
 
   /// One node: a box as center and half extents, and a leaf when count > 0 (triangles
   /// order()[first, first + count)), else an inner node with children first and first + 1.
