@@ -20,11 +20,12 @@
 // with margin = slack + 2^-40 (the boxes' and poses' magnitudes), which also covers the
 // rounding of the relative pose and of the test itself (tens of eps of the same magnitudes,
 // far below 2^-40 = 8192 eps). The same holds for a triangle's slabs as axes: the triangle's
-// exact vertices project into [lo, hi] up to a few ulps, and a unit axis (up to rounding) shows
-// no gap larger than the distance. At two leaves a slab turned into the world (axis R_WM n,
-// bounds shifted by that axis . t_WM) is compared with the other triangle's world corners, the
-// very points the predicates test: the rounding of the pose's product, a few eps of the same
-// magnitudes, is inside the margin too.
+// exact vertices project into [lo, hi] (relative to its leaf's center c, bounds rounded outward
+// to float) up to a few ulps of |p| + |c|, and an axis no longer than 1 shows no gap larger than
+// the distance. At two leaves a slab turned into the world (axis R_WM n, bounds shifted by that
+// axis . X_WM c) is compared with the other triangle's world corners, the very points the
+// predicates test: the rounding of the pose's product, a few eps of the same magnitudes, is
+// inside the margin too.
 
 namespace far {
 namespace {
@@ -180,14 +181,16 @@ LeafProbe MakeProbe(const PairFrame& f, const TriangleBvh& leaf_bvh, const Node&
       f.aligned ? Eigen::Vector3d(leaf.center + t_TL) : Eigen::Vector3d(R_TL * leaf.center + t_TL);
   p.half_extent = f.aligned ? leaf.half_extent : Eigen::Vector3d(abs_R_TL * leaf.half_extent);
   p.has_slabs = !leaf_bvh.slabs().empty();
+  // n . (p_L - c) = (R_TL n) . p_T - n . (c - t_LT), c the leaf's center.
+  const Eigen::Vector3d offset = leaf.center - t_LT;
   for (uint32_t i = 0; i < leaf.count && p.has_slabs; ++i) {
-    // n . p_L = (R_TL n) . p_T + n . t_LT
     const TriangleBvh::Slab& slab = leaf_bvh.slabs()[leaf.first + i];
     for (int k = 0; k < LeafProbe::kAxes; ++k) {
-      const double shift = slab.axis[k].dot(t_LT);
-      p.axis[i][k] = f.aligned ? slab.axis[k] : Eigen::Vector3d(R_TL * slab.axis[k]);
-      p.lo[i][k] = slab.lo[k] - shift;
-      p.hi[i][k] = slab.hi[k] - shift;
+      const Eigen::Vector3d axis = slab.Axis(k);
+      const double shift = axis.dot(offset);
+      p.axis[i][k] = f.aligned ? axis : Eigen::Vector3d(R_TL * axis);
+      p.lo[i][k] = slab.lo[k] + shift;
+      p.hi[i][k] = slab.hi[k] + shift;
     }
   }
   return p;
@@ -215,15 +218,16 @@ uint32_t LiveAgainst(const LeafProbe& p, const Node& node, uint32_t live, double
 uint32_t TreeLeafLive(const LeafProbe& p, const TriangleBvh& tree, const Node& leaf,
                       double margin) {
   if (tree.slabs().empty()) return (1u << leaf.count) - 1;
+  const Eigen::Vector3d center = p.center - leaf.center;  // the slabs are relative to the leaf
   uint32_t kept = 0;
   for (uint32_t j = 0; j < leaf.count; ++j) {
     const TriangleBvh::Slab& slab = tree.slabs()[leaf.first + j];
     bool apart = false;
     for (int k = 0; k < TriangleBvh::Slab::kAxes && !apart; ++k) {
-      const double middle = slab.axis[k].dot(p.center);
+      const Eigen::Vector3d axis = slab.Axis(k);
+      const double middle = axis.dot(center);
       // |R_TL^T n| . e_L: the OBB's extent along the axis.
-      const Eigen::Vector3d n_L =
-          p.R_LT != nullptr ? Eigen::Vector3d(*p.R_LT * slab.axis[k]) : slab.axis[k];
+      const Eigen::Vector3d n_L = p.R_LT != nullptr ? Eigen::Vector3d(*p.R_LT * axis) : axis;
       const double radius = n_L.cwiseAbs().dot(p.leaf->half_extent);
       apart = middle - radius > slab.hi[k] + margin || middle + radius < slab.lo[k] - margin;
     }
@@ -240,14 +244,16 @@ struct WorldSlab {
   double lo[TriangleBvh::Slab::kAxes], hi[TriangleBvh::Slab::kAxes];
 };
 
-void MakeWorldSlab(const BvhObject& object, bool rotated, uint32_t leaf_index, WorldSlab& w) {
+// `leaf_center_W`: the center of the triangle's leaf in the world, X_WM c.
+void MakeWorldSlab(const BvhObject& object, bool rotated, uint32_t leaf_index,
+                   const Eigen::Vector3d& leaf_center_W, WorldSlab& w) {
   w.made = true;
   if (object.bvh->slabs().empty()) return;
   const TriangleBvh::Slab& slab = object.bvh->slabs()[leaf_index];
   w.valid = true;
   for (int k = 0; k < TriangleBvh::Slab::kAxes; ++k) {
-    w.axis[k] = rotated ? Eigen::Vector3d(object.X_WM.linear() * slab.axis[k]) : slab.axis[k];
-    const double shift = w.axis[k].dot(object.X_WM.translation());
+    w.axis[k] = rotated ? Eigen::Vector3d(object.X_WM.linear() * slab.Axis(k)) : slab.Axis(k);
+    const double shift = w.axis[k].dot(leaf_center_W);
     w.lo[k] = slab.lo[k] + shift;
     w.hi[k] = slab.hi[k] + shift;
   }
@@ -296,12 +302,13 @@ void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t li
     }
   }
   out.considered += size_t{na} * nb;
+  const Eigen::Vector3d x_W = a.X_WM * x.center, y_W = b.X_WM * y.center;
   for (uint32_t i = 0; i < na; ++i) {
     for (uint32_t j = 0; j < nb; ++j) {
       if (!BoxesWithin(boxes_a[i], boxes_b[j], d.wanted.slack)) continue;
-      if (!slabs_a[i].made) MakeWorldSlab(a, f.rotated_a, index_a[i], slabs_a[i]);
+      if (!slabs_a[i].made) MakeWorldSlab(a, f.rotated_a, index_a[i], x_W, slabs_a[i]);
       if (SlabSeparates(slabs_a[i], b.world, boxes_b[j].triangle, f.margin)) continue;
-      if (!slabs_b[j].made) MakeWorldSlab(b, f.rotated_b, index_b[j], slabs_b[j]);
+      if (!slabs_b[j].made) MakeWorldSlab(b, f.rotated_b, index_b[j], y_W, slabs_b[j]);
       if (SlabSeparates(slabs_b[j], a.world, boxes_a[i].triangle, f.margin)) continue;
       if (!d.marks.empty()) {
         d.Mark(f.a, boxes_a[i].triangle);

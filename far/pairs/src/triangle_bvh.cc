@@ -56,7 +56,19 @@ void SetNodeBox(TriangleBvh::Node& node, const Box& box) {
   }
 }
 
-TriangleBvh::Slab SlabOf(std::span<const Eigen::Vector3d> p, const TriangleIndices& t) {
+// The largest float <= x and the smallest float >= x (infinite beyond float's range).
+float FloatBelow(double x) {
+  const auto f = static_cast<float>(x);
+  return f > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+float FloatAbove(double x) {
+  const auto f = static_cast<float>(x);
+  return f < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
+// The triangle's slabs (TriangleBvh::Slab), relative to `center`, the center of its leaf.
+TriangleBvh::Slab SlabOf(std::span<const Eigen::Vector3d> p, const TriangleIndices& t,
+                         const Eigen::Vector3d& center) {
   const Eigen::Vector3d& a = p[t[0]];
   const Eigen::Vector3d& b = p[t[1]];
   const Eigen::Vector3d& c = p[t[2]];
@@ -79,12 +91,17 @@ TriangleBvh::Slab SlabOf(std::span<const Eigen::Vector3d> p, const TriangleIndic
   } else {
     across.setZero();
   }
-  slab.axis[0] = normal;
-  slab.axis[1] = across;
+  // Each component rounds by at most 2^-24 of itself: scaled by 1 - 2^-22 first, the float
+  // axis is shorter than the (double, unit up to a few eps) axis, so no longer than 1.
+  constexpr double kShorter = 1 - 0x1p-22;
+  slab.axis[0] = (kShorter * normal).cast<float>();
+  slab.axis[1] = (kShorter * across).cast<float>();
+  const Eigen::Vector3d ra = a - center, rb = b - center, rc = c - center;
   for (int k = 0; k < TriangleBvh::Slab::kAxes; ++k) {
-    const double da = slab.axis[k].dot(a), db = slab.axis[k].dot(b), dc = slab.axis[k].dot(c);
-    slab.lo[k] = std::min({da, db, dc});
-    slab.hi[k] = std::max({da, db, dc});
+    const Eigen::Vector3d axis = slab.Axis(k);
+    const double da = axis.dot(ra), db = axis.dot(rb), dc = axis.dot(rc);
+    slab.lo[k] = FloatBelow(std::min({da, db, dc}));
+    slab.hi[k] = FloatAbove(std::max({da, db, dc}));
   }
   return slab;
 }
@@ -199,7 +216,11 @@ void TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
   builder.Build(0, 0, static_cast<uint32_t>(triangles.size()));
   built_area_ = builder.area_sum;
   slabs_.resize(order_.size());
-  for (size_t k = 0; k < order_.size(); ++k) slabs_[k] = SlabOf(p_MV, triangles[order_[k]]);
+  for (const Node& node : nodes_) {
+    for (uint32_t k = node.first; k < node.first + node.count; ++k) {
+      slabs_[k] = SlabOf(p_MV, triangles[order_[k]], node.center);
+    }
+  }
 }
 
 bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,

@@ -178,6 +178,11 @@ TEST(TriangleBvhTest, SlabsHoldTheirTrianglesAndRefitDropsThem) {
   Object& object = scene[0];
   const auto& slabs = object.bvh.slabs();
   ASSERT_EQ(slabs.size(), object.triangles.size());
+  // The slabs are relative to the center of each triangle's leaf.
+  std::vector<Eigen::Vector3d> leaf_center(slabs.size());
+  for (const TriangleBvh::Node& node : object.bvh.nodes()) {
+    for (uint32_t k = node.first; k < node.first + node.count; ++k) leaf_center[k] = node.center;
+  }
   int degenerate = 0;
   for (size_t k = 0; k < slabs.size(); ++k) {
     const TriangleBvh::Slab& slab = slabs[k];
@@ -190,22 +195,26 @@ TEST(TriangleBvhTest, SlabsHoldTheirTrianglesAndRefitDropsThem) {
       ++degenerate;
       continue;
     }
-    EXPECT_NEAR(slab.axis[0].norm(), 1.0, 1e-15);
-    EXPECT_NEAR(slab.axis[1].norm(), 1.0, 1e-15);
-    EXPECT_NEAR(slab.axis[0].dot(slab.axis[1]), 0.0, 1e-15);
+    // Float axes, just shorter than 1 (never longer), and perpendicular up to float rounding.
+    for (int axis = 0; axis < TriangleBvh::Slab::kAxes; ++axis) {
+      EXPECT_LE(slab.Axis(axis).norm(), 1.0);
+      EXPECT_NEAR(slab.Axis(axis).norm(), 1.0, 1e-6);
+    }
+    EXPECT_NEAR(slab.Axis(0).dot(slab.Axis(1)), 0.0, 1e-6);
     for (uint32_t v : t) {
       for (int axis = 0; axis < TriangleBvh::Slab::kAxes; ++axis) {
-        const double along = slab.axis[axis].dot(object.p_MV[v]);
+        const double along = slab.Axis(axis).dot(object.p_MV[v] - leaf_center[k]);
         EXPECT_GE(along, slab.lo[axis] - 1e-15);
         EXPECT_LE(along, slab.hi[axis] + 1e-15);
       }
     }
-    // The first slab is the triangle's plane: as thin as rounding leaves it. The second is as
-    // wide as the triangle's height over its longest edge: 2 area / longest edge.
-    EXPECT_LE(slab.hi[0] - slab.lo[0], 1e-14);
+    // The first slab is the triangle's plane: as thin as rounding to float leaves it (2^-24 of
+    // the distance to the leaf's center, well under 1e-6 here). The second is as wide as the
+    // triangle's height over its longest edge: 2 area / longest edge.
+    EXPECT_LE(slab.hi[0] - slab.lo[0], 1e-6);
     const Eigen::Vector3d a = object.p_MV[t[0]], b = object.p_MV[t[1]], c = object.p_MV[t[2]];
     const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-    EXPECT_NEAR(slab.hi[1] - slab.lo[1], (b - a).cross(c - a).norm() / longest, 1e-14);
+    EXPECT_NEAR(slab.hi[1] - slab.lo[1], (b - a).cross(c - a).norm() / longest, 1e-6);
   }
   EXPECT_EQ(degenerate, 40);
   // A refit (a deformable object's step) keeps no slabs: computing them would cost as much as
@@ -219,6 +228,23 @@ TEST(TriangleBvhTest, SlabsHoldTheirTrianglesAndRefitDropsThem) {
   object.bvh.Build(object.p_MV, {});
   EXPECT_TRUE(object.bvh.empty());
   EXPECT_TRUE(object.bvh.slabs().empty());
+}
+
+// The slabs' float bounds are relative to their leaf: a mesh a million units from its frame's
+// origin (a static object given in world coordinates far out) keeps slabs as thin as at the
+// origin, where absolute float bounds would be 0.06 units thick.
+TEST(TriangleBvhTest, SlabsStayThinFarFromTheOrigin) {
+  std::vector<Object> scene = RandomScene(13, 1, 300, 0);
+  Object& object = scene[0];
+  for (auto& p : object.p_MV) p += Eigen::Vector3d(1e6, -2e6, 3e6);
+  object.bvh.Build(object.p_MV, object.triangles);
+  double thickest_plane = 0;
+  for (const TriangleBvh::Slab& slab : object.bvh.slabs()) {
+    if (!slab.axis[0].isZero())
+      thickest_plane = std::max<double>(thickest_plane, slab.hi[0] - slab.lo[0]);
+  }
+  EXPECT_GT(thickest_plane, 0);
+  EXPECT_LE(thickest_plane, 1e-6);
 }
 
 TEST(BvhStageTest, ContactsMatchTheReferenceUnderRandomPoses) {

@@ -40,17 +40,26 @@ class TriangleBvh {
 
   /// A triangle's two best separating axes, each with the triangle's extent along it: its
   /// normal (a slab of zero thickness: its plane) and the direction across it in its plane,
-  /// perpendicular to its longest edge (for a sliver, a slab as thin as the sliver). Axes are
-  /// unit length up to rounding, or zero where the triangle has no plane (degenerate) or no
-  /// longest edge to cross, and then never separate anything. [lo[k], hi[k]] holds the computed
-  /// axis[k] . p of the three vertices, within a few ulps of the exact projections; a caller's
-  /// margin must cover that (the descent's 2^-40 of the coordinates' magnitude does, by a factor
-  /// of over a thousand). A third axis, along the longest edge, was measured and cut nothing
-  /// more (far_bvh_benchmark BM_Pair_BvhFans): the boxes already bound that direction.
+  /// perpendicular to its longest edge (for a sliver, a slab as thin as the sliver). Stored in
+  /// float, 40 bytes instead of 80 (the largest part of a hierarchy, read at every leaf a descent
+  /// reaches): each axis is the unit axis scaled by 1 - 2^-22 and rounded, so its length is
+  /// just under 1 (an axis no longer than 1 shows no gap larger than the distance), or zero where
+  /// the triangle has no plane (degenerate) or no longest edge to cross, and then never
+  /// separates anything. Any nonzero axis is a valid separating axis; only its bounds must be
+  /// right: [lo[k], hi[k]] holds axis[k] . (p - c) for the triangle's three vertices p, with c the
+  /// center of the triangle's leaf (Node::center), each projection computed in double (within a
+  /// few ulps of |p| + |c| of the exact one; a caller's margin must cover that, and the descent's
+  /// 2^-40 of the coordinates' magnitude does, by a factor of over a thousand) and the bounds
+  /// rounded outward to float. Relative to the leaf, the float bounds lose nothing that matters
+  /// far from the origin: their rounding is 2^-24 of the leaf's size, not of its position. A
+  /// third axis, along the longest edge, was measured and cut nothing more (far_bvh_benchmark
+  /// BM_Pair_BvhFans): the boxes already bound that direction.
   struct Slab {
     static constexpr int kAxes = 2;
-    Eigen::Vector3d axis[kAxes];  ///< the normal; across the triangle (normal x longest edge)
-    double lo[kAxes] = {0, 0}, hi[kAxes] = {0, 0};
+    Eigen::Vector3f axis[kAxes];  ///< the normal; across the triangle (normal x longest edge)
+    float lo[kAxes] = {0, 0}, hi[kAxes] = {0, 0};  ///< along axis[k], relative to the leaf
+    /// axis[k] in double (exactly).
+    Eigen::Vector3d Axis(int k) const { return axis[k].cast<double>(); }
   };
 
   /// Builds the hierarchy of `triangles` over `p_MV` (@pre indices in range, finite).
@@ -67,8 +76,8 @@ class TriangleBvh {
   const std::vector<Node>& nodes() const { return nodes_; }
   /// Triangle indices in leaf order.
   const std::vector<uint32_t>& order() const { return order_; }
-  /// Per triangle in leaf order (slabs()[k] belongs to triangle order()[k]), in frame M; empty
-  /// after a Refit that did not rebuild.
+  /// Per triangle in leaf order (slabs()[k] belongs to triangle order()[k]), in frame M and
+  /// relative to the center of the leaf that holds k; empty after a Refit that did not rebuild.
   const std::vector<Slab>& slabs() const { return slabs_; }
   bool empty() const { return nodes_.empty(); }
 
