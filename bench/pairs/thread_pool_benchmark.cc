@@ -5,10 +5,6 @@
 // the caller's CPU and waited there while the caller did the whole loop (ThreadPool keeps its
 // workers off the caller's CPU for this reason; on the 2-vCPU development VM, 32-42% of the
 // loops after 1-6 ms idle ran on one thread before it did). Time is the loop's wall time only.
-// BM_LoopAfterSerialWork: the same loop after the same idle gap, but the caller first does
-// 100 us of serial work (a step's update before its descent), with (wake_ahead 1) or without
-// (0) ThreadPool::WakeAhead before it; `worker_start_us` is the mean time from the loop's start
-// to the worker's first chunk (its wake-up, where it was asleep).
 // Run:
 //   build/<dir>/bench/pairs/far_thread_pool_benchmark --benchmark_repetitions=3
 //       --benchmark_report_aggregates_only=true
@@ -55,47 +51,6 @@ BENCHMARK(BM_ParallelForAfterIdle)
     ->Arg(0)
     ->Arg(1000)
     ->Arg(6000)
-    ->Iterations(200)
-    ->UseManualTime()
-    ->Unit(benchmark::kMicrosecond);
-
-void BM_LoopAfterSerialWork(benchmark::State& state) {
-  const auto idle = std::chrono::microseconds(state.range(0));
-  const bool wake_ahead = state.range(1) != 0;
-  ThreadPool pool(2);
-  int64_t loops = 0, one_thread = 0;
-  double worker_start_us = 0;
-  for (auto _ : state) {
-    std::this_thread::sleep_for(idle);
-    if (wake_ahead) pool.WakeAhead();
-    SpinFor(std::chrono::microseconds(100));
-    const std::thread::id caller = std::this_thread::get_id();
-    std::atomic<int64_t> worker_start_ns = -1;
-    const auto start = Clock::now();
-    pool.ParallelFor(64, 1, [&](size_t, size_t) {
-      if (std::this_thread::get_id() != caller) {
-        int64_t none = -1;
-        worker_start_ns.compare_exchange_strong(
-            none,
-            std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - start).count());
-      }
-      SpinFor(std::chrono::microseconds(10));
-    });
-    state.SetIterationTime(std::chrono::duration<double>(Clock::now() - start).count());
-    ++loops;
-    if (worker_start_ns < 0) {
-      ++one_thread;
-    } else {
-      worker_start_us += 1e-3 * static_cast<double>(worker_start_ns.load());
-    }
-  }
-  state.counters["one_thread"] = static_cast<double>(one_thread) / static_cast<double>(loops);
-  state.counters["worker_start_us"] =
-      loops > one_thread ? worker_start_us / static_cast<double>(loops - one_thread) : 0.0;
-}
-BENCHMARK(BM_LoopAfterSerialWork)
-    ->ArgsProduct({{0, 1000, 6000}, {0, 1}})
-    ->ArgNames({"idle_us", "wake_ahead"})
     ->Iterations(200)
     ->UseManualTime()
     ->Unit(benchmark::kMicrosecond);

@@ -57,20 +57,6 @@ void ThreadPool::ParallelFor(size_t count, size_t grain,
   body_ = nullptr;
 }
 
-void ThreadPool::WakeAhead() {
-  if (workers_.empty() || taking_part_.load() == 0) return;
-  {
-    std::lock_guard lock(mutex_);
-    helpers_ = std::min(workers_.size(), taking_part_.load());
-    ++wake_ahead_;
-    ends_at_wake_ahead_ = wake_ahead_ends_.load();
-  }
-  KeepWorkersOffThisCpu();
-  wake_.notify_all();
-}
-
-void ThreadPool::EndWakeAhead() { wake_ahead_ends_.fetch_add(1); }
-
 // Why: a worker woken while the caller runs may be queued on the caller's own CPU, and wait
 // there while the caller does the whole loop. On a 2-vCPU KVM guest that happened in 32-42% of
 // the loops after an idle gap of 1-6 ms (far_thread_pool_benchmark; probably because the
@@ -106,28 +92,12 @@ void ThreadPool::RunChunks() {
 }
 
 void ThreadPool::WorkerLoop(size_t index) {
-  uint64_t seen = 0, woken_ahead = 0;
+  uint64_t seen = 0;
   for (;;) {
     {
       std::unique_lock lock(mutex_);
-      wake_.wait(lock, [&] {
-        return stopping_ || generation_ != seen || (wake_ahead_ != woken_ahead && index < helpers_);
-      });
+      wake_.wait(lock, [&] { return stopping_ || generation_ != seen; });
       if (stopping_) return;
-      if (generation_ == seen) {  // woken ahead of a loop: wait for it awake, for a while
-        woken_ahead = wake_ahead_;
-        const uint64_t ends = ends_at_wake_ahead_;
-        lock.unlock();
-        const auto until = std::chrono::steady_clock::now() + kWakeAhead;
-        while (generation_.load(std::memory_order_relaxed) == seen &&
-               wake_ahead_ends_.load(std::memory_order_relaxed) == ends &&
-               std::chrono::steady_clock::now() < until) {
-#if defined(__x86_64__) || defined(__i386__)
-          __builtin_ia32_pause();
-#endif
-        }
-        continue;
-      }
       seen = generation_;
       if (index >= helpers_) continue;  // not taking part in this loop
       // A worker that wakes after every chunk was taken stays out, and the caller does not wait

@@ -437,18 +437,6 @@ Result<void> Pipeline::Impl::RunStages(StepState& state, StageTimer& timer) {
     timer.End(name);
     return {};
   };
-  // The CPU methods' first loop on the pool comes right after the update: wake its workers now
-  // (their wake-up overlaps the update), and let them sleep when the step ends, loop or not.
-  struct WakeAheadScope {
-    ThreadPool* pool = nullptr;
-    ~WakeAheadScope() {
-      if (pool != nullptr) pool->EndWakeAhead();
-    }
-  } wake_ahead;
-  if (IsCpuCulling(request.method) || request.method == Method::kExact) {
-    pool.WakeAhead();
-    wake_ahead.pool = &pool;
-  }
   auto ok = stage("update", [&]() -> Result<void> {
     cache.RefreshWorld();
     state.objects = cache.Objects();

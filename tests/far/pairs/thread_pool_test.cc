@@ -55,30 +55,6 @@ TEST(ThreadPoolTest, TinyLoopsFinishBeforeTheyReturn) {
   }
 }
 
-// WakeAhead wakes the workers before a loop; they wait for it spinning, a while, then sleep
-// again (at once after EndWakeAhead). Whatever comes after it (a loop at once, a loop after the
-// workers went back to sleep or were sent back, no loop and the pool's end, several calls in a
-// row), every loop runs every index once.
-TEST(ThreadPoolTest, LoopsAfterWakeAheadVisitEveryIndexOnce) {
-  for (int round = 0; round < 40; ++round) {
-    ThreadPool pool(3);
-    for (int loop = 0; loop < 20; ++loop) {
-      if (loop % 2 == 0) pool.WakeAhead();
-      if (loop % 3 == 0) pool.WakeAhead();
-      if (loop % 5 == 4) std::this_thread::sleep_for(ThreadPool::kWakeAhead * 2);
-      if (loop % 7 == 6) pool.EndWakeAhead();
-      const size_t count = 1 + static_cast<size_t>(loop * 37 % 300);
-      std::vector<std::atomic<int>> visits(count);
-      pool.ParallelFor(count, 4, [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) visits[i].fetch_add(1);
-      });
-      for (size_t i = 0; i < count; ++i) ASSERT_EQ(visits[i].load(), 1) << "index " << i;
-    }
-    pool.WakeAhead();  // and no loop: the destructor still stops the spinning workers
-    if (round % 2 == 0) pool.EndWakeAhead();
-  }
-}
-
 // The threads that ran chunks of one loop of `count` indices (each chunk sleeps a little, so
 // that every thread allowed to take part gets some), and the scheduling policy of each chunk
 // a worker ran.
@@ -115,8 +91,6 @@ TEST(ThreadPoolTest, BackgroundLoopsUseAtMostTheirThreadsAndIdlePriority) {
   for (int policy : policies) EXPECT_EQ(policy, SCHED_IDLE);
   EXPECT_NE(sched_getscheduler(0), SCHED_IDLE);
   pool.SetBackground(1);
-  EXPECT_EQ(ThreadsOfOneLoop(pool, 50), std::set<std::thread::id>{std::this_thread::get_id()});
-  pool.WakeAhead();  // wakes no worker: none takes part
   EXPECT_EQ(ThreadsOfOneLoop(pool, 50), std::set<std::thread::id>{std::this_thread::get_id()});
 }
 

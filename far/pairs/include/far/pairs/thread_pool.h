@@ -3,7 +3,6 @@
 #include <sched.h>
 
 #include <atomic>
-#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <functional>
@@ -31,18 +30,6 @@ class ThreadPool {
   /// The workers run on the CPUs the pool's constructor was allowed, except the one the caller
   /// calls from (when there is another), so that none waits for a core the caller holds.
   void ParallelFor(size_t count, size_t grain, const std::function<void(size_t, size_t)>& body);
-
-  /// Tells the pool a ParallelFor is coming soon (within kWakeAhead): the workers that would
-  /// take part wake now and wait for it spinning, until it starts, EndWakeAhead is called or
-  /// kWakeAhead has passed, then sleep again. A caller with serial work before its loop (a
-  /// step's update before its descent) calls it first, so that the workers' wake-up (30-60 us
-  /// after an idle gap on a 2-vCPU VM whose idle vCPUs halt: far_thread_pool_benchmark)
-  /// overlaps that work instead of delaying the loop.
-  void WakeAhead();
-  /// The loops WakeAhead announced have run, or will not come (a step with nothing to test):
-  /// workers still spinning for one sleep now instead of at kWakeAhead.
-  void EndWakeAhead();
-  static constexpr std::chrono::microseconds kWakeAhead{250};
 
   /// Makes the pool background work from its next loop on: each ParallelFor runs on at most
   /// `max_threads` threads (the calling thread and max_threads - 1 workers; at least 1), and
@@ -72,10 +59,7 @@ class ThreadPool {
   const std::function<void(size_t, size_t)>* body_ = nullptr;
   size_t count_ = 0, grain_ = 1, next_ = 0, active_ = 0;
   size_t helpers_ = 0;  // workers that take part in the current loop (index < helpers_)
-  std::atomic<uint64_t> generation_{0};       // written under mutex_; read by spinning workers too
-  uint64_t wake_ahead_ = 0;                   // WakeAhead calls (under mutex_)
-  std::atomic<uint64_t> wake_ahead_ends_{0};  // EndWakeAhead calls
-  uint64_t ends_at_wake_ahead_ = 0;  // wake_ahead_ends_ at the last WakeAhead (under mutex_)
+  uint64_t generation_ = 0;
   bool stopping_ = false;
   cpu_set_t worker_cpus_;  // the CPUs the constructing thread was allowed (empty: unknown)
   int excluded_cpu_ = -1;  // the CPU the workers are kept off (-1: none yet)
