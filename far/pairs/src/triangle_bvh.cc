@@ -7,8 +7,13 @@
 
 #include <Eigen/Geometry>
 
+#include "far/pairs/internal/float_bounds.h"
+
 namespace far {
 namespace {
+
+using internal::FloatAbove;
+using internal::FloatBelow;
 
 constexpr int kBins = 12;
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -54,16 +59,6 @@ void SetNodeBox(TriangleBvh::Node& node, const Box& box) {
     // nextafter: e 2^-52 is between one and two ulps of e), and is > 0 even for e = 0.
     node.half_extent[a] = e + (e * 0x1p-52 + std::numeric_limits<double>::denorm_min());
   }
-}
-
-// The largest float <= x and the smallest float >= x (infinite beyond float's range).
-float FloatBelow(double x) {
-  const auto f = static_cast<float>(x);
-  return f > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
-}
-float FloatAbove(double x) {
-  const auto f = static_cast<float>(x);
-  return f < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
 }
 
 // The triangle's slabs (TriangleBvh::Slab), relative to `center`, the center of its leaf.
