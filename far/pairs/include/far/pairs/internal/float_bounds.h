@@ -18,9 +18,8 @@ namespace far::internal {
 
 /// A float <= x, at most three floats below x (-infinity below float's range; NaN stays NaN).
 /// x less at least one float ulp of itself and the smallest subnormal float, then rounded to
-/// nearest, which moves it by at most half an ulp: below x (and three floats below near the
-/// smallest normal float, two elsewhere). The double arithmetic's
-/// own rounding is 2^-30 of that step.
+/// nearest, which moves it by at most half an ulp: below x (two floats below at most, three near
+/// the smallest normal float). The double arithmetic's own rounding is 2^-30 of that step.
 inline float FloatBelow(double x) {
   constexpr double kMax = std::numeric_limits<float>::max();
   if (x > kMax) return std::numeric_limits<float>::max();  // +infinity too
