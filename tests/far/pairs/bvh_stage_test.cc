@@ -208,9 +208,9 @@ TEST(TriangleBvhTest, SlabsHoldTheirTrianglesAndRefitDropsThem) {
         EXPECT_LE(along, slab.hi[axis] + 1e-15);
       }
     }
-    // The first slab is the triangle's plane: as thin as rounding to float leaves it (2^-24 of
-    // the distance to the leaf's center, well under 1e-6 here). The second is as wide as the
-    // triangle's height over its longest edge: 2 area / longest edge.
+    // The first slab is the triangle's plane: as thin as rounding outward to float leaves it (a
+    // few float steps, 2^-23 each, of the distance to the leaf's center; well under 1e-6 here). The
+    // second is as wide as the triangle's height over its longest edge: 2 area / longest edge.
     EXPECT_LE(slab.hi[0] - slab.lo[0], 1e-6);
     const Eigen::Vector3d a = object.p_MV[t[0]], b = object.p_MV[t[1]], c = object.p_MV[t[2]];
     const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});

@@ -51,9 +51,9 @@ class TriangleBvh {
   /// few ulps of |p| + |c| of the exact one; a caller's margin must cover that, and the descent's
   /// 2^-40 of the coordinates' magnitude does, by a factor of over a thousand) and the bounds
   /// rounded outward to float. Relative to the leaf, the float bounds lose nothing that matters
-  /// far from the origin: their rounding is 2^-24 of the leaf's size, not of its position. A
-  /// third axis, along the longest edge, was measured and cut nothing more (far_bvh_benchmark
-  /// BM_Pair_BvhFans): the boxes already bound that direction.
+  /// far from the origin: their rounding is a few float steps of the leaf's size (2^-23 each), not
+  /// of its position. A third axis, along the longest edge, was measured and cut nothing more
+  /// (far_bvh_benchmark BM_Pair_BvhFans): the boxes already bound that direction.
   struct Slab {
     static constexpr int kAxes = 2;
     Eigen::Vector3f axis[kAxes];  ///< the normal; across the triangle (normal x longest edge)
