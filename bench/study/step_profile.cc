@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "step,ms,repeat_ms,contacts,distance_pairs,object_pairs,pairs_considered,pairs_tested,"
-      "stages_ms\n");
+      "node_pairs,leaf_descents,leaf_descent_nodes,leaf_pairs,boxes_met,stages_ms\n");
   for (size_t s = 0; s <= scene.frames.size(); ++s) {
     if (idle_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(idle_ms));
     const auto start = Clock::now();
@@ -145,11 +145,17 @@ int main(int argc, char** argv) {
       std::snprintf(ms_text, sizeof ms_text, "%.3f", stage.ms);
       stages += (stages.empty() ? "" : " ") + stage.name + "=" + ms_text;
     }
-    std::printf("%zu,%.3f,%.3f,%zu,%zu,%lld,%lld,%lld,%s\n", s, ms, repeat_ms,
-                result->contacts.size(), result->distance_pairs.size(),
+    const far::DescentCounters& descent = result->stats.descent;
+    std::printf("%zu,%.3f,%.3f,%zu,%zu,%lld,%lld,%lld,%lld,%lld,%lld,%lld,%lld,%s\n", s, ms,
+                repeat_ms, result->contacts.size(), result->distance_pairs.size(),
                 static_cast<long long>(result->stats.object_pairs),
                 static_cast<long long>(result->stats.pairs_considered),
-                static_cast<long long>(result->stats.pairs_tested), stages.c_str());
+                static_cast<long long>(result->stats.pairs_tested),
+                static_cast<long long>(descent.node_pairs),
+                static_cast<long long>(descent.leaf_descents),
+                static_cast<long long>(descent.leaf_descent_nodes),
+                static_cast<long long>(descent.leaf_pairs),
+                static_cast<long long>(descent.boxes_met), stages.c_str());
   }
   return 0;
 }

@@ -117,10 +117,12 @@ bool OverlapInB(const PairFrame& f, const Node& y, const Task& t) {
 
 double NodeSize(const Node& n) { return n.half_extent.sum(); }
 
-// One chunk's output: the exact answers; and the stack DescendLeaf reuses.
+// One chunk's output: the exact answers and the descent's counters; and the stack DescendLeaf
+// reuses.
 struct Output {
   Partial partial;
   size_t considered = 0;
+  DescentCounters counters;
   std::vector<std::pair<uint32_t, uint32_t>> leaf_stack;
 };
 
@@ -302,10 +304,12 @@ void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t li
     }
   }
   out.considered += size_t{na} * nb;
+  ++out.counters.leaf_pairs;
   const Eigen::Vector3d x_W = a.X_WM * x.center, y_W = b.X_WM * y.center;
   for (uint32_t i = 0; i < na; ++i) {
     for (uint32_t j = 0; j < nb; ++j) {
       if (!BoxesWithin(boxes_a[i], boxes_b[j], d.wanted.slack)) continue;
+      ++out.counters.boxes_met;
       if (!slabs_a[i].made) MakeWorldSlab(a, f.rotated_a, index_a[i], x_W, slabs_a[i]);
       if (SlabSeparates(slabs_a[i], b.world, boxes_b[j].triangle, f.margin)) continue;
       if (!slabs_b[j].made) MakeWorldSlab(b, f.rotated_b, index_b[j], y_W, slabs_b[j]);
@@ -335,11 +339,13 @@ void DescendLeaf(const Descent& d, const PairFrame& f, const LeafProbe& p, uint3
   const uint32_t all = (1u << p.count) - 1;
   std::vector<std::pair<uint32_t, uint32_t>>& stack = out.leaf_stack;
   stack.assign(1, {root, all | kBoxesTested});
+  ++out.counters.leaf_descents;
   for (uint32_t visited = 0; !stack.empty(); ++visited) {
     if (visited % 256 == 255 && d.wanted.stopper->Poll()) return;
     const auto [index, entry] = stack.back();
     stack.pop_back();
     const Node& node = nodes[index];
+    ++out.counters.leaf_descent_nodes;
     const uint32_t parent_live = entry & ~kBoxesTested;
     if (!(entry & kBoxesTested)) {
       const Eigen::Array3d gap =
@@ -384,7 +390,9 @@ void DescendFromLeaf(const Descent& d, const PairFrame& f, uint32_t x, uint32_t 
 // Descends an overlapping task of two inner nodes one level: the children pairs of its bigger
 // node that overlap too are pushed onto `next`, except that, with `out`, a pair with a leaf is
 // descended from its leaf at once (seeding passes no `out`: it leaves the work to the pool).
-void Expand(const Descent& d, const Task& task, std::vector<Task>& next, Output* out) {
+void Expand(const Descent& d, const Task& task, std::vector<Task>& next, Output* out,
+            DescentCounters& counters) {
+  ++counters.node_pairs;
   const PairFrame& f = d.frames[task.frame];
   const auto& nodes_a = d.query.objects[f.a].bvh->nodes();
   const auto& nodes_b = d.query.objects[f.b].bvh->nodes();
@@ -443,6 +451,7 @@ void DescendAligned(const Descent& d, const PairFrame& f, uint32_t root_x, uint3
       DescendFromLeaf(d, f, ix, iy, out);
       continue;
     }
+    ++out.counters.node_pairs;
     const bool split_x = NodeSize(x) >= NodeSize(y);
     const uint32_t first = split_x ? x.first : y.first;
     for (uint32_t child : {first, first + 1}) {
@@ -464,7 +473,7 @@ void Descend(const Descent& d, const Task& root, Output& out) {
     if (HasLeaf(d, task)) {
       DescendFromLeaf(d, f, task.x, task.y, out);
     } else {
-      Expand(d, task, stack, &out);
+      Expand(d, task, stack, &out, out.counters);
     }
   }
 }
@@ -502,7 +511,7 @@ std::vector<PairFrame> MakeFrames(const BvhQuery& query, double slack) {
 
 // The overlapping root pairs, expanded breadth-first until there are enough tasks to share among
 // threads.
-std::vector<Task> SeedTasks(const Descent& d, size_t target) {
+std::vector<Task> SeedTasks(const Descent& d, size_t target, DescentCounters& counters) {
   std::vector<Task> tasks;
   for (uint32_t i = 0; i < d.frames.size(); ++i) {
     const PairFrame& f = d.frames[i];
@@ -519,7 +528,7 @@ std::vector<Task> SeedTasks(const Descent& d, size_t target) {
       if (HasLeaf(d, task)) {
         next.push_back(task);  // descended from its leaf later, on the pool
       } else {
-        Expand(d, task, next, nullptr);
+        Expand(d, task, next, nullptr, counters);
       }
     }
     const bool growing = next.size() > tasks.size();
@@ -592,7 +601,8 @@ BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
   // thread: scaling-5000 7-11% and breaking 1-15% faster; 4 per thread was slower on breaking).
   constexpr size_t kTasksPerThread = 16;
   const size_t threads = static_cast<size_t>(pool.num_threads());
-  const std::vector<Task> tasks = SeedTasks(descent, kTasksPerThread * threads);
+  DescentCounters seeding;
+  const std::vector<Task> tasks = SeedTasks(descent, kTasksPerThread * threads, seeding);
   const size_t grain = std::clamp<size_t>(tasks.size() / (16 * threads), 1, 256);
   std::vector<Output> outputs((tasks.size() + grain - 1) / grain);
   pool.ParallelFor(tasks.size(), grain, [&](size_t begin, size_t end) {
@@ -602,10 +612,12 @@ BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
 
   // Merge: sorted answers and candidates, whatever the number of threads.
   BvhResult result;
+  result.counters = seeding;
   std::vector<Partial> partials;
   size_t considered = 0;
   for (Output& out : outputs) {
     considered += out.considered;
+    result.counters += out.counters;
     partials.push_back(std::move(out.partial));
   }
   result.candidates.resize(marks.size());

@@ -378,6 +378,7 @@ Result<void> Pipeline::Impl::HierarchyStage(StepState& state) {
   }
   result.contacts = std::move(found.exact.contacts);
   result.distance_pairs = std::move(found.exact.distance_pairs);
+  result.stats.descent = found.counters;
   result.stats.pairs_considered = static_cast<int64_t>(found.exact.pairs_considered);
   result.stats.pairs_tested = static_cast<int64_t>(found.exact.pairs_tested);
   return {};

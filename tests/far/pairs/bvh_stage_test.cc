@@ -300,7 +300,37 @@ TEST(BvhStageTest, TouchingAtACornerUnderARotatedPose) {
   const std::vector<Object> scene = {a, b};
   const ExactResult expected = Reference(scene, std::nullopt);
   ASSERT_EQ(expected.contacts.size(), 1u);
-  EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
+  const BvhResult found = RunStage(scene, std::nullopt);
+  EXPECT_EQ(found.exact.contacts, expected.contacts);
+  // Each hierarchy is one leaf: one leaf sent down a one-node hierarchy, one leaf pair, one
+  // triangle pair whose boxes meet (at the corner), no inner node pair.
+  const DescentCounters& c = found.counters;
+  EXPECT_EQ(c.node_pairs, 0);
+  EXPECT_EQ(c.leaf_descents, 1);
+  EXPECT_EQ(c.leaf_descent_nodes, 1);
+  EXPECT_EQ(c.leaf_pairs, 1);
+  EXPECT_EQ(c.boxes_met, 1);
+}
+
+TEST(BvhStageTest, CountersFollowTheDescent) {
+  // Each step of the descent narrows the one before: nodes visited, leaf pairs, triangle pairs
+  // whose boxes meet, exact tests.
+  const std::vector<Object> scene = RandomScene(12, 6, 400, 0);
+  const BvhResult found = RunStage(scene, std::nullopt);
+  const DescentCounters& c = found.counters;
+  ASSERT_FALSE(found.exact.contacts.empty());
+  EXPECT_GT(c.node_pairs, 0);
+  EXPECT_GT(c.leaf_descents, 0);
+  EXPECT_LE(c.leaf_descents, c.leaf_descent_nodes);
+  EXPECT_LE(c.leaf_pairs, c.leaf_descent_nodes);
+  EXPECT_LT(c.boxes_met, static_cast<int64_t>(found.exact.pairs_considered));
+  EXPECT_LE(static_cast<int64_t>(found.exact.pairs_tested), c.boxes_met);
+  EXPECT_GT(found.exact.pairs_tested, 0u);
+  // Objects far apart: no root pair overlaps, nothing is counted.
+  std::vector<Object> apart = RandomScene(12, 2, 50, 0);
+  apart[1].X_WM.translation() += Eigen::Vector3d(100, 0, 0);
+  apart[1].Place();
+  EXPECT_EQ(RunStage(apart, std::nullopt).counters, DescentCounters{});
 }
 
 // Object A: `triangles` random triangles placed near `offset`; object B: no triangles yet, under
@@ -481,6 +511,7 @@ TEST(BvhStageTest, ThreadCountsGiveIdenticalOutput) {
     EXPECT_EQ(PairsOf(many.exact.distance_pairs), PairsOf(one.exact.distance_pairs));
     EXPECT_EQ(many.candidates, one.candidates);
     EXPECT_EQ(many.exact.pairs_tested, one.exact.pairs_tested);
+    EXPECT_EQ(many.counters, one.counters);
   }
 }
 

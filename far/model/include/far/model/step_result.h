@@ -42,6 +42,27 @@ struct Certificate {
   std::vector<LevelCertificate> levels;  ///< the GPU methods' culling levels; empty for CPU ones
 };
 
+/// The work of the bvh method's descent (RunBvhTests), for profiling what a step's time goes to
+/// (far-step-profile prints it). The same for any number of threads: the descent visits the same
+/// node pairs, only in another order.
+struct DescentCounters {
+  int64_t node_pairs = 0;          ///< pairs of inner nodes split into their children
+  int64_t leaf_descents = 0;       ///< leaves sent down the other object's hierarchy
+  int64_t leaf_descent_nodes = 0;  ///< nodes of the other hierarchy those descents visited
+  int64_t leaf_pairs = 0;          ///< leaf pairs whose live triangles were paired up
+  int64_t boxes_met = 0;  ///< of those triangle pairs, the ones whose world boxes met (then slabs)
+
+  DescentCounters& operator+=(const DescentCounters& other) {
+    node_pairs += other.node_pairs;
+    leaf_descents += other.leaf_descents;
+    leaf_descent_nodes += other.leaf_descent_nodes;
+    leaf_pairs += other.leaf_pairs;
+    boxes_met += other.boxes_met;
+    return *this;
+  }
+  bool operator==(const DescentCounters&) const = default;
+};
+
 /// What a step did and cost.
 struct StepStats {
   /// The configuration that ran: the method's name, and for the GPU methods the mechanism and
@@ -72,6 +93,9 @@ struct StepStats {
   /// test, those whose leaf boxes overlapped in its BVH traversal (its num_leaf_tests); exact:
   /// the pairs that passed the triangle-box prefilter.
   int64_t pairs_tested = 0;
+  /// bvh: the descent's work (zero for other methods). Not sent over the wire (study
+  /// measurements).
+  DescentCounters descent;
   double object_radius = 0;     ///< offset radius r of the last object-level view
   double primitive_radius = 0;  ///< offset radius r of the last sub-object view
   Certificate certificate;

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "far/model/contact_pair.h"
+#include "far/model/step_result.h"
 #include "far/pairs/exact_stage.h"
 #include "far/pairs/thread_pool.h"
 #include "far/pairs/triangle_bvh.h"
@@ -44,6 +45,7 @@ struct BvhQuery {
 struct BvhResult {
   ExactResult exact;
   std::vector<std::vector<uint32_t>> candidates;
+  DescentCounters counters;  ///< what the descent did (the same for any number of threads)
 };
 
 /// The hierarchy stage: for every object pair, a simultaneous descent of the two hierarchies in
