@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cassert>
 #include <cmath>
 #include <cstdint>
@@ -201,18 +202,20 @@ LeafProbe MakeProbe(const PairFrame& f, const TriangleBvh& leaf_bvh, const Node&
 // The probe's triangles, among `live` (bit i: triangle i), whose slabs do not separate `node`.
 uint32_t LiveAgainst(const LeafProbe& p, const Node& node, uint32_t live, double margin) {
   if (!p.has_slabs) return live;
+  // Every triangle (live or not) and every axis, then one mask: the exits that skipped the rest
+  // mispredict, the more so after an idle gap, which this machine's branch predictor does not
+  // survive (bench/RESULTS.md, "Branches after an idle gap").
   uint32_t kept = 0;
   for (uint32_t i = 0; i < p.count; ++i) {
-    if (!(live >> i & 1)) continue;
     bool apart = false;
-    for (int k = 0; k < LeafProbe::kAxes && !apart; ++k) {
+    for (int k = 0; k < LeafProbe::kAxes; ++k) {
       const double middle = p.axis[i][k].dot(node.center);
       const double radius = p.axis[i][k].cwiseAbs().dot(node.half_extent);
-      apart = middle - radius > p.hi[i][k] + margin || middle + radius < p.lo[i][k] - margin;
+      apart |= (middle - radius > p.hi[i][k] + margin) | (middle + radius < p.lo[i][k] - margin);
     }
-    if (!apart) kept |= 1u << i;
+    kept |= static_cast<uint32_t>(!apart) << i;
   }
-  return kept;
+  return kept & live;
 }
 
 // The triangles of a leaf of T whose slabs do not separate the probe's leaf (its oriented box:
@@ -270,12 +273,14 @@ bool SlabSeparates(const WorldSlab& s, const WorldObjectView& object, uint32_t t
   const Eigen::Vector3d& a = object.p_WV[v[0]];
   const Eigen::Vector3d& b = object.p_WV[v[1]];
   const Eigen::Vector3d& c = object.p_WV[v[2]];
+  // Every axis, then one answer: an exit per axis mispredicts (as in BoxesWithin).
+  bool apart = false;
   for (int k = 0; k < TriangleBvh::Slab::kAxes; ++k) {
     const double da = s.axis[k].dot(a), db = s.axis[k].dot(b), dc = s.axis[k].dot(c);
-    if (std::min({da, db, dc}) > s.hi[k] + margin || std::max({da, db, dc}) < s.lo[k] - margin)
-      return true;
+    apart |=
+        (std::min({da, db, dc}) > s.hi[k] + margin) | (std::max({da, db, dc}) < s.lo[k] - margin);
   }
-  return false;
+  return apart;
 }
 
 // The live triangle pairs of two leaves (x of A, y of B): world boxes, then each triangle's
@@ -307,9 +312,15 @@ void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t li
   ++out.counters.leaf_pairs;
   const Eigen::Vector3d x_W = a.X_WM * x.center, y_W = b.X_WM * y.center;
   for (uint32_t i = 0; i < na; ++i) {
+    // The pairs whose boxes meet, as a mask computed without a branch per pair: a branch there
+    // mispredicts on about half the pairs; the loop below takes only the pairs that met.
+    uint32_t met = 0;
     for (uint32_t j = 0; j < nb; ++j) {
-      if (!BoxesWithin(boxes_a[i], boxes_b[j], d.wanted.slack)) continue;
-      ++out.counters.boxes_met;
+      met |= static_cast<uint32_t>(BoxesWithin(boxes_a[i], boxes_b[j], d.wanted.slack)) << j;
+    }
+    out.counters.boxes_met += std::popcount(met);
+    for (; met != 0; met &= met - 1) {
+      const uint32_t j = static_cast<uint32_t>(std::countr_zero(met));
       if (!slabs_a[i].made) MakeWorldSlab(a, f.rotated_a, index_a[i], x_W, slabs_a[i]);
       if (SlabSeparates(slabs_a[i], b.world, boxes_b[j].triangle, f.margin)) continue;
       if (!slabs_b[j].made) MakeWorldSlab(b, f.rotated_b, index_b[j], y_W, slabs_b[j]);
