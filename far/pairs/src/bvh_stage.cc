@@ -202,9 +202,9 @@ LeafProbe MakeProbe(const PairFrame& f, const TriangleBvh& leaf_bvh, const Node&
 // The probe's triangles, among `live` (bit i: triangle i), whose slabs do not separate `node`.
 uint32_t LiveAgainst(const LeafProbe& p, const Node& node, uint32_t live, double margin) {
   if (!p.has_slabs) return live;
-  // Every triangle (live or not) and every axis, then one mask: the exits that skipped the rest
-  // mispredict, the more so after an idle gap, which this machine's branch predictor does not
-  // survive (bench/RESULTS.md, "Branches after an idle gap").
+  // Every triangle (live or not) and every axis, then one mask: exits that skip the rest
+  // mispredict, the more so in a step after an idle gap, whose predictor has forgotten what it
+  // learned (bench/RESULTS.md, "bvh: branches after an idle gap").
   uint32_t kept = 0;
   for (uint32_t i = 0; i < p.count; ++i) {
     bool apart = false;
@@ -312,8 +312,8 @@ void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t li
   ++out.counters.leaf_pairs;
   const Eigen::Vector3d x_W = a.X_WM * x.center, y_W = b.X_WM * y.center;
   for (uint32_t i = 0; i < na; ++i) {
-    // The pairs whose boxes meet, as a mask computed without a branch per pair: a branch there
-    // mispredicts on about half the pairs; the loop below takes only the pairs that met.
+    // The pairs whose boxes meet, as a mask computed without a branch per pair (one there
+    // mispredicts often: 40% of the pairs meet on breaking); the loop visits only those.
     uint32_t met = 0;
     for (uint32_t j = 0; j < nb; ++j) {
       met |= static_cast<uint32_t>(BoxesWithin(boxes_a[i], boxes_b[j], d.wanted.slack)) << j;
