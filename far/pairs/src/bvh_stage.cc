@@ -277,8 +277,8 @@ bool SlabSeparates(const WorldSlab& s, const WorldObjectView& object, uint32_t t
   bool apart = false;
   for (int k = 0; k < TriangleBvh::Slab::kAxes; ++k) {
     const double da = s.axis[k].dot(a), db = s.axis[k].dot(b), dc = s.axis[k].dot(c);
-    apart |=
-        (std::min({da, db, dc}) > s.hi[k] + margin) | (std::max({da, db, dc}) < s.lo[k] - margin);
+    const double least = std::min({da, db, dc}), most = std::max({da, db, dc});
+    apart |= (least > s.hi[k] + margin) | (most < s.lo[k] - margin);
   }
   return apart;
 }
