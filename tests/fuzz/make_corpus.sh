@@ -4,6 +4,8 @@
 # sessions as datagram and ring-operation sequences (far_fuzz_make_seeds, built from
 # make_seeds.cc), and the daemon configurations of tests/server/daemon_config_test.cc.
 #   bash tests/fuzz/make_corpus.sh [build folder, default build/fuzz]
+# bvh_reference's seeds (small scenes: a crossing, a coplanar overlap, a corner carried through
+# rotated poses far from the origin, a distance query on refit trees) are written below as bytes.
 # Seeds are named after what they hold; keep the total small (well under 1 MB). Inputs that once
 # crashed a target (tests/fuzz/regressions/<target>/, each also a unit test) are seeds too.
 set -euo pipefail
@@ -14,7 +16,7 @@ data=tests/data/scenes/example
 
 cmake --build "$build" --target far_fuzz_make_seeds >/dev/null
 rm -rf "$out"
-mkdir -p "$out"/{obj_reader,ply_reader,stl_reader,scene_reader,daemon_config}
+mkdir -p "$out"/{obj_reader,ply_reader,stl_reader,scene_reader,daemon_config,bvh_reference}
 "$build"/tests/fuzz/far_fuzz_make_seeds "$out"
 
 cp "$data"/*.obj "$out"/obj_reader/
@@ -38,6 +40,23 @@ configs=(
   '{}'
 )
 for i in "${!configs[@]}"; do printf '%s\n' "${configs[$i]}" >"$out/daemon_config/config_$i.json"; done
+
+# Seeds of bvh_reference (layout at the top of bvh_reference_fuzzer.cc), as hex bytes.
+bvh_seed() { printf '%b' "$(echo "$2" | sed 's/ //g; s/\([0-9a-f][0-9a-f]\)/\\x\1/g')" >"$out/bvh_reference/$1"; }
+#        flags e  d  n | object: v  t  pose quaternion  t.x t.y t.z | corners (kind x y z) | triangle
+bvh_seed crossing_at_grid_points \
+  "00 00 00 00  00 00 01 00000000 000000 00000000 00100000 00001000 000102 \
+                00 00 01 00000000 000000 000404f8 00060408 00040608 000102"
+bvh_seed coplanar_overlap \
+  "00 00 00 00  00 00 01 00000000 000000 00000000 00100000 00001000 000102 \
+                00 00 01 00000000 000000 00040400 00140400 00041400 000102"
+bvh_seed corner_carried_through_rotated_poses_at_1e6 \
+  "20 00 00 00  00 00 00 0a03fc07 010203 00000000 00100000 00001000 000102 \
+                00 00 00 05fe0901 000000 80       00080810 00f80810 000102"
+bvh_seed distance_refit_three_objects \
+  "03 02 08 01  00 00 01 00000000 000000 00000000 00100000 00001000 000102 \
+                00 00 01 00000000 000001 00000000 00100000 00001000 000102 \
+                00 00 00 01010000 000000 000000f8 000800f8 000008f8 000102"
 
 for dir in tests/fuzz/regressions/*/; do
   target=$(basename "$dir")
