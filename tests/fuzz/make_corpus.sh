@@ -42,8 +42,10 @@ configs=(
 for i in "${!configs[@]}"; do printf '%s\n' "${configs[$i]}" >"$out/daemon_config/config_$i.json"; done
 
 # Seeds of bvh_reference (layout at the top of bvh_reference_fuzzer.cc), as hex bytes.
-bvh_seed() { printf '%b' "$(echo "$2" | sed 's/ //g; s/\([0-9a-f][0-9a-f]\)/\\x\1/g')" >"$out/bvh_reference/$1"; }
-#        flags e  d  n | object: v  t  pose quaternion  t.x t.y t.z | corners (kind x y z) | triangle
+bvh_seed() {
+  printf '%b' "$(echo "$2" | sed 's/ //g; s/\([0-9a-f][0-9a-f]\)/\\x\1/g')" >"$out/bvh_reference/$1"
+}
+#        flags e d n | per object: v t pose, quaternion, translation | corners (kind x y z) | triangle
 bvh_seed crossing_at_grid_points \
   "00 00 00 00  00 00 01 00000000 000000 00000000 00100000 00001000 000102 \
                 00 00 01 00000000 000000 000404f8 00060408 00040608 000102"
