@@ -45,7 +45,7 @@ for i in "${!configs[@]}"; do printf '%s\n' "${configs[$i]}" >"$out/daemon_confi
 bvh_seed() {
   printf '%b' "$(echo "$2" | sed 's/ //g; s/\([0-9a-f][0-9a-f]\)/\\x\1/g')" >"$out/bvh_reference/$1"
 }
-#        flags e d n | per object: v t pose, quaternion, translation | corners (kind x y z) | triangle
+#        flags e d n | per object: v t pose quaternion translation | corners (kind xyz) | triangle
 bvh_seed crossing_at_grid_points \
   "00 00 00 00  00 00 01 00000000 000000 00000000 00100000 00001000 000102 \
                 00 00 01 00000000 000000 000404f8 00060408 00040608 000102"
