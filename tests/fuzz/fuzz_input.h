@@ -7,12 +7,14 @@
 // once, in its target's file.
 
 #include <dirent.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <span>
+#include <string>
 #include <type_traits>
 
 namespace far::fuzz {
@@ -69,6 +71,24 @@ inline int OpenDescriptors() {
   while (readdir(dir) != nullptr) ++count;
   closedir(dir);
   return count;
+}
+
+// The process's open descriptors and what each one is ("3 -> socket:[123]"), one per line: what
+// a harness prints when a descriptor count does not come back, so that a rare failure names the
+// descriptor instead of only its count.
+inline std::string DescribeDescriptors() {
+  std::string text;
+  DIR* dir = opendir("/proc/self/fd");
+  if (dir == nullptr) return "(cannot read /proc/self/fd)\n";
+  while (const dirent* entry = readdir(dir)) {
+    if (entry->d_name[0] == '.') continue;
+    const std::string path = std::string("/proc/self/fd/") + entry->d_name;
+    char target[256] = {};
+    const ssize_t length = readlink(path.c_str(), target, sizeof(target) - 1);
+    text += std::string(entry->d_name) + " -> " + (length > 0 ? target : "?") + "\n";
+  }
+  closedir(dir);
+  return text;
 }
 
 }  // namespace far::fuzz

@@ -27,6 +27,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -207,6 +208,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace far::fuzz;
   DaemonUnderTest& daemon = Daemon();
   const int descriptors = OpenDescriptors();
+  const std::string descriptors_before = DescribeDescriptors();  // printed if they do not come back
   FuzzInput in(data, size);
   const uint8_t flags = in.Take<uint8_t>();
   const auto first = (flags & 2) ? in.TakeBytes(in.Take<uint16_t>()) : in.TakeBytes(in.left());
@@ -230,7 +232,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       CheckAnswer(first, answer, sent_second);
     }
   }  // hang up: the daemon closes the session
-  FAR_FUZZ_CHECK(
-      WaitUntil([&] { return daemon.sessions().size() == 0 && OpenDescriptors() == descriptors; }));
+  if (!WaitUntil(
+          [&] { return daemon.sessions().size() == 0 && OpenDescriptors() == descriptors; })) {
+    // Rare (one CI run so far): say which condition held out, and every descriptor now open.
+    std::fprintf(stderr, "after 10 s: %zu sessions open; %d descriptors now:\n%s%d before:\n%s",
+                 daemon.sessions().size(), OpenDescriptors(), DescribeDescriptors().c_str(),
+                 descriptors, descriptors_before.c_str());
+    FAR_FUZZ_CHECK(!"the session closed and every descriptor came back");
+  }
   return 0;
 }
