@@ -1,6 +1,5 @@
 #include "far/protocol/message_validate.h"
 
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 
@@ -31,13 +30,6 @@ std::string Quote(std::string_view text) {
   }
   if (text.size() > 64) out += "...";
   return out + "'";
-}
-
-// The shortest text that reads back as the same double ("0.1", "1e+13", "nan", "-inf").
-std::string FormatDouble(double value) {
-  char text[32];
-  const auto result = std::to_chars(text, text + sizeof(text), value);
-  return std::string(text, result.ptr);
 }
 
 Result<uint64_t> CheckRingBytes(std::string_view field, int64_t bytes) {

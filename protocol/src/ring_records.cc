@@ -1,6 +1,5 @@
 #include "far/protocol/ring_records.h"
 
-#include <charconv>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -29,13 +28,6 @@ std::string RecordName(uint32_t type) {
       return "step_reply";
   }
   return "type " + std::to_string(type);
-}
-
-// The shortest text that reads back as the same double ("0.1", "1e+13", "nan", "-inf").
-std::string FormatDouble(double value) {
-  char text[32];
-  const auto result = std::to_chars(text, text + sizeof(text), value);
-  return std::string(text, result.ptr);
 }
 
 // Builds errors that name the record, the field and the value.

@@ -5,12 +5,16 @@
 // coplanar pairs, degenerate triangles); corners of an earlier object carried into this
 // object's frame through its rounded inverse pose (contact through rounded poses); rotated and
 // unrotated poses (the stage's two descents); scales from 2^-20 to 2^10, shifted up to 1e7 from
-// the origin; distance queries; trees without slabs (refit); one thread or two.
+// the origin, and tiny scales whose world corners lie around and below kTinyWorldCoordinate (the
+// pipeline takes those as 0, and the descent's margin must cover it); distance queries; trees
+// without slabs (refit); one thread or two.
 //
 // Input, front to back (past the end every byte reads as 0):
 //   uint8 flags: bit 0 a distance query, bit 1 refit the trees (no slabs), bit 2 one thread
 //         (else two), bits 3-5 the shift s (kShifts) along (1, -0.5, 0.25)
-//   int8  scale exponent: scale = 2^clamp(e, -20, 10), the grid step is scale / 16
+//   int8  scale exponent: scale = 2^clamp(e, -20, 10), or 2^(e - 188) for e < -64 (2^-316 to
+//         2^-253: corners from 2^-320 to 2^-250, the largest around kTinyWorldCoordinate =
+//         2^-256, the rest below); the grid step is scale / 16
 //   uint8 distance: D = scale * d / 64 (with flag bit 0)
 //   uint8 objects: 2 + n % 3, then per object:
 //     uint8 vertices: 3 + n % 14;  uint8 triangles: 1 + n % 12
@@ -88,8 +92,10 @@ Object ReadObject(FuzzInput& in, uint32_t id, double step, const Eigen::Vector3d
     const uint32_t a = corner(), b = corner(), c = corner();
     object.triangles.push_back({a, b, c});
   }
-  // As the pipeline places an object: the world corners are X_WM applied to the mesh's.
-  for (const Eigen::Vector3d& p : object.p_MV) object.p_WV.push_back(object.X_WM * p);
+  // As the pipeline places an object: the world corners are X_WM applied to the mesh's, with
+  // tiny coordinates taken as 0.
+  for (const Eigen::Vector3d& p : object.p_MV)
+    object.p_WV.push_back(FlushTinyCoordinates(object.X_WM * p));
   return object;
 }
 
@@ -108,7 +114,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static ThreadPool one(1), two(2);
   FuzzInput in(data, size);
   const uint8_t flags = in.Take<uint8_t>();
-  const double scale = std::ldexp(1.0, std::clamp<int>(in.Take<int8_t>(), -20, 10));
+  const int exponent = in.Take<int8_t>();
+  const double scale =
+      std::ldexp(1.0, exponent < -64 ? exponent - 188 : std::clamp(exponent, -20, 10));
   const double distance = scale * in.Take<uint8_t>() / 64;
   const std::optional<double> max_distance =
       flags & 1 ? std::optional<double>(distance) : std::nullopt;

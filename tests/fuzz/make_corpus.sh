@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
-# Regenerates the committed seed corpora tests/fuzz/corpus/<target>/ from what the repository's
+# Writes the committed seed corpora tests/fuzz/corpus/<target>/ from what the repository's
 # tests use: the files of tests/data, the protocol tests' sample messages encoded, whole client
 # sessions as datagram and ring-operation sequences (far_fuzz_make_seeds, built from
 # make_seeds.cc), and the daemon configurations of tests/server/daemon_config_test.cc.
 #   bash tests/fuzz/make_corpus.sh [build folder, default build/fuzz]
 # bvh_reference's seeds (small scenes: a crossing, a coplanar overlap, a corner carried through
-# rotated poses far from the origin, a distance query on refit trees) are written below as bytes.
-# Seeds are named after what they hold; keep the total small (well under 1 MB). Inputs that once
-# crashed a target (tests/fuzz/regressions/<target>/, each also a unit test) are seeds too.
+# rotated poses far from the origin and at a tiny scale, a distance query on refit trees) are
+# written below as bytes.
+# It overwrites the seeds it writes and deletes nothing: the inputs a long run added (named by
+# their SHA-1, such as daemon_datagram's) stay. Seeds are named after what they hold; keep the
+# total small (well under 1 MB). Inputs that once crashed a target
+# (tests/fuzz/regressions/<target>/, each also a unit test) are seeds too.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 build=${1:-build/fuzz}
@@ -15,7 +18,6 @@ out=tests/fuzz/corpus
 data=tests/data/scenes/example
 
 cmake --build "$build" --target far_fuzz_make_seeds >/dev/null
-rm -rf "$out"
 mkdir -p "$out"/{obj_reader,ply_reader,stl_reader,scene_reader,daemon_config,bvh_reference}
 "$build"/tests/fuzz/far_fuzz_make_seeds "$out"
 
@@ -54,6 +56,9 @@ bvh_seed coplanar_overlap \
                 00 00 01 00000000 000000 00040400 00140400 00041400 000102"
 bvh_seed corner_carried_through_rotated_poses_at_1e6 \
   "20 00 00 00  00 00 00 0a03fc07 010203 00000000 00100000 00001000 000102 \
+                00 00 00 05fe0901 000000 80       00080810 00f80810 000102"
+bvh_seed corner_carried_through_rotated_poses_near_2^-256 \
+  "00 be 00 00  00 00 00 0a03fc07 010203 00000000 00100000 00001000 000102 \
                 00 00 00 05fe0901 000000 80       00080810 00f80810 000102"
 bvh_seed distance_refit_three_objects \
   "03 02 08 01  00 00 01 00000000 000000 00000000 00100000 00001000 000102 \

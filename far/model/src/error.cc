@@ -1,3 +1,5 @@
+#include <charconv>
+
 #include "far/model/result.h"
 
 namespace far {
@@ -32,6 +34,12 @@ const char* ToString(ErrorCode code) {
 
 std::string ToString(const Error& error) {
   return std::string(ToString(error.code)) + ": " + error.message;
+}
+
+std::string FormatDouble(double value) {
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof(text), value);
+  return std::string(text, result.ptr);
 }
 
 }  // namespace far

@@ -1,7 +1,10 @@
 #include "far/model/scene_model.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
+
+#include "far/model/limits.h"
 
 namespace far {
 namespace {
@@ -15,6 +18,39 @@ Error NotAlive(uint32_t id) {
 // A content error with the field it names moved under `parent` ("mesh", "pose").
 Error Under(const std::string& parent, const Error& error) {
   return MakeError(error.code, parent + "." + error.message);
+}
+
+// Every coordinate finite and within +-kMaxCoordinate; the error names the first that is not.
+Result<void> CheckPositions(std::span<const Eigen::Vector3d> p_MV) {
+  // Branch-free, so that it vectorizes (a deformable object sends every vertex every step):
+  // |x| <= max is false for NaN and infinities too. Only when some value fails, find it.
+  bool all_fine = true;
+  for (const Eigen::Vector3d& p : p_MV) all_fine &= p.cwiseAbs().maxCoeff() <= kMaxCoordinate;
+  if (all_fine) return {};
+  for (size_t v = 0; v < p_MV.size(); ++v) {
+    if (!p_MV[v].allFinite()) {
+      return MakeError(ErrorCode::kInvalidArgument,
+                       "vertex " + std::to_string(v) + " is not finite");
+    }
+    if (p_MV[v].cwiseAbs().maxCoeff() > kMaxCoordinate) {
+      return MakeError(ErrorCode::kInvalidArgument,
+                       "vertex " + std::to_string(v) + " has a coordinate beyond +-" +
+                           FormatDouble(kMaxCoordinate) + " (" +
+                           FormatDouble(p_MV[v].cwiseAbs().maxCoeff()) + ")");
+    }
+  }
+  return {};
+}
+
+// CheckPose, and the translation within +-kMaxCoordinate.
+Result<void> CheckPoseInRange(const Pose& X_WO) {
+  if (auto valid = CheckPose(X_WO); !valid) return valid;
+  if (X_WO.translation.cwiseAbs().maxCoeff() > kMaxCoordinate) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "translation: a coordinate beyond +-" + FormatDouble(kMaxCoordinate) + " (" +
+                         FormatDouble(X_WO.translation.cwiseAbs().maxCoeff()) + ")");
+  }
+  return {};
 }
 
 }  // namespace
@@ -44,7 +80,10 @@ Result<void> SceneModel::Batch::Add(uint32_t id, const Mesh& mesh, Motion motion
   if (auto valid = ValidateMesh(mesh); !valid) {
     return MakeError(valid.error().code, "mesh: " + valid.error().message);
   }
-  if (auto valid = CheckPose(X_WO); !valid) return Under("pose", valid.error());
+  if (auto valid = CheckPositions(mesh.p_MV); !valid) {
+    return MakeError(valid.error().code, "mesh: " + valid.error().message);
+  }
+  if (auto valid = CheckPoseInRange(X_WO); !valid) return Under("pose", valid.error());
   // Budgets: counted as if every update of the batch so far were applied.
   const SceneLimits& limits = model_->limits_;
   if (objects_ + 1 > limits.max_objects) {
@@ -89,7 +128,7 @@ Result<void> SceneModel::Batch::SetPose(uint32_t id, const Pose& X_WO) {
     return MakeError(ErrorCode::kInvalidArgument,
                      "id: " + ObjectName(id) + " is static; static objects take no poses");
   }
-  return CheckPose(X_WO);
+  return CheckPoseInRange(X_WO);
 }
 
 Result<void> SceneModel::Batch::SetVertices(uint32_t id, std::span<const Eigen::Vector3d> p_MV) {
@@ -105,11 +144,8 @@ Result<void> SceneModel::Batch::SetVertices(uint32_t id, std::span<const Eigen::
                      "mesh: " + std::to_string(p_MV.size()) + " vertices given, " + ObjectName(id) +
                          " has " + std::to_string(object->num_vertices));
   }
-  for (size_t v = 0; v < p_MV.size(); ++v) {
-    if (!p_MV[v].allFinite()) {
-      return MakeError(ErrorCode::kInvalidArgument,
-                       "mesh: vertex " + std::to_string(v) + " is not finite");
-    }
+  if (auto valid = CheckPositions(p_MV); !valid) {
+    return MakeError(valid.error().code, "mesh: " + valid.error().message);
   }
   return {};
 }

@@ -1,7 +1,6 @@
 #include "far/model/step_request.h"
 
 #include <array>
-#include <charconv>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -56,13 +55,6 @@ Error Invalid(const std::string& field, const std::string& what) {
 
 std::string Range(int low, int high) {
   return "[" + std::to_string(low) + ", " + std::to_string(high) + "]";
-}
-
-// The shortest text that reads back as the same double ("0.1", "1e+13", "nan", "-inf").
-std::string FormatDouble(double value) {
-  char text[32];
-  const auto result = std::to_chars(text, text + sizeof(text), value);
-  return std::string(text, result.ptr);
 }
 
 template <typename Enum, size_t N>

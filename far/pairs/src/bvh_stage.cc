@@ -11,22 +11,23 @@
 #include "triangle_pair_test.h"
 
 // Why the descent never drops a pair the exact predicates accept. The exact stage tests the
-// world vertices p_WV = fl(X_WM p_MV). A node's box holds its triangles' p_MV exactly, so the
-// exactly transformed triangles lie in the node's box moved by X_WM (an oriented box). Each
-// rounded world vertex is within delta <= 8 eps (sqrt(3) |p_M| + |t|) of its exact image
-// (eps = 2^-53: three products and sums per coordinate). Two rounded triangles the predicates
-// accept are within D + err (TrianglesWithinDistance's bound, inside DistanceSlack), so their
-// exact images are within D + err + 2 delta, and so are the two oriented boxes: no separating
-// axis can show a larger gap. The test below compares the gap along the face axes of both boxes
-// with margin = slack + 2^-40 (the boxes' and poses' magnitudes), which also covers the
-// rounding of the relative pose and of the test itself (tens of eps of the same magnitudes,
-// far below 2^-40 = 8192 eps). The same holds for a triangle's slabs as axes: the triangle's
-// exact vertices project into [lo, hi] (relative to its leaf's center c, bounds rounded outward
-// to float) up to a few ulps of |p| + |c|, and an axis no longer than 1 shows no gap larger than
-// the distance. At two leaves a slab turned into the world (axis R_WM n, bounds shifted by that
-// axis . X_WM c) is compared with the other triangle's world corners, the very points the
-// predicates test: the rounding of the pose's product, a few eps of the same magnitudes, is
-// inside the margin too.
+// world vertices p_WV = flush(fl(X_WM p_MV)) (FlushTinyCoordinates, world_object.h). A node's
+// box holds its triangles' p_MV exactly, so the exactly transformed triangles lie in the node's
+// box moved by X_WM (an oriented box). Each world vertex is within delta <= 8 eps (sqrt(3) |p_M|
+// + |t|) + 2^-255 of its exact image (eps = 2^-53: three products and sums per coordinate; the
+// flush moves a point by less than 2^-255 along any unit axis). Two rounded triangles the
+// predicates accept are within D + err (TrianglesWithinDistance's bound, inside DistanceSlack),
+// so their exact images are within D + err + 2 delta, and so are the two oriented boxes: no
+// separating axis can show a larger gap. The test below compares the gap along the face axes of
+// both boxes with margin = slack + 2^-40 (the boxes' and poses' magnitudes) + 2^-246, which also
+// covers the rounding of the relative pose and of the test itself (tens of eps of the same
+// magnitudes, far below 2^-40 = 8192 eps) and the flush of both triangles (2^-254). The same
+// holds for a triangle's slabs as axes: the triangle's exact vertices project into [lo, hi]
+// (relative to its leaf's center c, bounds rounded outward to float) up to a few ulps of |p| +
+// |c|, and an axis no longer than 1 shows no gap larger than the distance. At two leaves a slab
+// turned into the world (axis R_WM n, bounds shifted by that axis . X_WM c) is compared with the
+// other triangle's world corners, the very points the predicates test: the rounding of the
+// pose's product, a few eps of the same magnitudes, is inside the margin too.
 
 namespace far {
 namespace {
@@ -75,7 +76,7 @@ PairFrame MakePairFrame(const BvhObject& a, const BvhObject& b, uint32_t ia, uin
   const double scale = 2 * (BoxMagnitude(a.bvh->nodes()[0]) + BoxMagnitude(b.bvh->nodes()[0])) +
                        a.X_WM.translation().cwiseAbs().maxCoeff() +
                        b.X_WM.translation().cwiseAbs().maxCoeff();
-  f.margin = slack + 0x1p-40 * scale;
+  f.margin = slack + 0x1p-40 * scale + 0x1p10 * kTinyWorldCoordinate;  // the last: 2^-246
   return f;
 }
 

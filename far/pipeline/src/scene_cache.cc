@@ -93,7 +93,7 @@ void SceneCache::RefreshWorld() {
     object.p_WV.resize(object.mesh.p_MV.size());
     object.box_W.setEmpty();
     for (size_t v = 0; v < object.p_WV.size(); ++v) {
-      object.p_WV[v] = object.X_WM * object.mesh.p_MV[v];
+      object.p_WV[v] = FlushTinyCoordinates(object.X_WM * object.mesh.p_MV[v]);
       object.box_W.extend(object.p_WV[v]);
     }
     object.world_dirty = false;

@@ -299,7 +299,7 @@ TEST_F(SceneIoTest, ReadWriteReadRoundTripWritesMissingMeshes) {
                   R"({"translation": [0.1, 0.2, 0.3], "rotation_wxyz": [0.5, 0.5, 0.5, 0.5]}},)") +
           kStatic + "," + kDeformable +
           R"(, {"id": 4, "mesh": "sub/quad.ply", "motion": "static"})",
-      R"({"poses": [{"id": 1, "translation": [1e-300, 1e300, 0.1]}], "vertices": [{"id": 3, "mesh": "tri_t1.obj"}]},)"
+      R"({"poses": [{"id": 1, "translation": [1e-300, -1e12, 0.1]}], "vertices": [{"id": 3, "mesh": "tri_t1.obj"}]},)"
       R"({"remove": [2], "add": [{"id": 7, "mesh": "sub/quad.ply", "motion": "rigid"}]})");
   WriteFile(dir_ / "scene.json", json);
   const Result<Scene> original = ReadScene(dir_ / "scene.json");
@@ -379,6 +379,17 @@ TEST_F(SceneIoTest, RejectsNumbersBeyondDouble) {
   EXPECT_TRUE(IsError(Parse(SceneJson(R"({"id": 1, "mesh": "tri.obj", "motion": "rigid",)"
                                       R"( "pose": {"translation": [1e999, 0, 0]}})")),
                       ErrorCode::kParseError, "number overflow"));
+}
+
+TEST_F(SceneIoTest, RejectsCoordinatesBeyondTheLimit) {
+  // Doubles, but beyond far::kMaxCoordinate: refused as the pipeline and the ring refuse them.
+  EXPECT_TRUE(IsError(Parse(SceneJson(R"({"id": 1, "mesh": "tri.obj", "motion": "rigid",)"
+                                      R"( "pose": {"translation": [0, 1e300, 0]}})")),
+                      ErrorCode::kInvalidArgument,
+                      "objects[0].pose.translation: a coordinate beyond +-1e+12 (1e+300)"));
+  EXPECT_TRUE(
+      IsError(Parse(SceneJson(kRigid, R"({"poses": [{"id": 1, "translation": [2e12, 0, 0]}]})")),
+              ErrorCode::kInvalidArgument, "a coordinate beyond +-1e+12 (2e+12)"));
 }
 
 TEST_F(SceneIoTest, SurvivesDeeplyNestedJson) {

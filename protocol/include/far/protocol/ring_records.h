@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 
+#include "far/model/limits.h"
 #include "far/model/mesh.h"
 #include "far/model/result.h"
 #include "far/model/scene_update.h"
@@ -35,9 +36,9 @@ namespace far::protocol {
 
 /// What the daemon accepts from a client's update ring.
 struct RingLimits {
-  uint32_t max_vertices = 1u << 22;   ///< per add_object / set_vertices record
-  uint32_t max_triangles = 1u << 22;  ///< per add_object record
-  double max_abs_coordinate = 1e12;   ///< |x|, |y|, |z| of positions and translations
+  uint32_t max_vertices = 1u << 22;            ///< per add_object / set_vertices record
+  uint32_t max_triangles = 1u << 22;           ///< per add_object record
+  double max_abs_coordinate = kMaxCoordinate;  ///< |x|, |y|, |z| of positions and translations
 };
 
 /// A record's update: far's own update types (far/model/scene_update.h).

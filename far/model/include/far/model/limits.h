@@ -22,6 +22,10 @@ inline constexpr int kMinResolution = 8;
 inline constexpr int kMaxResolution = 8192;
 /// Triangles per sub-object (k).
 inline constexpr int kMaxSubobjectSize = 1 << 20;
+/// Coordinates: every vertex position and translation has |x|, |y|, |z| <= this (world units), in
+/// scene files, the update ring and the pipeline alike. World coordinates then stay below
+/// 3e12 (|R p + t|), far inside the range where the exact predicates are exact (2^300).
+inline constexpr double kMaxCoordinate = 1e12;
 /// The largest distance D of a localized distance query (world units).
 inline constexpr double kMaxDistance = 1e12;
 

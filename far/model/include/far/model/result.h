@@ -33,6 +33,10 @@ struct Error {
 /// Returns "code: message".
 std::string ToString(const Error& error);
 
+/// For messages that quote a value: the shortest text that reads back as the same double ("0.1",
+/// "1e+13", "nan", "-inf").
+std::string FormatDouble(double value);
+
 /// The outcome of an operation on untrusted input: a value or an Error.
 template <typename T>
 class [[nodiscard]] Result {

@@ -17,7 +17,8 @@ namespace far {
 
 /// One object of a hierarchy query: its world view (id, world vertices, triangles), its
 /// hierarchy in its own frame M and the pose X_WM that places M in the world. The world
-/// vertices must be X_WM applied to the vertices the hierarchy was built or refit from.
+/// vertices must be X_WM applied to the vertices the hierarchy was built or refit from, then
+/// FlushTinyCoordinates (as the pipeline computes them).
 struct BvhObject {
   WorldObjectView world;
   const TriangleBvh* bvh = nullptr;  ///< aliased; not empty
