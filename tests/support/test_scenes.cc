@@ -9,7 +9,8 @@ WorldScene PlaceInWorld(const std::vector<SceneObject>& objects) {
     const Eigen::Isometry3d X = object.X_WO.ToIsometry();
     std::vector<Eigen::Vector3d> points;
     points.reserve(object.mesh.p_MV.size());
-    for (const auto& p : object.mesh.p_MV) points.push_back(X * p);
+    // As the pipeline places objects: tiny world coordinates are 0.
+    for (const auto& p : object.mesh.p_MV) points.push_back(FlushTinyCoordinates(X * p));
     world.p_WV.push_back(std::move(points));
   }
   for (size_t i = 0; i < objects.size(); ++i) {

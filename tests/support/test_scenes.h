@@ -9,6 +9,7 @@
 #include "far/model/scene.h"
 #include "far/pairs/exact_stage.h"
 #include "far/pairs/thread_pool.h"
+#include "far/pairs/world_object.h"
 #include "far/scenes/scenes.h"
 
 // Scene generators shared by the GPU tests and the studies in bench/. Every generator is
@@ -20,7 +21,8 @@ using scenes::LeavesScene;
 using scenes::RandomSoup;
 using scenes::SphereMesh;
 
-/// The objects of `scene` placed in the world: vertices moved by each pose.
+/// The objects of `scene` placed in the world: vertices moved by each pose (and flushed, as
+/// the pipeline places them: FlushTinyCoordinates).
 struct WorldScene {
   std::vector<std::vector<Eigen::Vector3d>> p_WV;
   std::vector<WorldObjectView> views;

@@ -14,13 +14,6 @@
 namespace far {
 namespace {
 
-Mesh Triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  Mesh mesh;
-  mesh.p_MV = {a, b, c};
-  mesh.triangles = {{0, 1, 2}};
-  return mesh;
-}
-
 std::unique_ptr<Pipeline> CpuPipeline() {
   PipelineOptions options;
   options.use_gl = false;
@@ -41,15 +34,15 @@ void ExpectRefused(const Result<void>& result, const std::string& field) {
 TEST(WorldCoordinatesTest, CoordinatesBeyondTheLimitAreRefusedInProcess) {
   auto pipeline = CpuPipeline();
   ASSERT_NE(pipeline, nullptr);
-  const Mesh at_limit = Triangle({-kMaxCoordinate, 0, 0}, {0, kMaxCoordinate, 0}, {0, 0, 1});
+  const Mesh at_limit{{{-kMaxCoordinate, 0, 0}, {0, kMaxCoordinate, 0}, {0, 0, 1}}, {{0, 1, 2}}};
   Pose far_out;
   far_out.translation = Eigen::Vector3d(0, 0, -kMaxCoordinate);
   ASSERT_TRUE(pipeline->AddObject(1, at_limit, Motion::kDeformable, far_out).ok());
 
   const double beyond = std::nextafter(kMaxCoordinate, 2 * kMaxCoordinate);
-  ExpectRefused(
-      pipeline->AddObject(2, Triangle({0, 0, 0}, {beyond, 0, 0}, {0, 1, 0}), Motion::kRigid, {}),
-      "mesh: vertex 1");
+  ExpectRefused(pipeline->AddObject(2, Mesh{{{0, 0, 0}, {beyond, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}},
+                                    Motion::kRigid, {}),
+                "mesh: vertex 1");
   Pose beyond_pose;
   beyond_pose.translation = Eigen::Vector3d(0, -beyond, 0);
   ExpectRefused(pipeline->AddObject(2, at_limit, Motion::kRigid, beyond_pose), "translation");
@@ -76,15 +69,17 @@ TEST(WorldCoordinatesTest, FlushTinyCoordinatesKeepsEverythingElse) {
 size_t Contacts(Method method, double shift_x) {
   auto pipeline = CpuPipeline();
   if (pipeline == nullptr) return SIZE_MAX;
-  EXPECT_TRUE(
-      pipeline->AddObject(1, Triangle({0, 0, -1}, {0, 2, -1}, {0, 1, 1}), Motion::kStatic, {})
-          .ok());
+  EXPECT_TRUE(pipeline
+                  ->AddObject(1, Mesh{{{0, 0, -1}, {0, 2, -1}, {0, 1, 1}}, {{0, 1, 2}}},
+                              Motion::kStatic, {})
+                  .ok());
   Pose turned;
   turned.rotation = Eigen::Quaterniond(1, 0, 0, 0x1p-401);  // unit: 1 + 2^-802 rounds to 1
   turned.translation = Eigen::Vector3d(shift_x, 0, 0);
-  EXPECT_TRUE(
-      pipeline->AddObject(2, Triangle({0, 1, 0}, {-1, 1, 0}, {-1, 1, 1}), Motion::kRigid, turned)
-          .ok());
+  EXPECT_TRUE(pipeline
+                  ->AddObject(2, Mesh{{{0, 1, 0}, {-1, 1, 0}, {-1, 1, 1}}, {{0, 1, 2}}},
+                              Motion::kRigid, turned)
+                  .ok());
   StepRequest request;
   request.method = method;
   auto result = pipeline->Step(request);
