@@ -2,6 +2,7 @@
 // contact of the brute-force reference, the two query mechanisms agree, CULLIDE can miss
 // where FAR does not, and the answer does not depend on where the scene is.
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <set>
 
@@ -196,6 +197,35 @@ TEST_F(PipelineCullingTest, HardCasesFarFromOriginAndTinyFeatures) {
         ExpectNoMiss(reference, Run(request),
                      "origin " + std::to_string(origin) + " seed " + std::to_string(seed));
       }
+    }
+  }
+}
+
+// `objects` scaled by 2^exponent about the origin (exact: vertices and translations times a
+// power of two).
+std::vector<SceneObject> ScaledBy(std::vector<SceneObject> objects, int exponent) {
+  for (SceneObject& object : objects) {
+    for (Eigen::Vector3d& p : object.mesh.p_MV) p = std::ldexp(1.0, exponent) * p;
+    object.X_WO.translation *= std::ldexp(1.0, exponent);
+  }
+  return objects;
+}
+
+TEST_F(PipelineCullingTest, ReliableMethodsAgreeAtTheEndsOfTheCoordinateRange) {
+  // Scenes 2^38 across (near the +-1e12 bound), and 2^-250 to 2^-262 across, where world
+  // coordinates below 2^-256 count as 0 (FlushTinyCoordinates): the GL methods cull in float
+  // from the meshes, the reference tests the flushed world vertices, and they must agree.
+  for (const int exponent : {38, -250, -254, -256, -262}) {
+    const auto objects = ScaledBy(RandomSoup(7, 5, 12, 1.0, 0.4), exponent);
+    Load(objects);
+    const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+    EXPECT_GT(reference.contacts.size(), 0u);
+    StepRequest request;
+    request.resolution = 256;
+    for (Method method :
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
+      request.method = method;
+      ExpectNoMiss(reference, Run(request), "scale 2^" + std::to_string(exponent));
     }
   }
 }
