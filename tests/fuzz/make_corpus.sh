@@ -5,8 +5,8 @@
 # make_seeds.cc), and the daemon configurations of tests/server/daemon_config_test.cc.
 #   bash tests/fuzz/make_corpus.sh [build folder, default build/fuzz]
 # bvh_reference's seeds (small scenes: a crossing, a coplanar overlap, a corner carried through
-# rotated poses far from the origin and at a tiny scale, a distance query on refit trees) are
-# written below as bytes.
+# rotated poses far from the origin and at a tiny scale, a distance query on refit trees) and
+# cpu_methods' (a few steps of updates) are written below as bytes.
 # It overwrites the seeds it writes and deletes nothing: the inputs a long run added (named by
 # their SHA-1, such as daemon_datagram's) stay. Seeds are named after what they hold; keep the
 # total small (well under 1 MB). Inputs that once crashed a target
@@ -18,7 +18,7 @@ out=tests/fuzz/corpus
 data=tests/data/scenes/example
 
 cmake --build "$build" --target far_fuzz_make_seeds >/dev/null
-mkdir -p "$out"/{obj_reader,ply_reader,stl_reader,scene_reader,daemon_config,bvh_reference}
+mkdir -p "$out"/{obj_reader,ply_reader,stl_reader,scene_reader,daemon_config,bvh_reference,cpu_methods}
 "$build"/tests/fuzz/far_fuzz_make_seeds "$out"
 
 cp "$data"/*.obj "$out"/obj_reader/
@@ -43,27 +43,41 @@ configs=(
 )
 for i in "${!configs[@]}"; do printf '%s\n' "${configs[$i]}" >"$out/daemon_config/config_$i.json"; done
 
-# Seeds of bvh_reference (layout at the top of bvh_reference_fuzzer.cc), as hex bytes.
-bvh_seed() {
-  printf '%b' "$(echo "$2" | sed 's/ //g; s/\([0-9a-f][0-9a-f]\)/\\x\1/g')" >"$out/bvh_reference/$1"
+# hex_seed TARGET NAME HEX: writes the bytes HEX (spaces ignored) as seed NAME of TARGET.
+hex_seed() {
+  printf '%b' "$(echo "$3" | sed 's/ //g; s/\([0-9a-f][0-9a-f]\)/\\x\1/g')" >"$out/$1/$2"
 }
+
+# Seeds of bvh_reference (layout at the top of bvh_reference_fuzzer.cc).
 #        flags e d n | per object: v t pose quaternion translation | corners (kind xyz) | triangle
-bvh_seed crossing_at_grid_points \
+hex_seed bvh_reference crossing_at_grid_points \
   "00 00 00 00  00 00 01 00000000 000000 00000000 00100000 00001000 000102 \
                 00 00 01 00000000 000000 000404f8 00060408 00040608 000102"
-bvh_seed coplanar_overlap \
+hex_seed bvh_reference coplanar_overlap \
   "00 00 00 00  00 00 01 00000000 000000 00000000 00100000 00001000 000102 \
                 00 00 01 00000000 000000 00040400 00140400 00041400 000102"
-bvh_seed corner_carried_through_rotated_poses_at_1e6 \
+hex_seed bvh_reference corner_carried_through_rotated_poses_at_1e6 \
   "20 00 00 00  00 00 00 0a03fc07 010203 00000000 00100000 00001000 000102 \
                 00 00 00 05fe0901 000000 80       00080810 00f80810 000102"
-bvh_seed corner_carried_through_rotated_poses_near_2^-256 \
+hex_seed bvh_reference corner_carried_through_rotated_poses_near_2^-256 \
   "00 be 00 00  00 00 00 0a03fc07 010203 00000000 00100000 00001000 000102 \
                 00 00 00 05fe0901 000000 80       00080810 00f80810 000102"
-bvh_seed distance_refit_three_objects \
+hex_seed bvh_reference distance_refit_three_objects \
   "03 02 08 01  00 00 01 00000000 000000 00000000 00100000 00001000 000102 \
                 00 00 01 00000000 000001 00000000 00100000 00001000 000102 \
                 00 00 00 01010000 000000 000000f8 000800f8 000008f8 000102"
+
+# Seeds of cpu_methods (layout at the top of cpu_methods_fuzzer.cc).
+#        flags e d n | per object: motion v t quaternion translation | corners | triangle
+#        | per later step, per object: change and its pose or corners
+hex_seed cpu_methods static_and_rigid_crossing_then_moved_and_readded \
+  "06 00 00 00  00 00 00 00000000 000000 000000 100000 001000 000102 \
+                01 00 00 00000000 000000 0404f8 040408 080408 000102 \
+                00 01 0a03fc07 010203  03 00  00 02"
+hex_seed cpu_methods deformable_and_rigid_distance_near_2^-256 \
+  "03 be 10 00  02 00 00 00000000 000000 000000 100000 001000 000102 \
+                01 00 00 05fe0901 000001 000000 100000 001000 000102 \
+                02 000001 100001 001001  01 00000000 000002"
 
 for dir in tests/fuzz/regressions/*/; do
   target=$(basename "$dir")

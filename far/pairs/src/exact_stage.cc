@@ -280,4 +280,10 @@ ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
   return Merge(partials, pairs_considered, &stopper);
 }
 
+double CullSlack(double max_distance, double magnitude) {
+  // DistanceSlack covers the predicate; 2^-50 = 8 ulps of (magnitude + limit) covers rounding
+  // both sides of a box grown by it, with room to spare.
+  return DistanceSlack(max_distance, magnitude) + 0x1p-50 * (magnitude + max_distance);
+}
+
 }  // namespace far

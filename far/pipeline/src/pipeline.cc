@@ -108,11 +108,11 @@ void SortUnique(std::vector<uint32_t>& values) {
 }
 
 // The AABB baseline's primitive PCS: per object of a candidate pair, the triangles whose box
-// overlaps the partner object's box grown by the query distance D. A large scene takes seconds
+// overlaps the partner object's box grown by `margin` (CullMargin). A large scene takes seconds
 // here: `control` is checked every kTrianglesPerCheck triangles.
 Result<std::vector<std::vector<uint32_t>>> TrianglesInPartnerBoxes(
     std::span<const CachedObject* const> objects, std::span<const ObjectPair> pairs,
-    const std::map<uint32_t, size_t>& index_of, double distance, const StepControl& control) {
+    const std::map<uint32_t, size_t>& index_of, double margin, const StepControl& control) {
   constexpr size_t kTrianglesPerCheck = 1 << 16;
   std::vector<std::vector<uint32_t>> subsets(objects.size());
   size_t unchecked = 0;
@@ -120,8 +120,8 @@ Result<std::vector<std::vector<uint32_t>>> TrianglesInPartnerBoxes(
     const size_t a = index_of.at(pair.object_a), b = index_of.at(pair.object_b);
     for (auto [self, other] : {std::make_pair(a, b), std::make_pair(b, a)}) {
       Eigen::AlignedBox3d partner = objects[other]->box_W;
-      partner.min().array() -= distance;
-      partner.max().array() += distance;
+      partner.min().array() -= margin;
+      partner.max().array() += margin;
       const CachedObject& object = *objects[self];
       for (size_t t = 0; t < object.mesh.triangles.size(); ++t) {
         if (++unchecked == kTrianglesPerCheck) {
@@ -260,14 +260,28 @@ Result<void> Pipeline::Impl::CullObjectsStage(StepState& state) {
   return {};
 }
 
-// Sweep-and-prune on the PCS objects' AABBs (margin D for distance queries).
+// How much the CPU culls (sweep-and-prune, the aabb method's triangle boxes) grow boxes: 0 for
+// contacts (closed boxes that touch overlap), CullSlack for a distance query, so that they drop
+// no pair the exact tests would report.
+double CullMargin(const StepState& state) {
+  if (!state.request.distance) return 0.0;
+  double magnitude = 0;
+  for (const CachedObject* object : state.objects) {
+    if (object->box_W.isEmpty()) continue;
+    magnitude = std::max({magnitude, object->box_W.min().cwiseAbs().maxCoeff(),
+                          object->box_W.max().cwiseAbs().maxCoeff()});
+  }
+  return CullSlack(*state.request.distance, magnitude);
+}
+
+// Sweep-and-prune on the PCS objects' AABBs (margin CullMargin for distance queries).
 void Pipeline::Impl::PairObjectsStage(StepState& state) {
   std::vector<IdBox> id_boxes;
   for (size_t i = 0; i < state.objects.size(); ++i) {
     if (state.object_alive[i]) id_boxes.push_back({state.objects[i]->id, state.objects[i]->box_W});
   }
   StepResult& result = state.result;
-  result.object_pairs = sap.Update(id_boxes, state.request.distance.value_or(0.0));
+  result.object_pairs = sap.Update(id_boxes, CullMargin(state));
   result.stats.object_pairs = static_cast<int64_t>(result.object_pairs.size());
   if (IsCpuCulling(state.request.method)) {
     // I-COLLIDE: the PCS is the set of objects in some overlapping pair.
@@ -303,7 +317,7 @@ Result<void> Pipeline::Impl::CullPrimitivesStage(StepState& state) {
     state.subsets = std::move(*subsets);
   } else {
     auto subsets = TrianglesInPartnerBoxes(state.objects, result.object_pairs, index_of,
-                                           state.request.distance.value_or(0.0), state.control);
+                                           CullMargin(state), state.control);
     if (!subsets) return subsets.error();
     state.subsets = std::move(*subsets);
   }

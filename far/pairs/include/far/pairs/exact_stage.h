@@ -42,6 +42,14 @@ struct ExactResult {
 /// @pre every id in object_pairs is in objects; subsets hold valid triangle indices.
 ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool);
 
+/// The margin a cull in front of the exact tests must grow boxes by for a distance query with
+/// limit `max_distance`, where every world coordinate is at most `magnitude` in absolute value:
+/// TrianglesWithinDistance accepts pairs up to the limit plus its error bound (a few hundred
+/// ulps of the coordinates), and a cull that grew boxes by the limit alone would drop those
+/// pairs, which the exact stage and the reference report. Also covers the rounding of growing a
+/// box by it (a few ulps of the coordinates and of the limit).
+double CullSlack(double max_distance, double magnitude);
+
 /// The brute-force reference: every cross-object triangle pair (AABB prefilter only). The
 /// oracle every culling path is tested against.
 ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
