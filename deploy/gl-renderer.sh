@@ -12,7 +12,9 @@ platform=$1
 shift
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
-"$@" --lcm-url memq:// --gl-platform "$platform" --log-level info >"$log" 2>&1 &
+# A name of its own (so its own socket): a daemon already serving, or another check started
+# beside this one (ctest -j), holds the default name's socket.
+"$@" --name "glr-$$" --lcm-url memq:// --gl-platform "$platform" --log-level info >"$log" 2>&1 &
 pid=$!
 for _ in $(seq 300); do
   grep -q event=daemon_ready "$log" && break
