@@ -166,13 +166,16 @@ void SocketServer::Run(const std::atomic<bool>& stop) {
       ids.push_back(id);
     }
     poll(fds.data(), fds.size(), 100);
+    // fds[1 + i] is pending_[i] only for the connections polled: those accepted now come after
+    // them, and wait for their first message until the next turn.
+    const size_t polled = pending_.size();
     if (fds[0].revents & POLLIN) AcceptAll();
     // Connections that spoke (or hung up) are done after their handshake; silent ones expire.
     std::vector<Pending> waiting;
     const auto now = Clock::now();
     for (size_t i = 0; i < pending_.size(); ++i) {
       Pending& p = pending_[i];
-      if (1 + i < fds.size() && fds[1 + i].revents != 0) {
+      if (i < polled && fds[1 + i].revents != 0) {
         Handshake(p);
       } else if (now >= p.deadline) {
         stats_.CountRejected("timeout", "a local connection said nothing");
