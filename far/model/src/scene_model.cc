@@ -1,7 +1,6 @@
 #include "far/model/scene_model.h"
 
 #include <algorithm>
-#include <cmath>
 #include <string>
 
 #include "far/model/limits.h"
