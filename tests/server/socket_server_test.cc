@@ -49,11 +49,12 @@ class SocketServerTest : public ::testing::Test {
     bus_ = std::move(*bus);
     sessions_ = std::make_unique<SessionRegistry>(config_);
     replier_ = std::make_unique<Replier>(*bus_, stats_);
-    workers_ = std::make_unique<WorkerContext>(
-        config_, *replier_, stats_, budget_, /*use_gl=*/false,
-        [this](int64_t id, const std::string&) { sessions_->Close(id); });
-    status_ = std::make_unique<StatusSources>(config_, stats_, *sessions_, "none", "none",
-                                              std::chrono::steady_clock::now());
+    // Aggregates, brace-initialized (clang does not build them from parentheses).
+    workers_.reset(
+        new WorkerContext{config_, *replier_, stats_, budget_, /*use_gl=*/false,
+                          [this](int64_t id, const std::string&) { sessions_->Close(id); }});
+    status_.reset(new StatusSources{config_, stats_, *sessions_, "none", "none",
+                                    std::chrono::steady_clock::now()});
     auto listener = protocol::LocalListener::Listen(SocketPathOf(config_));
     EXPECT_TRUE(listener.ok());
     server_ = std::make_unique<SocketServer>(std::move(*listener), config_, *sessions_, stats_,
