@@ -66,6 +66,7 @@ struct StepState {
   std::vector<const CachedObject*> objects;    // id order; index i is the object's group
   std::vector<uint8_t> object_alive;           // per object: in the object PCS
   std::vector<std::vector<uint32_t>> subsets;  // per object: its triangles in the primitive PCS
+  double cull_margin = 0;                      // CullMargin, once the world boxes are known
   StepResult result;
 };
 
@@ -260,6 +261,8 @@ Result<void> Pipeline::Impl::CullObjectsStage(StepState& state) {
   return {};
 }
 
+namespace {
+
 // How much the CPU culls (sweep-and-prune, the aabb method's triangle boxes) grow boxes: 0 for
 // contacts (closed boxes that touch overlap), CullSlack for a distance query, so that they drop
 // no pair the exact tests would report.
@@ -274,6 +277,8 @@ double CullMargin(const StepState& state) {
   return CullSlack(*state.request.distance, magnitude);
 }
 
+}  // namespace
+
 // Sweep-and-prune on the PCS objects' AABBs (margin CullMargin for distance queries).
 void Pipeline::Impl::PairObjectsStage(StepState& state) {
   std::vector<IdBox> id_boxes;
@@ -281,7 +286,7 @@ void Pipeline::Impl::PairObjectsStage(StepState& state) {
     if (state.object_alive[i]) id_boxes.push_back({state.objects[i]->id, state.objects[i]->box_W});
   }
   StepResult& result = state.result;
-  result.object_pairs = sap.Update(id_boxes, CullMargin(state));
+  result.object_pairs = sap.Update(id_boxes, state.cull_margin);
   result.stats.object_pairs = static_cast<int64_t>(result.object_pairs.size());
   if (IsCpuCulling(state.request.method)) {
     // I-COLLIDE: the PCS is the set of objects in some overlapping pair.
@@ -317,7 +322,7 @@ Result<void> Pipeline::Impl::CullPrimitivesStage(StepState& state) {
     state.subsets = std::move(*subsets);
   } else {
     auto subsets = TrianglesInPartnerBoxes(state.objects, result.object_pairs, index_of,
-                                           CullMargin(state), state.control);
+                                           state.cull_margin, state.control);
     if (!subsets) return subsets.error();
     state.subsets = std::move(*subsets);
   }
@@ -432,7 +437,7 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request, const StepCo
                                                   "' needs the GPU, and this pipeline has no GL "
                                                   "context");
   }
-  StepState state{request, control, {}, {}, {}, {}};
+  StepState state{request, control, {}, {}, {}, 0.0, {}};
   state.result.stats.method = ConfigName(request);
   StageTimer timer(state.result.stats);
   if (auto ran = RunStages(state, timer); !ran) return ran.error();
@@ -455,6 +460,7 @@ Result<void> Pipeline::Impl::RunStages(StepState& state, StageTimer& timer) {
   auto ok = stage("update", [&]() -> Result<void> {
     cache.RefreshWorld();
     state.objects = cache.Objects();
+    state.cull_margin = CullMargin(state);
     return {};
   });
   if (!ok) return ok;
