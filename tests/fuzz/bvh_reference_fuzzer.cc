@@ -31,12 +31,11 @@
 // bvh's candidates; nothing stops early.
 
 #include <algorithm>
-#include <array>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "fuzz_grid.h"
 #include "fuzz_input.h"
 #include <Eigen/Geometry>
 
@@ -48,8 +47,6 @@
 namespace far::fuzz {
 namespace {
 
-constexpr std::array<double, 8> kShifts = {0, 1e3, -3e4, 1e5, 1e6, -1e6, 1e7, 0.5};
-
 struct Object {
   uint32_t id = 0;
   std::vector<Eigen::Vector3d> p_MV, p_WV;
@@ -57,11 +54,6 @@ struct Object {
   Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
   TriangleBvh bvh;
 };
-
-Eigen::Vector3d GridPoint(FuzzInput& in, double step) {
-  const double x = in.Take<int8_t>(), y = in.Take<int8_t>(), z = in.Take<int8_t>();
-  return Eigen::Vector3d(x, y, z) * step;
-}
 
 Object ReadObject(FuzzInput& in, uint32_t id, double step, const Eigen::Vector3d& shift,
                   const std::vector<Object>& earlier) {
@@ -99,12 +91,6 @@ Object ReadObject(FuzzInput& in, uint32_t id, double step, const Eigen::Vector3d
   return object;
 }
 
-std::vector<ContactPair> PairsOf(const std::vector<DistancePair>& list) {
-  std::vector<ContactPair> pairs;
-  for (const DistancePair& d : list) pairs.push_back(d.pair);
-  return pairs;
-}
-
 }  // namespace
 }  // namespace far::fuzz
 
@@ -115,14 +101,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   FuzzInput in(data, size);
   const uint8_t flags = in.Take<uint8_t>();
   const int exponent = in.Take<int8_t>();
-  const double scale =
-      std::ldexp(1.0, exponent < -64 ? exponent - 188 : std::clamp(exponent, -20, 10));
+  const double scale = GridScale(exponent);
   const double distance = scale * in.Take<uint8_t>() / 64;
   const std::optional<double> max_distance =
       flags & 1 ? std::optional<double>(distance) : std::nullopt;
   const bool refit = flags & 2;
   ThreadPool& pool = flags & 4 ? one : two;
-  const Eigen::Vector3d shift = kShifts[(flags >> 3) & 7] * Eigen::Vector3d(1, -0.5, 0.25);
+  const Eigen::Vector3d shift = GridShift((flags >> 3) & 7);
   const int count = 2 + in.Take<uint8_t>() % 3;
 
   std::vector<Object> objects;
