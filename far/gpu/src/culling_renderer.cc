@@ -26,17 +26,6 @@ struct ObjectData {
 };
 static_assert(sizeof(ObjectData) == 80);
 
-// Bound on the float32 rounding of one object's corners on the GPU, in world units: the corner
-// in frame A (|x| <= local_extent + r), the matrix entries rounded to float (relative 2^-24 on
-// rotation and translation), and about ten float operations per corner. 16 ulps covers them
-// with room; it is many orders of magnitude below the pixel size in practice.
-double FloatRoundingBound(const ViewObject& object, const Projection& projection) {
-  const double kUlp = std::ldexp(1.0, -24);
-  const double translation = (object.X_WA.translation() - projection.center_W).norm();
-  const double half_extent = 0.5 * projection.bounds_W.sizes().maxCoeff();
-  return 16.0 * kUlp * (object.local_extent + projection.radius + translation + half_extent);
-}
-
 // Builds the object's anchor-to-clip matrix for a view along `axis`: the axis permutation,
 // the orthographic scale of the projection bounds, and depth mapped to [0, 1]
 // (glClipControl ZERO_TO_ONE). Composed in double, rounded to float once.
@@ -64,6 +53,16 @@ std::array<float, 3> ToFloat(const Eigen::Vector3d& v) {
 }
 
 }  // namespace
+
+// The corner in frame A (|x| <= local_extent + r), the matrix entries rounded to float
+// (relative 2^-24 on rotation and translation), and about ten float operations per corner:
+// 16 ulps covers them with room.
+double FloatRoundingBound(const ViewObject& object, const Projection& projection) {
+  const double kUlp = std::ldexp(1.0, -24);
+  const double translation = (object.X_WA.translation() - projection.center_W).norm();
+  const double half_extent = 0.5 * projection.bounds_W.sizes().maxCoeff();
+  return 16.0 * kUlp * (object.local_extent + projection.radius + translation + half_extent);
+}
 
 std::string CurrentGlRenderer() {
   if (epoxy_egl_version(eglGetCurrentDisplay()) == 0 || eglGetCurrentContext() == EGL_NO_CONTEXT)

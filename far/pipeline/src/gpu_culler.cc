@@ -1,6 +1,7 @@
 #include "gpu_culler.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "far/offsets/bounding_offset.h"
@@ -104,6 +105,33 @@ void AddView(const Projection& projection, const Eigen::AlignedBox3d& primitive_
   }
 }
 
+// The projection for primitives within `bounds` whose views also hold every drawn piece as
+// the GPU grows it: by radius_scale (r + its object's FloatRoundingBound), reaching up to
+// sqrt(3) times that along a world axis when tilted. That float margin follows the object's
+// extent and distance from the view, not the view: around a tiny live region of a big object
+// it can be a million views wide, and llvmpipe's clipper, interpolating such a primitive in
+// float, put it off the viewport (a contact of two 1e-12 triangles on an object 1e3 across
+// was lost). Growing the view by the margin keeps every piece within a few view sizes. The
+// margin changes by 16 ulps of the growth, so doubling it settles in one more round.
+Projection ProjectionHoldingMargins(const Eigen::AlignedBox3d& bounds, const RasterFormat& raster,
+                                    double distance, std::span<const ViewObject> drawn,
+                                    double radius_scale) {
+  Projection projection = ComputeProjection(bounds, raster, distance);
+  double grown = 0;
+  for (int round = 0; round < 8; ++round) {
+    double margin = 0;
+    for (const ViewObject& object : drawn)
+      margin = std::max(margin, FloatRoundingBound(object, projection));
+    const double reach = std::sqrt(3.0) * radius_scale * margin;
+    if (reach <= grown) break;
+    grown = 2 * reach;
+    projection = ComputeProjection(
+        Eigen::AlignedBox3d(bounds.min().array() - grown, bounds.max().array() + grown), raster,
+        distance);
+  }
+  return projection;
+}
+
 // The level's certificate goes with the step's stats when a view was rendered (with fewer than
 // two groups left nothing needs drawing: nothing can touch).
 void RecordLevel(const LevelCertificate& level, StepStats& stats, double& radius) {
@@ -189,9 +217,9 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
   for (int axis = 0; axis < 3; ++axis) {
     // A primitive can only be kept by another group: stop when one group or none is left
     // (each view object is its own group).
-    int live_groups = 0;
     Eigen::AlignedBox3d bounds;
     int live = 0;
+    std::vector<ViewObject> drawn;  // the objects with a live primitive (each its own group)
     for (const ViewObject& object : view_objects) {
       const int live_before = live;
       for (uint32_t j = 0; j < PrimitivesOf(object, k); ++j) {
@@ -199,22 +227,22 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
         bounds.extend(primitive_boxes_W[object.first_primitive + j]);
         ++live;
       }
-      live_groups += live > live_before;
+      if (live > live_before) drawn.push_back(object);
     }
-    if (live_groups < 2) {
+    if (drawn.size() < 2) {
       std::fill(alive.begin(), alive.end(), 0);
       return {};
     }
     AxisView view;
     view.axis = axis;
-    view.projection =
-        ComputeProjection(bounds, entry.renderer->raster(), request.distance.value_or(0.0));
+    view.radius_scale = proxies ? std::sqrt(3.0) : 1.0;
+    view.projection = ProjectionHoldingMargins(
+        bounds, entry.renderer->raster(), request.distance.value_or(0.0), drawn, view.radius_scale);
     view.objects = view_objects;
     view.triangles_per_primitive = k;
     view.num_primitives = static_cast<int>(alive.size());
     view.alive = alive;
     view.sets = sets;
-    view.radius_scale = proxies ? std::sqrt(3.0) : 1.0;
     RenderCounters counters;
     auto stays = entry.renderer->RenderView(view, request.mechanism, &counters);
     if (!stays.ok()) return stays.error();

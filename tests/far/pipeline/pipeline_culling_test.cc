@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <set>
+#include <sstream>
 
 #include "hard_cases.h"
 #include "test_scenes.h"
@@ -290,6 +291,58 @@ TEST_F(PipelineCullingTest, OneHugeObjectWithManyTinyOnes) {
       request.resolution = resolution;
       ExpectNoMiss(reference, Run(request),
                    std::string(ToString(method)) + " res " + std::to_string(resolution));
+    }
+  }
+}
+
+// Two tiny triangles touching at the origin, the first on an object that also holds a big
+// triangle `span` away, both turned alike (the contact stays; every piece is tilted against
+// the view axes).
+std::vector<SceneObject> TinyContactOfABigObject(double tiny, double span) {
+  std::vector<SceneObject> objects(2);
+  objects[0].id = 1;
+  objects[0].mesh.p_MV = {{0, 0, 0},    {tiny, 0, 0},    {0, tiny, 0},
+                          {span, 0, 0}, {span, span, 0}, {span, 0, span}};
+  objects[0].mesh.triangles = {{0, 1, 2}, {3, 4, 5}};
+  objects[1].id = 2;
+  objects[1].mesh.p_MV = {{0, 0, 0}, {0, 0, tiny}, {-tiny, 0, tiny}};
+  objects[1].mesh.triangles = {{0, 1, 2}};
+  for (auto& object : objects) object.X_WO.rotation = Eigen::Quaterniond(-15, 9, 2, 0).normalized();
+  return objects;
+}
+
+// At the sub-object level only the two tiny triangles are live, so the views are about their
+// size while each object's float rounding margin follows its own size: before the views grew
+// to hold it, a 1e-12 contact on an object 1e3 across was lost on llvmpipe (the margin made the
+// pieces about 1e9 views wide, and the clipper put them off the viewport).
+TEST_F(PipelineCullingTest, TinyContactOfABigTiltedObject) {
+  for (double tiny : {1e-3, 1e-6, 1e-9, 1e-12, 1e-15}) {
+    for (double span : {1.0, 1e3, 1e6}) {
+      const auto objects = TinyContactOfABigObject(tiny, span);
+      Load(objects);
+      for (std::optional<double> distance : {std::optional<double>(), std::optional(tiny)}) {
+        const ExactResult reference = ReferenceAnswer(objects, distance, pool_);
+        ASSERT_EQ(reference.contacts.size(), 1u);
+        for (QueryMechanism mechanism :
+             {QueryMechanism::kIdBuffer, QueryMechanism::kOcclusionQuery}) {
+          for (Method method : {Method::kFar, Method::kFarExactOffset}) {
+            StepRequest request;
+            request.method = method;
+            request.mechanism = mechanism;
+            request.resolution = 64;
+            request.distance = distance;
+            if (distance) request.output = Output::kDistancePairs;
+            const StepResult result = Run(request);
+            std::ostringstream what;
+            what << ToString(method) << " " << ToString(mechanism) << " tiny " << tiny << " span "
+                 << span << (distance ? " with distance" : "");
+            ExpectNoMiss(reference, result, what.str());
+            if (distance) {
+              EXPECT_EQ(result.distance_pairs, reference.distance_pairs) << what.str();
+            }
+          }
+        }
+      }
     }
   }
 }

@@ -65,6 +65,12 @@ struct ViewObject {
   double local_extent = 0;  ///< max |coordinate| of its instances in frame A
 };
 
+/// Bound on the float32 rounding of `object`'s pieces as the GPU draws them in a view of
+/// `projection`, in world units: the renderer grows every offset by it on top of r. It scales
+/// with the object's extent and its distance from the view's center (16 ulps of their sum),
+/// not with the view, so a small view of a big object must be grown to hold it (GpuCuller).
+double FloatRoundingBound(const ViewObject& object, const Projection& projection);
+
 /// One orthographic view along `axis` of the objects, in the given draw order.
 struct AxisView {
   int axis = 2;  ///< view direction: 0 = X (screen Y,Z), 1 = Y (screen Z,X), 2 = Z (screen X,Y)
