@@ -18,7 +18,7 @@ out=tests/fuzz/corpus
 data=tests/data/scenes/example
 
 cmake --build "$build" --target far_fuzz_make_seeds >/dev/null
-mkdir -p "$out"/{obj_reader,ply_reader,stl_reader,scene_reader,daemon_config,bvh_reference,cpu_methods}
+mkdir -p "$out"/{obj_reader,ply_reader,stl_reader,scene_reader,daemon_config,bvh_reference,cpu_methods,gl_methods}
 "$build"/tests/fuzz/far_fuzz_make_seeds "$out"
 
 cp "$data"/*.obj "$out"/obj_reader/
@@ -78,6 +78,28 @@ hex_seed cpu_methods deformable_and_rigid_distance_near_2^-256 \
   "03 be 10 00  02 00 00 00000000 000000 000000 100000 001000 000102 \
                 01 00 00 05fe0901 000001 000000 100000 001000 000102 \
                 02 000001 100001 001001  01 00000000 000002"
+
+# Seeds of gl_methods: a culling byte, a resolution byte and a sub-object byte (layout at the
+# top of gl_methods_fuzzer.cc), then a cpu_methods scene.
+#        culling res k | flags e d n | per object: ... as cpu_methods
+hex_seed gl_methods far_id_buffer_depth16_static_and_rigid_crossing \
+  "00 03 00  06 00 00 00  00 00 00 00000000 000000 000000 100000 001000 000102 \
+                          01 00 00 00000000 000000 0404f8 040408 080408 000102 \
+                          00 01 0a03fc07 010203  03 00  00 02"
+hex_seed gl_methods far_exact_offset_queries_depth24_distance_near_2^-256 \
+  "07 02 01  03 be 10 00  02 00 00 00000000 000000 000000 100000 001000 000102 \
+                          01 00 00 05fe0901 000001 000000 100000 001000 000102 \
+                          02 000001 100001 001001  01 00000000 000002"
+hex_seed gl_methods far_depth32f_shifted_1e6_static_and_rigid_crossing \
+  "48 05 03  06 00 00 00  00 00 00 00000000 000000 000000 100000 001000 000102 \
+                          01 00 00 00000000 000000 0404f8 040408 080408 000102 \
+                          00 01 0a03fc07 010203  03 00  00 02"
+# Points at the origin on a tilted object whose unused vertices reach 2 units away: the
+# object's float margin dwarfed the view (fixed in gpu_culler.cc, ProjectionHoldingMargins).
+hex_seed gl_methods far_tilted_points_beside_unused_vertices \
+  "00 00 00  01 01 00 00  00 03 06 f1090200 000000 000000 000000 000000 000010 000000 1000cd \
+                          000102 020000 040101 000000 000000 020000 000000 \
+                          00 00 00 00000000 000000 000000 000000 000000 000102"
 
 for dir in tests/fuzz/regressions/*/; do
   target=$(basename "$dir")
