@@ -109,7 +109,7 @@ void AddView(const Projection& projection, const Eigen::AlignedBox3d& primitive_
 // the GPU grows it: by radius_scale (r + its object's FloatRoundingBound), reaching up to
 // sqrt(3) times that along a world axis when tilted. That float margin follows the object's
 // extent and distance from the view, not the view: around a tiny live region of a big object
-// it can be a million views wide, and llvmpipe's clipper, interpolating such a primitive in
+// it can be a billion views wide, and llvmpipe's clipper, interpolating such a primitive in
 // float, put it off the viewport (a contact of two 1e-12 triangles on an object 1e3 across
 // was lost). Growing the view by the margin keeps every piece within a few view sizes. The
 // margin changes by 16 ulps of the growth, so doubling it settles in one more round.
