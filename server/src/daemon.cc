@@ -116,8 +116,7 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   d.status = std::make_unique<StatusSources>(
       StatusSources{d.config, d.stats, d.sessions, d.renderer, device, d.created});
   SocketServer server(std::move(d.listener), d.config, d.sessions, d.stats, *d.workers, *d.status);
-  std::atomic<bool> stop_socket{false};
-  std::thread socket_thread([&] { server.Run(stop_socket); });
+  // Both lines come before the socket answers: whoever finds the daemon ready finds them logged.
   spdlog::info(
       "event=daemon_ready name={} socket={} gl_renderer=\"{}\" gl_device=\"{}\" "
       "lcm_url={} max_sessions={}",
@@ -130,11 +129,16 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
         "them\"",
         d.config.lcm_url);
   }
+  std::atomic<bool> stop_socket{false};
+  std::thread socket_thread([&] { server.Run(stop_socket); });
   d.ServeMessages(stop_flag);
-  spdlog::info("event=daemon_stopping sessions={}", d.sessions.size());
-  d.CloseEverySession();
+  // The socket thread stops first, so that no session opens while every session closes: one
+  // opened then would get a worker after the registry had reaped the rest. The connections
+  // close with `server`, after their clients have been told.
   stop_socket = true;
   socket_thread.join();
+  spdlog::info("event=daemon_stopping sessions={}", d.sessions.size());
+  d.CloseEverySession();
   spdlog::info("event=daemon_stopped steps_total={}", d.stats.steps_total());
   return {};
 }

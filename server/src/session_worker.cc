@@ -207,6 +207,16 @@ class SessionWorker {
 }  // namespace
 
 void StartSessionWorker(const std::shared_ptr<Session>& session, const WorkerContext& context) {
+  // Under the session's mutex, which the worker takes before it can end and a closer takes to
+  // close it: worker_done then means that `worker` is assigned, and ReapWorkers never joins a
+  // thread still being moved in.
+  std::lock_guard lock(session->mutex);
+  if (session->closing) {
+    // Closed before it started (a shutdown), perhaps reaped already: a thread started now would
+    // outlive the registry. Nothing runs; the segment goes with the last reference.
+    session->worker_done = true;
+    return;
+  }
   session->worker = std::thread([session, &context] { SessionWorker(session, context).Run(); });
 }
 

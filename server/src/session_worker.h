@@ -30,7 +30,8 @@ struct WorkerContext {
 /// publishes statuses and the reply. The session's pipeline (with its own GL context, made on
 /// this thread) and segment live and die on this thread. A session whose steps take more than
 /// heavy_step_ms is moved to a lower CPU priority, so that it cannot starve light ones. The
-/// thread ends when the session is closed; SessionRegistry::ReapWorkers joins it.
+/// thread ends when the session is closed; SessionRegistry::ReapWorkers joins it. A session
+/// closed before its worker starts gets none.
 void StartSessionWorker(const std::shared_ptr<Session>& session, const WorkerContext& context);
 
 }  // namespace far::server

@@ -138,11 +138,13 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
     spdlog::warn("event=open_failed uid={} reason=\"{}\"", uid, sent.error().message);
     return;
   }
-  StartSessionWorker(*session, workers_);
-  connections_.emplace((*session)->id, std::move(pending.connection));
+  // Said before the worker starts: from then on the segment is the worker's, which frees it as
+  // soon as the session closes (the client may close it the moment it has the reply).
   spdlog::info("event=session_open session={} uid={} pid={} client=\"{}\" segment={}",
                (*session)->id, uid, pending.peer.pid, (*session)->client_name,
                (*session)->segment->name());
+  connections_.emplace((*session)->id, std::move(pending.connection));
+  StartSessionWorker(*session, workers_);
 }
 
 void SocketServer::DropClosedSessions() {
@@ -201,8 +203,9 @@ void SocketServer::Run(const std::atomic<bool>& stop) {
     DropClosedSessions();
     sessions_.ReapWorkers();
   }
+  // The sessions' connections stay open until the server is destroyed: the daemon tells their
+  // clients why their sessions end first, and closing a connection would say less, sooner.
   pending_.clear();
-  connections_.clear();
 }
 
 }  // namespace far::server

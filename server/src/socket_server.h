@@ -42,7 +42,7 @@ class SocketServer {
         workers_(workers),
         status_(status) {}
 
-  /// Serves until `stop` is set; then closes every connection.
+  /// Serves until `stop` is set. The sessions' connections close when the server is destroyed.
   void Run(const std::atomic<bool>& stop);
 
  private:

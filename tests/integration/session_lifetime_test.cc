@@ -4,8 +4,11 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <atomic>
 #include <future>
 #include <sstream>
+#include <thread>
+#include <vector>
 
 #include "daemon_fixture.h"
 #include "integration_scenes.h"
@@ -195,6 +198,40 @@ TEST_F(SessionLifetimeTest, GracefulStopTellsConnectedClientsAtOnce) {
   EXPECT_LT(std::chrono::steady_clock::now() - start, 1s);
   EXPECT_EQ(step.error().code, ErrorCode::kUnavailable);
   EXPECT_NE(step.error().message.find("shutting down"), std::string::npos) << step.error().message;
+}
+
+// A daemon stopped while clients open sessions as fast as they can exits cleanly. It used to
+// crash now and then: the socket thread logged a new session after starting its worker, and the
+// shutdown's reaping had that worker free the session's segment under the log line.
+TEST_F(SessionLifetimeTest, StoppingWhileSessionsOpenExitsCleanly) {
+  constexpr int kRounds = 4, kOpeners = 4;
+  for (int round = 0; round < kRounds; ++round) {
+    DaemonProcess* daemon = StartDaemon({"--max-opens-per-second", "100000"});
+    ASSERT_NE(daemon, nullptr);
+    client::ClientOptions options = TestClientOptions("opener");
+    options.connect_timeout = 100ms;
+    std::atomic<bool> done{false};
+    std::atomic<int> opened{0};
+    std::vector<std::thread> openers;
+    for (int i = 0; i < kOpeners; ++i) {
+      openers.emplace_back([&] {
+        // Each opener holds its newest session, so that some are open when the stop comes.
+        std::unique_ptr<client::Client> held;
+        while (!done) {
+          auto client = client::Client::Connect(options);
+          if (client.ok()) {
+            held = std::move(*client);
+            ++opened;
+          }
+        }
+      });
+    }
+    EXPECT_TRUE(WaitUntil([&] { return opened >= 20; }, 10s)) << "opened " << opened;
+    StopDaemon(*daemon);
+    done = true;
+    for (std::thread& opener : openers) opener.join();
+    if (HasFailure()) break;
+  }
 }
 
 TEST_F(SessionLifetimeTest, NoDaemonIsSaidWithinAboutASecond) {

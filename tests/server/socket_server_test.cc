@@ -121,5 +121,20 @@ TEST_F(SocketServerTest, AConnectionAcceptedBesideAHangUpWaitsForItsMessage) {
   EXPECT_EQ(answered, kRounds);
 }
 
+// A session the shutdown closed and reaped before the socket thread started its worker gets
+// none. It once got one: the thread outlived the registry, held the last reference, and
+// destroyed its own joinable std::thread (std::terminate).
+TEST_F(SocketServerTest, ASessionClosedBeforeItsWorkerStartsGetsNone) {
+  protocol::OpenSessionParams params;
+  params.client_name = "late";
+  auto session = sessions_->Open(params, protocol::PeerCredentials{getpid(), getuid(), getgid()});
+  ASSERT_TRUE(session.ok()) << far::ToString(session.error());
+  ASSERT_EQ(sessions_->CloseAll().size(), 1u);
+  EXPECT_EQ(sessions_->ReapWorkers(/*wait=*/true), 1);
+  StartSessionWorker(*session, *workers_);
+  EXPECT_FALSE((*session)->worker.joinable());
+  EXPECT_TRUE((*session)->worker_done);
+}
+
 }  // namespace
 }  // namespace far::server
