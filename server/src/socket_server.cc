@@ -139,7 +139,7 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
     return;
   }
   // Said before the worker starts: from then on the segment is the worker's, which frees it as
-  // soon as the session closes (the client may close it the moment it has the reply).
+  // soon as the session closes, and another thread may close it (a shutdown, a faulted ring).
   spdlog::info("event=session_open session={} uid={} pid={} client=\"{}\" segment={}",
                (*session)->id, uid, pending.peer.pid, (*session)->client_name,
                (*session)->segment->name());
