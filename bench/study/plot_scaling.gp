@@ -32,6 +32,9 @@ do for [i = 1:n] {
 }
 
 colour(m) = (m eq "aabb") ? "#7f7f7f" : (m eq "bvh") ? "#9467bd" : (m eq "auto") ? "#8c564b" : (m eq "fcl") ? "#ff7f0e" : (m eq "exact") ? "#000000" : (m[1:17] eq "far-exact-offset/") ? "#2ca02c" : (m[1:8] eq "cullide/") ? "#d62728" : "#1f77b4"
+# GL configurations of one method share its colour: the mechanism and resolution tell them apart.
+dashes(m) = strstrt(m, "occlusion-query") ? 2 : (strstrt(m, "/256") || strstrt(m, "/") == 0) ? 1 : 3
+points(m) = strstrt(m, "occlusion-query") ? 5 : (strstrt(m, "/256") || strstrt(m, "/") == 0) ? 7 : 9
 set datafile separator whitespace
 set datafile nocolumnheaders
 set logscale xy
@@ -40,4 +43,5 @@ set key top left
 set title "far-study, scaling family: time per step against triangles (median, contacts)" font ",14"
 set xlabel "triangles"
 set ylabel "time per step (ms)"
-plot for [i = 1:n] $series index (i - 1) using 1:2 with linespoints lw 2 pt 7 lc rgb colour(word(configs, i)) title word(configs, i)
+plot for [i = 1:n] $series index (i - 1) using 1:2 with linespoints lw 2 pt points(word(configs, i)) dt dashes(word(configs, i)) \
+  lc rgb colour(word(configs, i)) title word(configs, i)
