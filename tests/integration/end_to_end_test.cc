@@ -181,6 +181,30 @@ TEST_F(EndToEndTest, LoadRunsEveryClientForItsStepsAndTime) {
     EXPECT_GT(client["steps"].get<int>(), 0) << client.dump();
 }
 
+// Sixteen sessions culling on the GL path at once, each on its own thread and context: on
+// llvmpipe (Mesa 22.3.6) this killed far-daemon with SIGSEGV inside swrast_dri.so in 4 of 6
+// six-second runs, because the contexts share one rasterizer; far::LockGl makes their GL stages
+// take turns. The steps are heavy enough to demote the sessions (heavy_step_ms), which is how
+// the crash was met (far-client load on an H100 bundle's far-daemon, then here).
+TEST_F(EndToEndTest, SixteenSessionsOnTheGlPathAtOnceLeaveTheDaemonUp) {
+  DaemonProcess* daemon = StartDaemon();
+  ASSERT_NE(daemon, nullptr);
+  const ProcessResult load =
+      RunFarClient({"load", "--clients", "16", "--steps", "0", "--seconds", "4", "--method", "far",
+                    "--resolution", "256", "--json"});
+  ASSERT_EQ(load.exit_code, 0) << load.out << load.err;
+  const auto report = nlohmann::json::parse(load.out);
+  ASSERT_EQ(report["per_client"].size(), 16u);
+  for (const auto& client : report["per_client"]) {
+    EXPECT_GT(client["steps"].get<int>(), 0) << client.dump();
+    EXPECT_EQ(client["errors"].get<int>(), 0) << client.dump();
+  }
+  EXPECT_TRUE(daemon->Running());
+  const auto stopped = daemon->Stop();
+  ASSERT_TRUE(stopped.ok()) << stopped.error().message;
+  EXPECT_EQ(*stopped, 0);
+}
+
 // A daemon on memq:// (an LCM URL that carries messages only within one LCM instance) can
 // serve no client: the client library and far-client say so at once, instead of every step
 // waiting out its timeout, and the daemon's log warns at start.

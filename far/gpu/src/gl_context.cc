@@ -8,6 +8,8 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
+#include "far/gpu/gl_lock.h"
+
 namespace far {
 
 namespace {
@@ -257,6 +259,7 @@ std::vector<std::string> GlContext::ListDevices() {
 }
 
 Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform, int device) {
+  const auto gl = LockGl();  // another thread's GL work must not run while a display starts
   auto impl = std::make_unique<Impl>();
   std::vector<std::string> attempts;
   const char* client_extensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
@@ -307,6 +310,7 @@ Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform, int de
 GlContext::GlContext(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 GlContext::~GlContext() {
+  const auto gl = LockGl();
   eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(impl_->display, impl_->context);
   ReleaseDisplay(impl_->display);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "far/gpu/gl_lock.h"
 #include "far/offsets/bounding_offset.h"
 
 namespace far::internal {
@@ -259,9 +260,15 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
   return {};
 }
 
+GpuCuller::~GpuCuller() {
+  const auto gl = LockGl();  // the renderers free their GL objects
+  renderers_.clear();
+}
+
 Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
                                                     std::span<const CachedObject* const> objects,
                                                     StepStats& stats) {
+  const auto gl = LockGl();
   auto entry = RendererFor(request);
   if (!entry.ok()) return entry.error();
   const std::vector<PieceSet> sets = ObjectLevelSetsFor(request.method);
@@ -288,6 +295,7 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
     const StepRequest& request, std::span<const CachedObject* const> objects,
     std::span<const size_t> paired, std::span<const std::vector<uint32_t>> candidates,
     StepStats& stats) {
+  const auto gl = LockGl();
   auto entry = RendererFor(request);
   if (!entry.ok()) return entry.error();
   const std::vector<PieceSet> sets = PieceSetsFor(request.method);
@@ -345,6 +353,7 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
 }
 
 void GpuCuller::RemoveSlot(uint32_t slot) {
+  const auto gl = LockGl();
   for (auto& [key, entry] : renderers_) {
     entry.renderer->RemoveSlot(slot);
     for (int set = 0; set < kNumPieceSets; ++set) entry.built.erase({slot, set});

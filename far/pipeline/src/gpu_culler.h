@@ -21,12 +21,15 @@ namespace far::internal {
 /// The GPU stages of a step (FAR, FAR with exact offsets, CULLIDE): object-level and
 /// sub-object-level culling with three axis views each. Keeps one renderer per raster format,
 /// each with the GPU pieces of every object, rebuilt only when the object's vertices change.
-/// Owned by the GL thread (see far::GlContext).
+/// Owned by the GL thread (see far::GlContext); its GL work runs under far::LockGl.
 class GpuCuller {
  public:
   /// `counters` gets the piece builds; `pool` builds the pieces of changed objects in
   /// parallel. Both aliased, must outlive *this.
   GpuCuller(SceneCounters& counters, ThreadPool& pool) : counters_(counters), pool_(pool) {}
+  ~GpuCuller();
+  GpuCuller(const GpuCuller&) = delete;
+  GpuCuller& operator=(const GpuCuller&) = delete;
 
   /// Culls whole objects: returns, indexed like `objects`, 1 for objects in the object PCS.
   /// @pre the objects' hierarchies are up to date (SceneCache::RefreshHierarchies): the FAR

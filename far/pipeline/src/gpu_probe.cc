@@ -7,6 +7,7 @@
 #include <mutex>
 
 #include "far/gpu/culling_renderer.h"
+#include "far/gpu/gl_lock.h"
 #include "far/pipeline/pipeline.h"
 
 namespace far::internal {
@@ -77,6 +78,7 @@ std::optional<double> Measure(int ball_n, int* triangles) {
 }  // namespace
 
 std::optional<GpuCost> ProbeGpuCost() {
+  const auto gl = LockGl();
   static std::mutex mutex;
   static std::map<std::string, GpuCost> cost_by_renderer;
   const std::string renderer = CurrentGlRenderer();

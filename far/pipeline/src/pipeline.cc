@@ -14,6 +14,7 @@
 #include "scene_cache.h"
 
 #include "far/gpu/culling_renderer.h"
+#include "far/gpu/gl_lock.h"
 #include "far/model/limits.h"
 #include "far/pairs/bvh_stage.h"
 #include "far/pairs/exact_stage.h"
@@ -498,6 +499,7 @@ Result<std::unique_ptr<Pipeline>> Pipeline::Create(const PipelineOptions& option
     impl->gl = std::move(*gl);
     impl->renderer_name = impl->gl->renderer();
   } else if (options.use_gl) {
+    const auto gl = LockGl();
     impl->renderer_name = internal::CurrentGlRenderer();
     if (impl->renderer_name.empty()) {
       return MakeError(ErrorCode::kUnavailable,

@@ -20,7 +20,7 @@ enum class GlPlatform {
 /// Threading contract: the context is made current on the thread that calls Create and must only
 /// be used (and destroyed) on that thread. Every far class that issues GL calls (the culling
 /// renderers, Pipeline) inherits this contract: one GL thread owns them. A process may hold one
-/// context per thread.
+/// context per thread; their GL work takes turns under far::LockGl (gl_lock.h).
 class GlContext {
  public:
   /// Creates a context and makes it current on the calling thread. Tries, in order (kAuto): EGL
