@@ -42,10 +42,7 @@ struct DaemonConfig {
   int64_t max_reply_pairs = 2'000'000;  ///< contacts + distance pairs in one reply
   int step_deadline_ms = 60'000;        ///< the longest a step may wait and run
   int heavy_step_ms = 50;  ///< a session whose step takes longer runs at a lower CPU priority
-  /// The same for a session's first step, which does one-time work (hierarchies, GPU pieces,
-  /// shaders); the larger of the two applies to it.
-  int first_step_heavy_ms = 1000;
-  int exact_threads = 0;           ///< CPU threads per session for the exact tests (0: all cores)
+  int exact_threads = 0;   ///< CPU threads per session for the exact tests (0: all cores)
   std::string log_level = "info";  ///< trace, debug, info, warn, error
 };
 

@@ -121,26 +121,16 @@ class SessionWorker {
     control.on_stage = [this, &job](std::string_view stage) {
       context_.replier.StepStatus(*session_, job, "stage", 0, stage);
     };
-    // Past the heavy threshold, every thread of the step lowers itself at its next check,
-    // while the step runs: a step that only ends at its deadline is heavy too.
+    // Past heavy_step_ms, every thread of the step lowers itself at its next check, while the
+    // step runs: a step that only ends at its deadline is heavy too.
     const auto started = Clock::now();
-    control.slow_after = started + std::chrono::milliseconds(HeavyThresholdMs());
+    control.slow_after = started + std::chrono::milliseconds(context_.config.heavy_step_ms);
     control.on_slow = [this, started] {
       ThreadPool::MoveCallingThreadToBackground();
       if (!session_->demoted.load(std::memory_order_relaxed))
         Demote(MsBetween(started, Clock::now()), "running");
     };
     return control;
-  }
-
-  // How long a step may run before its session counts as heavy. A session's first step builds
-  // the scene's hierarchies and GPU pieces and compiles the GL shaders, one-time work that made
-  // identical sessions heavy or not by chance (16 clients of one scene: some served at half the
-  // rate of others, for good): it gets the longer first_step_heavy_ms.
-  int HeavyThresholdMs() const {
-    const DaemonConfig& config = context_.config;
-    return ran_a_step_ ? config.heavy_step_ms
-                       : std::max(config.heavy_step_ms, config.first_step_heavy_ms);
   }
 
   // A heavy session: its pool's threads lower themselves at their next parallel loop too, and
@@ -185,9 +175,8 @@ class SessionWorker {
         !result && result.error().code == ErrorCode::kTimeout && daemon_deadline;
     deadlines_.Record(command.request, triangles, hit_deadline,
                       result ? std::string() : result.error().message, Clock::now());
-    const int heavy_ms = HeavyThresholdMs();
-    ran_a_step_ = true;
-    if (const double step_ms = MsBetween(step_started, Clock::now()); step_ms > heavy_ms) {
+    if (const double step_ms = MsBetween(step_started, Clock::now());
+        step_ms > context_.config.heavy_step_ms) {
       ThreadPool::MoveCallingThreadToBackground();
       Demote(step_ms, result ? "finished" : "failed");
     }
@@ -213,7 +202,6 @@ class SessionWorker {
   std::shared_ptr<Session> session_;
   const WorkerContext& context_;
   DeadlineMemory deadlines_;  // the cost of this session's steps, judged before they run
-  bool ran_a_step_ = false;   // a step reached the pipeline: later ones get heavy_step_ms
 };
 
 }  // namespace

@@ -48,7 +48,6 @@ constexpr const char* kKeys[] = {
     "max_reply_pairs",
     "step_deadline_ms",
     "heavy_step_ms",
-    "first_step_heavy_ms",
     "exact_threads",
     "log_level",
     "no_such_key",
