@@ -28,6 +28,7 @@ struct Daemon::Impl {
   DaemonStats stats;
   SessionRegistry sessions{config};
   SharedSceneBudget budget{config.max_vertices_total, config.max_triangles_total};
+  SetupAllowance setup_allowance{config.setup_allowance_ms};
   std::unique_ptr<Replier> replier;
   std::unique_ptr<MessageHandlers> handlers;
   std::unique_ptr<WorkerContext> workers;
@@ -64,7 +65,7 @@ Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, Daemo
   impl->handlers->Subscribe(*impl->bus, std::move(hooks.before_message));
   Impl* raw = impl.get();
   impl->workers = std::make_unique<WorkerContext>(WorkerContext{
-      impl->config, *impl->replier, impl->stats, impl->budget, true,
+      impl->config, *impl->replier, impl->stats, impl->budget, impl->setup_allowance, true,
       [raw](int64_t id, const std::string& reason) { raw->CloseSession(id, reason); }});
   return std::unique_ptr<Daemon>(new Daemon(std::move(impl)));
 }

@@ -42,7 +42,11 @@ struct DaemonConfig {
   int64_t max_reply_pairs = 2'000'000;  ///< contacts + distance pairs in one reply
   int step_deadline_ms = 60'000;        ///< the longest a step may wait and run
   int heavy_step_ms = 50;  ///< a session whose step takes longer runs at a lower CPU priority
-  int exact_threads = 0;   ///< CPU threads per session for the exact tests (0: all cores)
+  /// Per user, ms of one-off work (hierarchy builds, auto's calibration) that does not make a
+  /// step heavy; refilled at a tenth of it per second (setup_allowance.h). 0: every step's
+  /// whole CPU time counts.
+  double setup_allowance_ms = 1000;
+  int exact_threads = 0;           ///< CPU threads per session for the exact tests (0: all cores)
   std::string log_level = "info";  ///< trace, debug, info, warn, error
 };
 

@@ -8,7 +8,8 @@
 namespace far::server {
 
 /// A token bucket: `rate` events per second sustained, bursts of up to `burst`. Used for a
-/// session's step requests and a user's session opens. Not thread-safe (one owner thread).
+/// session's step requests, a user's session opens and a user's setup allowance (tokens are
+/// then milliseconds of CPU). Not thread-safe (one owner thread).
 class RateLimiter {
  public:
   using Clock = std::chrono::steady_clock;
@@ -16,18 +17,34 @@ class RateLimiter {
 
   /// Takes one token when there is one; false (and nothing taken) when over the rate.
   bool Allow(Clock::time_point now = Clock::now()) {
-    if (last_ != Clock::time_point{}) {
-      const double seconds = std::chrono::duration<double>(now - last_).count();
-      tokens_ = std::min(burst_, tokens_ + seconds * rate_);
-    }
-    last_ = now;
+    Refill(now);
     if (tokens_ < 1.0) return false;
     tokens_ -= 1.0;
     return true;
   }
+  /// Takes up to `amount` (>= 0) of what the bucket holds; returns what it took.
+  double TakeUpTo(double amount, Clock::time_point now = Clock::now()) {
+    Refill(now);
+    const double taken = std::clamp(amount, 0.0, tokens_);
+    tokens_ -= taken;
+    return taken;
+  }
+  /// What the bucket holds now.
+  double Available(Clock::time_point now = Clock::now()) {
+    Refill(now);
+    return tokens_;
+  }
   double rate() const { return rate_; }
 
  private:
+  void Refill(Clock::time_point now) {
+    if (last_ != Clock::time_point{} && now > last_) {
+      const double seconds = std::chrono::duration<double>(now - last_).count();
+      tokens_ = std::min(burst_, tokens_ + seconds * rate_);
+    }
+    if (now > last_) last_ = now;
+  }
+
   double rate_, burst_, tokens_;
   Clock::time_point last_{};
 };

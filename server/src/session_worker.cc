@@ -35,6 +35,55 @@ constexpr Clock::rep kCpuLookEvery =
 // Bytes one contact or distance pair takes in an encoded reply (the larger, a distance pair).
 constexpr uint64_t kWireBytesPerPair = 32;
 
+// A thread's CPU time in ms (its clock, which other threads can read too); 0 without one.
+double ThreadCpuMs(std::optional<clockid_t> clock) {
+  timespec t{};
+  if (!clock || clock_gettime(*clock, &t) != 0) return 0;
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
+// The worker's CPU time on one step, with its setup (StepControl::on_setup_begin/end: hierarchy
+// builds, auto's calibration) covered by the user's SetupAllowance as far as it lasts: only
+// the rest, the step's steady cost, can make the step heavy. Begin and End run on the worker;
+// SteadyMs on any thread of the step.
+class StepCpuMeter {
+ public:
+  StepCpuMeter(std::optional<clockid_t> clock, SetupAllowance& allowance, uid_t uid)
+      : clock_(clock), allowance_(allowance), uid_(uid), started_ms_(ThreadCpuMs(clock)) {}
+
+  void BeginSetup() {
+    if (depth_++ == 0) open_since_ms_.store(ThreadCpuMs(clock_), std::memory_order_relaxed);
+  }
+  void EndSetup() {
+    if (depth_ == 0 || --depth_ > 0) return;
+    const double ms = ThreadCpuMs(clock_) - open_since_ms_.load(std::memory_order_relaxed);
+    open_since_ms_.store(-1, std::memory_order_relaxed);
+    setup_ms_.fetch_add(ms, std::memory_order_relaxed);
+    covered_ms_.fetch_add(allowance_.TakeUpTo(uid_, ms), std::memory_order_relaxed);
+  }
+
+  // CPU ms since the step started, less the setup covered so far (a part still running counts
+  // as covered as far as the allowance now holds).
+  double SteadyMs() const {
+    const double now = ThreadCpuMs(clock_);
+    double covered = covered_ms_.load(std::memory_order_relaxed);
+    if (const double since = open_since_ms_.load(std::memory_order_relaxed); since >= 0)
+      covered += std::min(now - since, allowance_.Available(uid_));
+    return now - started_ms_ - covered;
+  }
+  double setup_ms() const { return setup_ms_.load(std::memory_order_relaxed); }
+  double covered_ms() const { return covered_ms_.load(std::memory_order_relaxed); }
+
+ private:
+  const std::optional<clockid_t> clock_;
+  SetupAllowance& allowance_;
+  const uid_t uid_;
+  const double started_ms_;
+  int depth_ = 0;                          // worker only: setup parts nest
+  std::atomic<double> open_since_ms_{-1};  // CPU time the open part began at; -1: none open
+  std::atomic<double> setup_ms_{0}, covered_ms_{0};
+};
+
 class SessionWorker {
  public:
   SessionWorker(std::shared_ptr<Session> session, const WorkerContext& context)
@@ -121,7 +170,7 @@ class SessionWorker {
     return {};
   }
 
-  StepControl ControlFor(const StepJob& job, double cpu_started) {
+  StepControl ControlFor(const StepJob& job, StepCpuMeter& meter) {
     StepControl control;
     control.cancel = &session_->cancel;
     control.deadline = job.deadline;
@@ -137,43 +186,44 @@ class SessionWorker {
     const auto started = Clock::now();
     control.slow_after = started + std::chrono::milliseconds(context_.config.heavy_step_ms);
     auto next_look = std::make_shared<std::atomic<Clock::rep>>(0);
-    control.on_slow = [this, started, cpu_started, next_look] {
+    control.on_slow = [this, started, &meter, next_look] {
       if (!session_->demoted.load(std::memory_order_relaxed)) {
         // The worker's CPU clock is a system call: one thread reads it, once a millisecond.
         const Clock::rep now = Clock::now().time_since_epoch().count();
         Clock::rep due = next_look->load(std::memory_order_relaxed);
         if (now < due || !next_look->compare_exchange_strong(due, now + kCpuLookEvery)) return;
-        if (!HeavyOnCpu(cpu_started)) return;
-        Demote(MsBetween(started, Clock::now()), "running");
+        if (!HeavyOnCpu(meter)) return;
+        Demote(MsBetween(started, Clock::now()), "running", meter);
       }
       ThreadPool::MoveCallingThreadToBackground();
     };
+    control.on_setup_begin = [&meter] { meter.BeginSetup(); };
+    control.on_setup_end = [&meter] { meter.EndSetup(); };
     return control;
   }
 
-  // The worker thread's CPU time in ms (its clock, which other threads can read too).
-  double WorkerCpuMs() const {
-    timespec t{};
-    if (!worker_clock_ || clock_gettime(*worker_clock_, &t) != 0) return 0;
-    return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
-  }
-
-  // Whether the worker spent heavy_step_ms of CPU time on the step since `cpu_started`. Wall
-  // time alone is not enough: contention stretches light steps, CPU time it does not. With
-  // wall time alone, 16 clients of one scene whose steps take 2-20 ms alone saw those pass
-  // 50 ms now and then on a saturated machine, and were each demoted at a random moment, for
-  // good: served 4.6x apart on 2 cores, 1.9x on 16. Without a CPU clock: true.
-  bool HeavyOnCpu(double cpu_started) const {
-    return !worker_clock_ || WorkerCpuMs() - cpu_started >= context_.config.heavy_step_ms;
+  // Whether the worker spent heavy_step_ms of CPU time on the step, its covered setup apart.
+  // Wall time alone is not enough: contention stretches light steps, CPU time it does not.
+  // With wall time alone, 16 clients of one scene whose steps take 2-20 ms alone saw those
+  // pass 50 ms now and then on a saturated machine, and were each demoted at a random moment,
+  // for good: served 4.6x apart on 2 cores, 1.9x on 16. And one-off work is no step's steady
+  // cost: a 3.5 ms step on a 360K-triangle scene, whose first step built its hierarchies, was
+  // demoted by that step and served at 4.5 steps/s beside light sessions (30 when not).
+  // Without a CPU clock: true.
+  bool HeavyOnCpu(const StepCpuMeter& meter) const {
+    return !worker_clock_ || meter.SteadyMs() >= context_.config.heavy_step_ms;
   }
 
   // A heavy session: its pool's threads lower themselves at their next parallel loop too, and
   // its later steps start lowered. Said once.
-  void Demote(double ms, const char* step_state) {
+  void Demote(double ms, const char* step_state, const StepCpuMeter& meter) {
     if (session_->demoted.exchange(true)) return;
     if (session_->pipeline) session_->pipeline->SetCpuBackground(HeavySessionThreads());
-    spdlog::info("event=session_demoted session={} step_ms={:.1f} step={} nice={}", session_->id,
-                 ms, step_state, ThreadPool::kBackgroundNice);
+    spdlog::info(
+        "event=session_demoted session={} step_ms={:.1f} step={} nice={} cpu_ms={:.1f} "
+        "setup_ms={:.1f} setup_covered_ms={:.1f}",
+        session_->id, ms, step_state, ThreadPool::kBackgroundNice, meter.SteadyMs(),
+        meter.setup_ms(), meter.covered_ms());
   }
 
   void RunStep(const StepJob& job) {
@@ -201,8 +251,8 @@ class SessionWorker {
     if (auto fits = deadlines_.Check(command.request, triangles, Clock::now()); !fits)
       return replier.StepError(*session_, command, fits.error());
     const auto step_started = Clock::now();
-    const double cpu_started = WorkerCpuMs();
-    auto result = session_->pipeline->Step(command.request, ControlFor(job, cpu_started));
+    StepCpuMeter meter(worker_clock_, context_.setup_allowance, session_->uid);
+    auto result = session_->pipeline->Step(command.request, ControlFor(job, meter));
     // Ran into the daemon's own deadline (not a shorter one the client asked for)?
     const bool daemon_deadline =
         job.deadline >= job.received + std::chrono::milliseconds(context_.config.step_deadline_ms);
@@ -211,9 +261,9 @@ class SessionWorker {
     deadlines_.Record(command.request, triangles, hit_deadline,
                       result ? std::string() : result.error().message, Clock::now());
     if (const double step_ms = MsBetween(step_started, Clock::now());
-        step_ms > context_.config.heavy_step_ms && HeavyOnCpu(cpu_started)) {
+        step_ms > context_.config.heavy_step_ms && HeavyOnCpu(meter)) {
       ThreadPool::MoveCallingThreadToBackground();
-      Demote(step_ms, result ? "finished" : "failed");
+      Demote(step_ms, result ? "finished" : "failed", meter);
     }
     if (!result) return replier.StepError(*session_, command, result.error());
     const protocol::StepReplyIds ids{session_->id, command.request_id, command.step_id,

@@ -8,6 +8,7 @@
 #include "daemon_stats.h"
 #include "replier.h"
 #include "session.h"
+#include "setup_allowance.h"
 
 #include "far/model/scene_budget.h"
 
@@ -18,8 +19,9 @@ struct WorkerContext {
   const DaemonConfig& config;
   Replier& replier;
   DaemonStats& stats;
-  SharedSceneBudget& budget;  ///< all sessions' vertices and triangles
-  bool use_gl = true;         ///< the daemon made a GL context at start-up
+  SharedSceneBudget& budget;        ///< all sessions' vertices and triangles
+  SetupAllowance& setup_allowance;  ///< per user, one-off work that does not make a step heavy
+  bool use_gl = true;               ///< the daemon made a GL context at start-up
   /// Ends a session from its worker (the segment became unreadable), telling its client.
   std::function<void(int64_t session_id, const std::string& reason)> close_session;
 };

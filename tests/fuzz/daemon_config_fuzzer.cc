@@ -48,6 +48,7 @@ constexpr const char* kKeys[] = {
     "max_reply_pairs",
     "step_deadline_ms",
     "heavy_step_ms",
+    "setup_allowance_ms",
     "exact_threads",
     "log_level",
     "no_such_key",

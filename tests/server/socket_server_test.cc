@@ -51,7 +51,7 @@ class SocketServerTest : public ::testing::Test {
     replier_ = std::make_unique<Replier>(*bus_, stats_);
     // Aggregates, brace-initialized (clang does not build them from parentheses).
     workers_.reset(
-        new WorkerContext{config_, *replier_, stats_, budget_, /*use_gl=*/false,
+        new WorkerContext{config_, *replier_, stats_, budget_, setup_allowance_, /*use_gl=*/false,
                           [this](int64_t id, const std::string&) { sessions_->Close(id); }});
     status_.reset(new StatusSources{config_, stats_, *sessions_, "none", "none",
                                     std::chrono::steady_clock::now()});
@@ -94,6 +94,7 @@ class SocketServerTest : public ::testing::Test {
   DaemonStats stats_;
   std::unique_ptr<SessionRegistry> sessions_;
   SharedSceneBudget budget_{config_.max_vertices_total, config_.max_triangles_total};
+  SetupAllowance setup_allowance_{config_.setup_allowance_ms};
   std::unique_ptr<Replier> replier_;
   std::unique_ptr<WorkerContext> workers_;
   std::unique_ptr<StatusSources> status_;

@@ -126,11 +126,13 @@ Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
                   Ms(*entry.first_ms) + ", one-off work included)"
             : "trying " + entry.candidate.Name() +
                   (entry.predicted_ms ? " (predicted " + Ms(*entry.predicted_ms) + ")" : "");
+    trying_ = true;
     *reason =
         "auto: calibrating: " + trying +
         (best ? "; best so far " + best->candidate.Name() + " " + Ms(*best->measured_ms) : "");
     return entry.candidate;
   }
+  trying_ = false;
   if (chosen_calibration_ms_ == 0) chosen_calibration_ms_ = *best->measured_ms;
   *reason = "auto: " + best->candidate.Name() + " is the fastest measured (" +
             Ms(*best->measured_ms) + ")";

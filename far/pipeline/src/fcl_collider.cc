@@ -50,6 +50,7 @@ std::vector<ContactPair> FclCollider::Collide(const std::vector<Object>& objects
   for (const Object& object : objects) {
     Impl::Entry& entry = impl_->entries[object.id];
     if (!entry.model) {
+      const SetupScope setup(control);  // one-off: later steps move or refit it
       entry.model = std::make_shared<Model>();
       entry.model->beginModel();
       std::vector<fcl::Triangle> triangles;

@@ -248,7 +248,7 @@ Result<void> Pipeline::Impl::RunWholeScene(StepState& state) {
 Result<void> Pipeline::Impl::CullObjectsStage(StepState& state) {
   if (IsGpuMethod(state.request.method)) {
     cache.RefreshGpuGeometry(pool);
-    cache.RefreshHierarchies(state.objects, pool);
+    cache.RefreshHierarchies(state.objects, pool, state.control);
     auto alive = gpu->CullObjects(state.request, state.objects, state.result.stats);
     if (!alive) return alive.error();
     state.object_alive = std::move(*alive);
@@ -367,7 +367,7 @@ BvhResult Pipeline::Impl::DescendHierarchies(StepState& state, bool run_exact,
   }
   std::sort(paired.begin(), paired.end());
   paired.erase(std::unique(paired.begin(), paired.end()), paired.end());
-  cache.RefreshHierarchies(paired, pool);
+  cache.RefreshHierarchies(paired, pool, state.control);
   std::vector<BvhObject> objects;
   for (const CachedObject* object : paired) {
     objects.push_back(
@@ -414,7 +414,11 @@ Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request,
   internal::SceneSize size{cache.size(), 0, cache.structure()};
   for (const CachedObject* object : cache.Objects()) size.triangles += object->mesh.num_triangles();
   std::string reason;
+  // A step that calibrates (the GPU probe, a try of a candidate) is setup: the steps after it
+  // run the configuration chosen.
+  SetupScope setup(&control);
   const internal::Candidate chosen = selector->Choose(size, &reason);
+  if (!selector->trying()) setup.End();
   StepRequest concrete = request;
   concrete.method = chosen.method;
   if (chosen.gpu()) {

@@ -101,21 +101,28 @@ void SceneCache::RefreshWorld() {
   }
 }
 
-void SceneCache::RefreshHierarchies(std::span<const CachedObject* const> objects,
-                                    ThreadPool& pool) {
-  std::vector<CachedObject*> stale;
+void SceneCache::RefreshHierarchies(std::span<const CachedObject* const> objects, ThreadPool& pool,
+                                    const StepControl& control) {
+  std::vector<CachedObject*> builds, refits;
   for (const CachedObject* object : objects) {
-    if (object->bvh_stamp != object->geometry_stamp) stale.push_back(&objects_.at(object->id));
+    if (object->bvh_stamp == object->geometry_stamp) continue;
+    CachedObject& stale = objects_.at(object->id);
+    (stale.bvh.empty() ? builds : refits).push_back(&stale);
   }
-  pool.ParallelFor(stale.size(), 1, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) {
-      CachedObject& object = *stale[i];
-      if (object.bvh.empty()) {
-        object.bvh.Build(object.mesh.p_MV, object.mesh.triangles);
-      } else {
-        (void)object.bvh.Refit(object.mesh.p_MV, object.mesh.triangles);
+  if (!builds.empty()) {
+    // One-off work: later steps of these objects do not repeat it.
+    SetupScope setup(&control);
+    pool.ParallelFor(builds.size(), 1, [&](size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) {
+        builds[i]->bvh.Build(builds[i]->mesh.p_MV, builds[i]->mesh.triangles);
+        builds[i]->bvh_stamp = builds[i]->geometry_stamp;
       }
-      object.bvh_stamp = object.geometry_stamp;
+    });
+  }
+  pool.ParallelFor(refits.size(), 1, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      (void)refits[i]->bvh.Refit(refits[i]->mesh.p_MV, refits[i]->mesh.triangles);
+      refits[i]->bvh_stamp = refits[i]->geometry_stamp;
     }
   });
 }

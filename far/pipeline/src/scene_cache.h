@@ -9,6 +9,7 @@
 #include "far/model/mesh.h"
 #include "far/model/pose.h"
 #include "far/model/scene_update.h"
+#include "far/model/step_control.h"
 #include "far/pairs/thread_pool.h"
 #include "far/pairs/triangle_bvh.h"
 #include "far/pairs/world_object.h"
@@ -59,8 +60,11 @@ class SceneCache {
   /// of the objects whose vertices changed since, on `pool`.
   void RefreshGpuGeometry(ThreadPool& pool);
   /// Brings the hierarchies of `objects` up to date with their vertices on `pool`: built once
-  /// for static and rigid objects, refit (rebuilt when loose) for deformed ones.
-  void RefreshHierarchies(std::span<const CachedObject* const> objects, ThreadPool& pool);
+  /// for static and rigid objects, refit (rebuilt when loose) for deformed ones. The builds are
+  /// the step's setup (`control`'s on_setup_begin and on_setup_end around them); the refits
+  /// are per-step work.
+  void RefreshHierarchies(std::span<const CachedObject* const> objects, ThreadPool& pool,
+                          const StepControl& control);
   std::vector<WorldObjectView> WorldViews() const;
 
   int size() const { return static_cast<int>(objects_.size()); }

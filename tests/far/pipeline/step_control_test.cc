@@ -116,6 +116,79 @@ TEST(StepControlTest, EveryThreadOfAStepThatRunsLongIsToldWhileItRuns) {
   EXPECT_EQ(told.size(), 2u) << "the calling thread and the pool's worker";
 }
 
+// What a step marks as setup (StepControl::on_setup_begin/end), seen from the step's thread:
+// how many parts, and which stages ran inside one.
+struct SetupLog {
+  int parts = 0;
+  int depth = 0;
+  bool balanced = true;
+  bool other_thread = false;
+  std::vector<std::string> stages_inside;
+  std::vector<std::string> stages_outside;
+};
+
+StepControl LoggingSetup(SetupLog& log) {
+  const std::thread::id caller = std::this_thread::get_id();
+  StepControl control;
+  control.on_setup_begin = [&log, caller] {
+    log.other_thread |= std::this_thread::get_id() != caller;
+    if (log.depth++ == 0) ++log.parts;
+  };
+  control.on_setup_end = [&log, caller] {
+    log.other_thread |= std::this_thread::get_id() != caller;
+    log.balanced &= --log.depth >= 0;
+  };
+  control.on_stage = [&log](std::string_view stage) {
+    (log.depth > 0 ? log.stages_inside : log.stages_outside).emplace_back(stage);
+  };
+  return control;
+}
+
+TEST(StepControlTest, HierarchyBuildsAreSetupAndTheStepsAfterThemHaveNone) {
+  for (Method method : {Method::kBvh, Method::kFcl}) {
+    SCOPED_TRACE(std::string(ToString(method)));
+    auto pipeline = TwoGrids(20);
+    SetupLog first;
+    ASSERT_TRUE(pipeline->Step(Request(method), LoggingSetup(first)).ok());
+    EXPECT_GE(first.parts, 1) << "the two new objects' hierarchies were built";
+    EXPECT_TRUE(first.balanced && first.depth == 0 && !first.other_thread);
+    EXPECT_TRUE(first.stages_inside.empty()) << "the builds are part of a stage, not a stage";
+    // The rigid grid moves: its hierarchy is kept.
+    ASSERT_TRUE(pipeline->SetPose(2, Pose{Eigen::Vector3d(0.25, 0, 0)}).ok());
+    SetupLog moved;
+    ASSERT_TRUE(pipeline->Step(Request(method), LoggingSetup(moved)).ok());
+    EXPECT_EQ(moved.parts, 0);
+    // A new object: its build is setup again.
+    ASSERT_TRUE(pipeline->AddObject(3, Grid(4, 1), Motion::kRigid).ok());
+    SetupLog added;
+    ASSERT_TRUE(pipeline->Step(Request(method), LoggingSetup(added)).ok());
+    EXPECT_GE(added.parts, 1);
+    EXPECT_TRUE(added.balanced && added.depth == 0);
+  }
+}
+
+TEST(StepControlTest, AutoStepsThatCalibrateAreSetupAndTheChosenOnesAreNot) {
+  auto pipeline = TwoGrids(10);
+  // Without a GPU, auto tries bvh twice (its first run on new objects, then again), then runs
+  // it as the one chosen.
+  for (int step = 0; step < 4; ++step) {
+    SCOPED_TRACE("step " + std::to_string(step));
+    SetupLog log;
+    auto result = pipeline->Step(Request(Method::kAuto), LoggingSetup(log));
+    ASSERT_TRUE(result.ok());
+    EXPECT_TRUE(log.balanced && log.depth == 0 && !log.other_thread);
+    const bool calibrating = result->stats.method_reason.starts_with("auto: calibrating");
+    EXPECT_EQ(calibrating, step < 2) << result->stats.method_reason;
+    if (calibrating) {
+      EXPECT_TRUE(log.stages_outside.empty()) << "every stage of a try is setup";
+      EXPECT_FALSE(log.stages_inside.empty());
+    } else {
+      EXPECT_TRUE(log.stages_inside.empty()) << "the chosen configuration's stages are no setup";
+      EXPECT_FALSE(log.stages_outside.empty());
+    }
+  }
+}
+
 TEST(StepControlTest, TheAabbPrimitiveCullChecksAsItGoes) {
   // 2 x 80,000 triangles: the AABB method's primitive cull tests 160,000 boxes, and checks
   // (here: reports the slow step) every 65,536 of them, not only as the stage starts.

@@ -42,6 +42,12 @@ struct StepControl {
   /// Called again at every later check: it must be cheap once it has done its work.
   std::function<void()> on_slow;
   Clock::time_point slow_after = Clock::time_point::max();
+  /// Called on the step's thread (the caller of Pipeline::Step) at the start and the end of
+  /// each part of the step that later steps of the same scene do not repeat: the hierarchy
+  /// builds of new objects, and an `auto` step that tries a configuration or measures the GPU
+  /// (the steps after it run the one chosen). A daemon accounts that work apart from the
+  /// step's steady cost. Parts may nest; each begin has its end. Either may be empty.
+  std::function<void()> on_setup_begin, on_setup_end;
 
   /// kCancelled or kDeadline when the step must stop now, else kNone (reads the clock; calls
   /// on_slow past slow_after).
@@ -53,6 +59,25 @@ struct StepControl {
     if (now >= slow_after && on_slow) on_slow();
     return now >= deadline ? StopReason::kDeadline : StopReason::kNone;
   }
+};
+
+/// Marks the work of a scope as setup (StepControl::on_setup_begin and on_setup_end), from its
+/// construction to End() or its destruction, whichever comes first. A null control: nothing.
+class SetupScope {
+ public:
+  explicit SetupScope(const StepControl* control) : control_(control) {
+    if (control_ != nullptr && control_->on_setup_begin) control_->on_setup_begin();
+  }
+  SetupScope(const SetupScope&) = delete;
+  SetupScope& operator=(const SetupScope&) = delete;
+  ~SetupScope() { End(); }
+  void End() {
+    if (control_ != nullptr && control_->on_setup_end) control_->on_setup_end();
+    control_ = nullptr;
+  }
+
+ private:
+  const StepControl* control_;
 };
 
 }  // namespace far

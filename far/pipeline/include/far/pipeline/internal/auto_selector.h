@@ -77,6 +77,8 @@ class AutoSelector {
   Candidate Choose(const SceneSize& scene, std::string* reason);
   /// Records the time of a step that ran `candidate` (the one Choose just gave).
   void Record(const Candidate& candidate, double ms);
+  /// Whether the last Choose gave a candidate to try (calibrating), not the chosen one.
+  bool trying() const { return trying_; }
 
  private:
   struct Entry {
@@ -98,6 +100,7 @@ class AutoSelector {
   SceneSize calibrated_for_;
   uint64_t structure_ = 0;  // of the scene of the last Choose
   bool calibrated_ = false;
+  bool trying_ = false;
   int64_t steps_since_calibration_ = 0;
   double chosen_calibration_ms_ = 0;
 };
