@@ -147,6 +147,7 @@ Result<GpuCuller::RendererEntry*> GpuCuller::RendererFor(const StepRequest& requ
   auto key = std::make_tuple(raster.width, raster.height, static_cast<int>(raster.depth));
   auto it = renderers_.find(key);
   if (it == renderers_.end()) {
+    const auto gl = LockGl();  // compiles shaders, makes framebuffers
     auto renderer = CullingRenderer::Create(raster);
     if (!renderer.ok()) return renderer.error();
     it = renderers_.emplace(key, RendererEntry{std::move(*renderer), {}}).first;
@@ -245,7 +246,12 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
     view.alive = alive;
     view.sets = sets;
     RenderCounters counters;
-    auto stays = entry.renderer->RenderView(view, request.mechanism, &counters);
+    // The GL lock is held for one view (uploads, passes, read-back), not for the whole stage:
+    // the views of other sessions' stages take turns with this one's.
+    auto stays = [&] {
+      const auto gl = LockGl();
+      return entry.renderer->RenderView(view, request.mechanism, &counters);
+    }();
     if (!stays.ok()) return stays.error();
     alive = std::move(*stays);
     stats.primitives_rendered += live;
@@ -268,7 +274,6 @@ GpuCuller::~GpuCuller() {
 Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
                                                     std::span<const CachedObject* const> objects,
                                                     StepStats& stats) {
-  const auto gl = LockGl();
   auto entry = RendererFor(request);
   if (!entry.ok()) return entry.error();
   const std::vector<PieceSet> sets = ObjectLevelSetsFor(request.method);
@@ -295,7 +300,6 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
     const StepRequest& request, std::span<const CachedObject* const> objects,
     std::span<const size_t> paired, std::span<const std::vector<uint32_t>> candidates,
     StepStats& stats) {
-  const auto gl = LockGl();
   auto entry = RendererFor(request);
   if (!entry.ok()) return entry.error();
   const std::vector<PieceSet> sets = PieceSetsFor(request.method);
@@ -353,7 +357,7 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
 }
 
 void GpuCuller::RemoveSlot(uint32_t slot) {
-  const auto gl = LockGl();
+  // No GL here: the renderers drop the slot's pieces on the CPU and upload at their next view.
   for (auto& [key, entry] : renderers_) {
     entry.renderer->RemoveSlot(slot);
     for (int set = 0; set < kNumPieceSets; ++set) entry.built.erase({slot, set});

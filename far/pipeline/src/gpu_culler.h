@@ -21,7 +21,8 @@ namespace far::internal {
 /// The GPU stages of a step (FAR, FAR with exact offsets, CULLIDE): object-level and
 /// sub-object-level culling with three axis views each. Keeps one renderer per raster format,
 /// each with the GPU pieces of every object, rebuilt only when the object's vertices change.
-/// Owned by the GL thread (see far::GlContext); its GL work runs under far::LockGl.
+/// Owned by the GL thread (see far::GlContext); its GL work runs under far::LockGl, taken per
+/// view (the pieces are built and dropped on the CPU, and uploaded in the view that draws them).
 class GpuCuller {
  public:
   /// `counters` gets the piece builds; `pool` builds the pieces of changed objects in
