@@ -170,57 +170,59 @@ void AddCrossingGrids(RawSession& session) {
   return ::testing::AssertionSuccess();
 }
 
+// A daemon with heavy_step_ms 10 and the given setup allowance, and one session on the
+// crossing grids, whose first step (the two builds) has run.
+class SetupAllowanceTest : public DaemonTest {
+ protected:
+  void OpenLargeScene(double setup_allowance_ms) {
+    daemon_ = StartDaemon(HeavyStepArgs(dir_, 10, setup_allowance_ms));
+    ASSERT_NE(daemon_, nullptr);
+    auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "large-scene");
+    ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
+    raw_ = std::move(*raw);
+    AddCrossingGrids(*raw_);
+    ASSERT_TRUE(RunSteps(*raw_, 0, 1));
+  }
+  bool Demoted() const {
+    const std::string tag = "event=session_demoted session=" + std::to_string(raw_->id());
+    return daemon_->Log().find(tag) != std::string::npos;
+  }
+
+  TempDir dir_;
+  DaemonProcess* daemon_ = nullptr;
+  std::unique_ptr<RawSession> raw_;
+};
+
 // One-off work is no step's steady cost: a session whose first step builds two large
 // hierarchies (more than heavy_step_ms of the worker's CPU) and whose later steps are light is
 // not demoted. Judged on its whole first step, it was, for good: a 360K-triangle scene whose
 // steps take 3.5 ms was then served at 4.5 steps/s beside light sessions, 30 when not demoted.
-TEST_F(CpuPriorityTest, ASessionIsNotDemotedForTheHierarchiesItsFirstStepBuilds) {
-  TempDir dir;
-  DaemonProcess* daemon = StartDaemon(HeavyStepArgs(dir, 10, 1000));
-  ASSERT_NE(daemon, nullptr);
-  auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "large-static-scene");
-  ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
-  AddCrossingGrids(**raw);
-  ASSERT_TRUE(RunSteps(**raw, 0, 5));
-  EXPECT_EQ(daemon->Log().find("event=session_demoted"), std::string::npos) << daemon->Log();
+TEST_F(SetupAllowanceTest, ASessionIsNotDemotedForTheHierarchiesItsFirstStepBuilds) {
+  ASSERT_NO_FATAL_FAILURE(OpenLargeScene(1000));
+  ASSERT_TRUE(RunSteps(*raw_, 1, 4));
+  EXPECT_FALSE(Demoted()) << daemon_->Log();
 }
 
 // The same session with no setup allowance is demoted by its first step: the test above sees
 // the allowance at work, not a first step too light to matter.
-TEST_F(CpuPriorityTest, WithoutASetupAllowanceItsFirstStepMakesItHeavy) {
-  TempDir dir;
-  DaemonProcess* daemon = StartDaemon(HeavyStepArgs(dir, 10, 0));
-  ASSERT_NE(daemon, nullptr);
-  auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "large-static-scene");
-  ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
-  AddCrossingGrids(**raw);
-  ASSERT_TRUE(RunSteps(**raw, 0, 1));
-  EXPECT_NE(daemon->Log().find("event=session_demoted session=" + std::to_string((*raw)->id())),
-            std::string::npos)
-      << daemon->Log();
-  EXPECT_NE(daemon->Log().find("setup_covered_ms=0.0"), std::string::npos) << daemon->Log();
+TEST_F(SetupAllowanceTest, WithoutAnAllowanceItsFirstStepMakesItHeavy) {
+  ASSERT_NO_FATAL_FAILURE(OpenLargeScene(0));
+  EXPECT_TRUE(Demoted()) << daemon_->Log();
+  EXPECT_NE(daemon_->Log().find("setup_covered_ms=0.0"), std::string::npos) << daemon_->Log();
 }
 
 // The allowance is a budget, not a pass: a client that adds a new large object at every step
 // (and removes the last) is demoted once its user's allowance is spent.
-TEST_F(CpuPriorityTest, AClientThatBuildsAtEveryStepIsDemotedOnceItsAllowanceIsSpent) {
-  TempDir dir;
-  DaemonProcess* daemon = StartDaemon(HeavyStepArgs(dir, 10, 60));
-  ASSERT_NE(daemon, nullptr);
-  auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "churn");
-  ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
-  AddCrossingGrids(**raw);
-  ASSERT_TRUE(RunSteps(**raw, 0, 1));
-  const std::string tag = "event=session_demoted session=" + std::to_string((*raw)->id());
-  for (int step = 1; step < 12 && daemon->Log().find(tag) == std::string::npos; ++step) {
+TEST_F(SetupAllowanceTest, AClientThatBuildsAtEveryStepIsDemotedOnceItsAllowanceIsSpent) {
+  ASSERT_NO_FATAL_FAILURE(OpenLargeScene(60));
+  for (int step = 1; step < 12 && !Demoted(); ++step) {
     // A new copy of the static grid in place of the last one: built anew.
     const uint32_t id = static_cast<uint32_t>(step + 2);
-    ASSERT_TRUE((*raw)->writer().RemoveObject(step == 1 ? 1 : id - 1).ok());
-    ASSERT_TRUE((*raw)->writer().AddObject(id, FlatGrid(300), Motion::kStatic, Pose{}).ok());
-    ASSERT_TRUE(RunSteps(**raw, step, 1));
+    ASSERT_TRUE(raw_->writer().RemoveObject(step == 1 ? 1 : id - 1).ok());
+    ASSERT_TRUE(raw_->writer().AddObject(id, FlatGrid(300), Motion::kStatic, Pose{}).ok());
+    ASSERT_TRUE(RunSteps(*raw_, step, 1));
   }
-  EXPECT_TRUE(WaitUntil([&] { return daemon->Log().find(tag) != std::string::npos; }, 2s))
-      << daemon->Log();
+  EXPECT_TRUE(WaitUntil([&] { return Demoted(); }, 2s)) << daemon_->Log();
 }
 
 }  // namespace
