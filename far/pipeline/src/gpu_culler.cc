@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "far/gpu/gl_lock.h"
 #include "far/offsets/bounding_offset.h"
@@ -142,9 +144,13 @@ void RecordLevel(const LevelCertificate& level, StepStats& stats, double& radius
 
 }  // namespace
 
+GpuCuller::RendererKeyType GpuCuller::RendererKey(const StepRequest& request) {
+  return {request.resolution, request.resolution, static_cast<int>(request.depth_format)};
+}
+
 Result<GpuCuller::RendererEntry*> GpuCuller::RendererFor(const StepRequest& request) {
   const RasterFormat raster{request.resolution, request.resolution, request.depth_format};
-  auto key = std::make_tuple(raster.width, raster.height, static_cast<int>(raster.depth));
+  const RendererKeyType key = RendererKey(request);
   auto it = renderers_.find(key);
   if (it == renderers_.end()) {
     const auto gl = LockGl();  // compiles shaders, makes framebuffers
@@ -184,19 +190,33 @@ std::vector<PieceInstance> BuildPieces(const CachedObject& object, PieceSet set)
 // (deformable objects change every step: 150 leaves rebuild 19K triangles' pieces), then
 // handed to the renderer on this thread, the GL thread.
 void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
-                             std::span<const PieceSet> sets) {
+                             std::span<const PieceSet> sets, const StepControl& control) {
+  // The pieces an object never had here first (one-off: setup), then those whose vertices
+  // changed (deformable objects, every step).
   std::vector<std::pair<const CachedObject*, PieceSet>> stale;
+  size_t first_builds = 0;
   for (const CachedObject* object : objects) {
     for (PieceSet set : sets) {
       auto it = entry.built.find({object->slot, static_cast<int>(set)});
-      if (it == entry.built.end() || it->second != object->geometry_stamp)
+      if (it == entry.built.end()) {
+        stale.insert(stale.begin() + static_cast<ptrdiff_t>(first_builds++), {object, set});
+      } else if (it->second != object->geometry_stamp) {
         stale.emplace_back(object, set);
+      }
     }
   }
   std::vector<std::vector<PieceInstance>> built(stale.size());
-  pool_.ParallelFor(stale.size(), 1, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) built[i] = BuildPieces(*stale[i].first, stale[i].second);
-  });
+  const auto build = [&](size_t from, size_t to) {
+    pool_.ParallelFor(to - from, 1, [&](size_t begin, size_t end) {
+      for (size_t i = from + begin; i < from + end; ++i)
+        built[i] = BuildPieces(*stale[i].first, stale[i].second);
+    });
+  };
+  if (first_builds > 0) {
+    const SetupScope setup(&control);
+    build(0, first_builds);
+  }
+  build(first_builds, stale.size());
   for (size_t i = 0; i < stale.size(); ++i) {
     const auto [object, set] = stale[i];
     counters_.piece_builds++;
@@ -273,11 +293,17 @@ GpuCuller::~GpuCuller() {
 
 Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
                                                     std::span<const CachedObject* const> objects,
-                                                    StepStats& stats) {
+                                                    StepStats& stats, const StepControl& control) {
+  // A renderer's first step (its shaders compiled on first use) is setup. The object stage
+  // comes first in every GPU step: it tells the primitive stage which step this is.
+  const bool first_step = !renderers_.contains(RendererKey(request));
+  std::optional<SetupScope> setup;
+  if (first_step) setup.emplace(&control);
   auto entry = RendererFor(request);
   if (!entry.ok()) return entry.error();
+  (*entry)->first_step = first_step;
   const std::vector<PieceSet> sets = ObjectLevelSetsFor(request.method);
-  EnsurePieces(**entry, objects, sets);
+  EnsurePieces(**entry, objects, sets, control);
   // One primitive per object; each object is its own group.
   std::vector<ViewObject> view_objects;
   std::vector<Eigen::AlignedBox3d> boxes;
@@ -299,11 +325,13 @@ Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
 Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
     const StepRequest& request, std::span<const CachedObject* const> objects,
     std::span<const size_t> paired, std::span<const std::vector<uint32_t>> candidates,
-    StepStats& stats) {
+    StepStats& stats, const StepControl& control) {
   auto entry = RendererFor(request);
   if (!entry.ok()) return entry.error();
+  std::optional<SetupScope> setup;  // as in CullObjects
+  if (std::exchange((*entry)->first_step, false)) setup.emplace(&control);
   const std::vector<PieceSet> sets = PieceSetsFor(request.method);
-  EnsurePieces(**entry, objects, sets);
+  EnsurePieces(**entry, objects, sets, control);
   // Sub-objects of k triangles of the paired objects, each object its own group.
   const int k = request.subobject_size;
   std::vector<ViewObject> view_objects;

@@ -13,6 +13,7 @@
 
 #include "far/gpu/culling_renderer.h"
 #include "far/model/result.h"
+#include "far/model/step_control.h"
 #include "far/model/step_request.h"
 #include "far/model/step_result.h"
 
@@ -35,9 +36,11 @@ class GpuCuller {
   /// Culls whole objects: returns, indexed like `objects`, 1 for objects in the object PCS.
   /// @pre the objects' hierarchies are up to date (SceneCache::RefreshHierarchies): the FAR
   /// methods draw a cut of each hierarchy at this level.
+  /// The first step of a renderer (its shaders compiled, its pieces built and uploaded) and the
+  /// pieces built for objects new to it are setup (`control`'s on_setup_begin/on_setup_end).
   Result<std::vector<uint8_t>> CullObjects(const StepRequest& request,
                                            std::span<const CachedObject* const> objects,
-                                           StepStats& stats);
+                                           StepStats& stats, const StepControl& control);
 
   /// Culls sub-objects of k = request.subobject_size triangles of the objects `paired`
   /// (indices into `objects`): returns, indexed like `objects`, the sorted triangles of each
@@ -47,7 +50,7 @@ class GpuCuller {
   Result<std::vector<std::vector<uint32_t>>> CullPrimitives(
       const StepRequest& request, std::span<const CachedObject* const> objects,
       std::span<const size_t> paired, std::span<const std::vector<uint32_t>> candidates,
-      StepStats& stats);
+      StepStats& stats, const StepControl& control);
 
   /// Frees a removed object's pieces in every renderer.
   void RemoveSlot(uint32_t slot);
@@ -56,11 +59,14 @@ class GpuCuller {
   struct RendererEntry {
     std::unique_ptr<CullingRenderer> renderer;
     std::map<std::pair<uint32_t, int>, uint64_t> built;  // (slot, set) -> geometry stamp
+    bool first_step = false;  // the step running now is its first: its GPU stages are setup
   };
 
+  using RendererKeyType = std::tuple<int, int, int>;  // width, height, depth format
+  static RendererKeyType RendererKey(const StepRequest& request);
   Result<RendererEntry*> RendererFor(const StepRequest& request);
   void EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
-                    std::span<const PieceSet> sets);
+                    std::span<const PieceSet> sets, const StepControl& control);
   Result<void> CullLevel(RendererEntry& entry, const StepRequest& request,
                          std::span<const PieceSet> sets, std::span<const ViewObject> view_objects,
                          int k, std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
@@ -68,7 +74,7 @@ class GpuCuller {
 
   SceneCounters& counters_;
   ThreadPool& pool_;
-  std::map<std::tuple<int, int, int>, RendererEntry> renderers_;
+  std::map<RendererKeyType, RendererEntry> renderers_;
 };
 
 }  // namespace far::internal

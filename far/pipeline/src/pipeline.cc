@@ -249,7 +249,7 @@ Result<void> Pipeline::Impl::CullObjectsStage(StepState& state) {
   if (IsGpuMethod(state.request.method)) {
     cache.RefreshGpuGeometry(pool);
     cache.RefreshHierarchies(state.objects, pool, state.control);
-    auto alive = gpu->CullObjects(state.request, state.objects, state.result.stats);
+    auto alive = gpu->CullObjects(state.request, state.objects, state.result.stats, state.control);
     if (!alive) return alive.error();
     state.object_alive = std::move(*alive);
   } else {
@@ -317,8 +317,8 @@ Result<void> Pipeline::Impl::CullPrimitivesStage(StepState& state) {
     std::vector<std::vector<uint32_t>> candidates(state.objects.size());
     for (size_t i = 0; i < descended.size(); ++i)
       candidates[index_of.at(descended[i]->id)] = std::move(near.candidates[i]);
-    auto subsets =
-        gpu->CullPrimitives(state.request, state.objects, paired, candidates, result.stats);
+    auto subsets = gpu->CullPrimitives(state.request, state.objects, paired, candidates,
+                                       result.stats, state.control);
     if (!subsets) return subsets.error();
     state.subsets = std::move(*subsets);
   } else {

@@ -182,6 +182,41 @@ TEST_F(PipelineCullingTest, ContactsDoNotChangeWhenTheSceneMoves) {
   }
 }
 
+// One-off GL work is setup (StepControl::on_setup_begin/on_setup_end), which a daemon does not
+// count against a session: a renderer's first step (its shaders compiled and its pieces built
+// on first use) and the pieces of an object new to it. Later steps of the same objects have
+// none. A step at another resolution comes first each time, so that the hierarchies are built
+// and what is seen here is the new renderer's and the new pieces'.
+TEST_F(PipelineCullingTest, ARenderersFirstStepAndNewObjectsPiecesAreSetup) {
+  int parts = 0, depth = 0;
+  StepControl control;
+  control.on_setup_begin = [&] { parts += depth++ == 0; };
+  control.on_setup_end = [&] { --depth; };
+  const auto setup_parts = [&](Method method, int resolution) {
+    StepRequest request;
+    request.method = method;
+    request.resolution = resolution;
+    parts = 0;
+    auto result = pipeline_->Step(request, control);
+    EXPECT_TRUE(result.ok()) << ToString(result.error());
+    EXPECT_EQ(depth, 0);
+    return parts;
+  };
+  auto objects = RandomSoup(77, 4, 12, 2.0, 0.6);
+  const SceneObject added = objects.back();
+  objects.pop_back();
+  constexpr int kUnusedResolution = 200;  // no other test makes this renderer
+  Load(objects);
+  setup_parts(Method::kFar, 256);
+  EXPECT_GE(setup_parts(Method::kFar, kUnusedResolution), 1) << "a new renderer's first step";
+  EXPECT_EQ(setup_parts(Method::kFar, kUnusedResolution), 0);
+  ASSERT_TRUE(pipeline_->AddObject(added.id, added.mesh, added.motion, added.X_WO).ok());
+  loaded_.push_back(added.id);
+  setup_parts(Method::kFar, 256);
+  EXPECT_GE(setup_parts(Method::kFar, kUnusedResolution), 1) << "the new object's pieces";
+  EXPECT_EQ(setup_parts(Method::kFar, kUnusedResolution), 0);
+}
+
 TEST_F(PipelineCullingTest, HardCasesFarFromOriginAndTinyFeatures) {
   // Features of 1e-3 at 1e5 and 1e6 from the origin.
   for (double origin : {1e5, 1e6}) {

@@ -44,8 +44,9 @@ struct StepControl {
   Clock::time_point slow_after = Clock::time_point::max();
   /// Called on the step's thread (the caller of Pipeline::Step) at the start and the end of
   /// each part of the step that later steps of the same scene do not repeat: the hierarchy
-  /// builds of new objects, and an `auto` step that tries a configuration or measures the GPU
-  /// (the steps after it run the one chosen). A daemon accounts that work apart from the
+  /// builds and GPU pieces of new objects, a GL renderer's first step (shaders, framebuffers),
+  /// and an `auto` step that tries a configuration or measures the GPU (the steps after it run
+  /// the one chosen). A daemon accounts that work apart from the
   /// step's steady cost. Parts may nest; each begin has its end. Either may be empty.
   std::function<void()> on_setup_begin, on_setup_end;
 
