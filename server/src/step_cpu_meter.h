@@ -18,7 +18,7 @@ inline double ThreadCpuMs(std::optional<clockid_t> clock) {
 }
 
 /// A session worker's CPU time on one step (read from the worker's clock), with its setup
-/// (StepControl::on_setup_begin/end: hierarchy builds, auto's calibration) covered by the
+/// (StepControl::on_setup_begin/end: one-off work such as hierarchy builds) covered by the
 /// user's SetupAllowance as far as it lasts: only the rest, the step's steady cost, can make
 /// the step heavy. BeginSetup and EndSetup run on the worker; the rest on any thread.
 class StepCpuMeter {

@@ -193,18 +193,19 @@ void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject*
                              std::span<const PieceSet> sets, const StepControl& control) {
   // The pieces an object never had here first (one-off: setup), then those whose vertices
   // changed (deformable objects, every step).
-  std::vector<std::pair<const CachedObject*, PieceSet>> stale;
-  size_t first_builds = 0;
+  std::vector<std::pair<const CachedObject*, PieceSet>> stale, changed;
   for (const CachedObject* object : objects) {
     for (PieceSet set : sets) {
       auto it = entry.built.find({object->slot, static_cast<int>(set)});
       if (it == entry.built.end()) {
-        stale.insert(stale.begin() + static_cast<ptrdiff_t>(first_builds++), {object, set});
-      } else if (it->second != object->geometry_stamp) {
         stale.emplace_back(object, set);
+      } else if (it->second != object->geometry_stamp) {
+        changed.emplace_back(object, set);
       }
     }
   }
+  const size_t first_builds = stale.size();
+  stale.insert(stale.end(), changed.begin(), changed.end());
   std::vector<std::vector<PieceInstance>> built(stale.size());
   const auto build = [&](size_t from, size_t to) {
     pool_.ParallelFor(to - from, 1, [&](size_t begin, size_t end) {

@@ -46,8 +46,8 @@ struct StepControl {
   /// each part of the step that later steps of the same scene do not repeat: the hierarchy
   /// builds and GPU pieces of new objects, a GL renderer's first step (shaders, framebuffers),
   /// and an `auto` step that tries a configuration or measures the GPU (the steps after it run
-  /// the one chosen). A daemon accounts that work apart from the
-  /// step's steady cost. Parts may nest; each begin has its end. Either may be empty.
+  /// the one chosen). A daemon accounts that work apart from the step's steady cost. Parts may
+  /// nest; each begin has its end. Either may be empty.
   std::function<void()> on_setup_begin, on_setup_end;
 
   /// kCancelled or kDeadline when the step must stop now, else kNone (reads the clock; calls
