@@ -224,6 +224,7 @@ Command AddLoadCommand(CLI::App& app, const GlobalFlags& global) {
                    "scene each client uploads (default: a random soup per client)");
   load->add_flag("--json", flags->as_json, "print JSON");
   flags->step.Add(load);
+  flags->step.AddTimeout(load);
   command.run = [&global, flags, steps, seconds] {
     auto request = flags->step.Request();
     if (!request) return Fail(request.error());

@@ -146,6 +146,7 @@ Command AddCollideCommand(CLI::App& app, const GlobalFlags& global) {
       ->required()
       ->check(CLI::ExistingFile);
   flags->step.Add(command.app);
+  flags->step.AddTimeout(command.app);
   command.run = [&global, flags] { return RunCollide(global, *flags); };
   return command;
 }
@@ -174,6 +175,7 @@ Command AddPlayCommand(CLI::App& app, const GlobalFlags& global) {
                         "rounding bound and world bounds); by default only when the "
                         "configuration changes. JSON lines always carry it in stats");
   flags->step.Add(command.app);
+  flags->step.AddTimeout(command.app);
   command.run = [&global, flags] { return RunPlay(global, *flags); };
   return command;
 }

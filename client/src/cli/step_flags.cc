@@ -6,12 +6,15 @@
 
 namespace far::cli {
 
-void StepFlags::Add(CLI::App* command) {
+void StepFlags::AddTimeout(CLI::App* command) {
   command
       ->add_option("--timeout", timeout,
                    "wait this long for each step's reply while the daemon works on it (500ms, "
                    "60s, 2m); a daemon that stops ends the wait at once")
       ->capture_default_str();
+}
+
+void StepFlags::Add(CLI::App* command) {
   command
       ->add_option("--method", method,
                    "auto (the fastest reliable method for the daemon's renderer and the scene), "

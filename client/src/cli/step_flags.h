@@ -17,8 +17,10 @@ struct StepFlags {
   double distance = 0;
   CLI::Option* distance_option = nullptr;
 
-  /// Adds the options to `command`.
+  /// Adds the options of the request to `command`.
   void Add(CLI::App* command);
+  /// Adds --timeout, for the commands whose steps run in a daemon (not snapshot's).
+  void AddTimeout(CLI::App* command);
   /// The request the options describe, or an error naming the bad option.
   Result<StepRequest> Request() const;
   /// The client options for these steps: `base` with --timeout.

@@ -167,5 +167,15 @@ TEST_F(SnapshotCommandTest, RefusesAFrameTheSceneDoesNotHave) {
   EXPECT_FALSE(std::filesystem::exists(dir_ / "x.png"));
 }
 
+// Snapshot runs its step in-process: a --timeout it took would bound nothing, so it has none.
+TEST_F(SnapshotCommandTest, HasNoTimeoutOption) {
+  const std::filesystem::path scene = WriteTwoBalls(dir_, 1.0);
+  const auto [status, out] = RunFarClient("snapshot " + scene.string() + " --png " +
+                                          (dir_ / "x.png").string() + " --timeout 1s");
+  EXPECT_NE(status, 0) << out;
+  EXPECT_NE(out.find("--timeout"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "x.png"));
+}
+
 }  // namespace
 }  // namespace far
