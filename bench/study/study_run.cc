@@ -298,7 +298,10 @@ int64_t SumOf(const std::vector<Sample>& samples, F field) {
 
 void SummarizeTimes(const std::vector<Sample>& s, Row& row) {
   std::vector<double> ms;
-  for (const Sample& x : s) ms.push_back(x.step_ms);
+  for (const Sample& x : s) {
+    ms.push_back(x.step_ms);
+    row.ms_by_step[x.step] = x.step_ms;
+  }
   row.ms_median = far::Quantile(ms, 0.5);
   row.ms_p25 = far::Quantile(ms, 0.25);
   row.ms_p75 = far::Quantile(ms, 0.75);
@@ -464,6 +467,7 @@ far::Result<void> RunStep(const StudyScene& scene, const RunOptions& options, in
   for (size_t i = 0; i < configs.size(); ++i) {
     if (!ran[i]) continue;
     if (reference_runs) Compare(configs.back(), configs[i], samples[i]);
+    samples[i].step = s;
     configs[i].samples.push_back(std::move(samples[i]));
   }
   return {};
@@ -475,6 +479,7 @@ SceneReport MakeReport(const StudyScene& scene, const std::vector<Live>& configs
   report.name = scene.name;
   report.description = scene.description;
   report.break_note = scene.break_note;
+  report.break_step = scene.break_step;
   report.family = scene.family;
   report.kind = scene.kind;
   report.triangles = scene.triangles;

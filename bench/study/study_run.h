@@ -61,6 +61,7 @@ constexpr std::array<const char*, 5> kStages = {"update", "object_cull", "sweep_
 
 /// What one step of one configuration measured.
 struct Sample {
+  int step = 0;          ///< the measured step, 1..steps
   double step_ms = 0;    ///< ingest + Step, wall clock
   double cpu_ms = 0;     ///< the same span in CPU time of the whole process (llvmpipe's too)
   double ingest_ms = 0;  ///< Pipeline::Apply of the step's updates
@@ -85,6 +86,7 @@ struct Row {
   bool checked = false;    ///< some measured step was checked: missed / false positives known
   int checked_steps = 0;   ///< samples checked against the reference (the totals count these)
   double ms_median = 0, ms_p25 = 0, ms_p75 = 0, ms_min = 0, ms_max = 0, cpu_ms = 0;
+  std::map<int, double> ms_by_step;  ///< measured step -> its time (one sample per step)
   double ingest_ms = 0, cull_ms = 0;
   std::array<double, kStages.size()> stage_ms{};
   double pcs_objects = 0, pcs_primitives = 0, object_pairs = 0, pairs_considered = 0;
@@ -103,6 +105,7 @@ struct Row {
 /// One scene's run: what it was and a row per configuration.
 struct SceneReport {
   std::string name, description, break_note;
+  int break_step = 0;  ///< breaking: the measured step of the break; 0: none
   Family family = Family::kSmall;
   Kind kind = Kind::kRigid;
   int64_t triangles = 0;

@@ -195,6 +195,7 @@ far::Result<StudyScene> MakePaperScene(const std::string& name, const SceneOptio
     study.kind = Kind::kBreaking;
     study.scene = far::scenes::BreakingScene(kPaperSeed, frames, options.breaking_static_triangles,
                                              options.breaking_rigid_triangles);
+    study.break_step = break_step;
     study.key_steps = {break_step, break_step + 1};
     study.break_note = "the vase breaks at measured step " + std::to_string(break_step) + " of " +
                        std::to_string(steps);

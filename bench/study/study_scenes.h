@@ -39,6 +39,7 @@ struct StudyScene {
   double diagonal = 0;     ///< of the world bounding box at step 0 (D is a fraction of it)
   bool far_only = false;   ///< bunnies-fine: FAR at the primary resolution only
   std::string break_note;  ///< breaking: at which measured step the break happens
+  int break_step = 0;      ///< breaking: that measured step; 0 for the other scenes
   /// Measured steps the reference must check even when it runs on a few steps only
   /// (--reference-steps): breaking's break and the step after it.
   std::vector<int> key_steps;
