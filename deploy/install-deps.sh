@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs every Debian 12 package far needs to build, test and run. Idempotent: packages already
-# present are left alone, and apt is asked only for what is missing.
+# Installs every Debian 12 package far needs to build, test and run, then fetches LCM's source
+# package through apt (deploy/fetch-lcm-source.sh). Idempotent: packages already present are left
+# alone, apt is asked only for what is missing, and the source is fetched once.
 set -euo pipefail
 
 packages=(
@@ -14,9 +15,9 @@ packages=(
   # headless GL: EGL + GL headers and Mesa's software rasterizer (llvmpipe). Nothing pulls
   # libgl1-mesa-dri in otherwise, and without it EGL finds no driver at all.
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev
-  # protocol and IPC. LCM's C library is built from source (protocol/third_party/lcm: patch,
-  # glib; CMake downloads the tarball, ca-certificates for https); lcm-gen is liblcm-bin's.
-  liblcm-bin libglib2.0-dev patch ca-certificates libboost-dev libsodium-dev
+  # protocol and IPC. LCM's C library is built from Debian's source package (protocol/third_party/
+  # lcm: patch, glib; fetched through apt below); lcm-gen is liblcm-bin's.
+  liblcm-bin libglib2.0-dev patch libboost-dev libsodium-dev
   # files (far-client snapshot writes PNG through libpng), command lines, logs
   nlohmann-json3-dev libpng-dev libcli11-dev libspdlog-dev
   # tests, benchmarks, plots
@@ -33,12 +34,13 @@ for p in "${packages[@]}"; do
 done
 if ((${#missing[@]} == 0)); then
   echo "install-deps: all ${#packages[@]} packages present"
-  exit 0
+else
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-sudo=""
-[ "$(id -u)" -eq 0 ] || sudo="sudo"
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+bash "$(dirname "$0")/fetch-lcm-source.sh"

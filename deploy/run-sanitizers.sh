@@ -15,10 +15,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 jobs=$(nproc)
-# The release tree's copy of LCM's tarball, when there is one: no second download.
-lcm_tarball=$(ls build/*/_deps/far_lcm/lcm_1.3.1+repack1.orig.tar.gz 2>/dev/null | head -n 1 || true)
-lcm_flag=()
-[ -n "$lcm_tarball" ] && lcm_flag=(-DFAR_LCM_TARBALL="$PWD/$lcm_tarball")
 
 stage_timer_name=run-sanitizers
 # shellcheck source=deploy/stage-timer.sh
@@ -32,7 +28,7 @@ tsan_unit_targets=(far_protocol_test far_server_test far_pairs_test)
 tsan_integration='^(SessionLifetimeTest|DispatchTest|BadInputTest|LimitsTest)\.'
 
 configure() {
-  cmake --preset "$1" "${lcm_flag[@]}" >/dev/null
+  cmake --preset "$1" >/dev/null
 }
 
 asan() {
