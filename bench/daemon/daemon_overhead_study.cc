@@ -15,8 +15,8 @@
 
 #include "daemon.h"
 
+#include "far/base/quantile.h"
 #include "far/client/client.h"
-#include "far/model/quantile.h"
 #include "far/pipeline/pipeline.h"
 #include "far/scenes/scenes.h"
 

@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/protocol/lcm_bus.h"
 
 namespace far::study {

@@ -28,7 +28,7 @@
 #include "study_daemon.h"
 #include <CLI/CLI.hpp>
 
-#include "far/model/quantile.h"
+#include "far/base/quantile.h"
 
 namespace far::study {
 namespace {

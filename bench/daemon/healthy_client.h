@@ -11,8 +11,8 @@
 
 #include "study_daemon.h"
 
+#include "far/base/result.h"
 #include "far/client/client.h"
-#include "far/model/result.h"
 #include "far/model/scene.h"
 
 namespace far::study {

@@ -6,8 +6,8 @@
 
 #include <cstdint>
 
+#include "far/base/result.h"
 #include "far/client/client.h"
-#include "far/model/result.h"
 #include "far/model/scene.h"
 
 namespace far::study {

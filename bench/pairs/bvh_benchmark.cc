@@ -107,7 +107,7 @@ struct PairScene {
     bvh.Build(mesh.p_MV, mesh.triangles);
   }
   std::vector<WorldObjectView> Views() const {
-    return {{1, p_WA, mesh.triangles}, {2, p_WB, mesh.triangles}};
+    return {{p_WA, mesh.triangles}, {p_WB, mesh.triangles}};
   }
 };
 
@@ -118,14 +118,15 @@ const PairScene& Scene(int n, bool fans = false) {
   return *scene;
 }
 
-const std::vector<ObjectPair> kPairs = {{1, 2}};
+const std::vector<SlotPair> kPairs = {{SlotAt(0), SlotAt(1)}};
 
 ExactResult RunBvh(const PairScene& scene, ThreadPool& pool, const TriangleBvh* bvh = nullptr) {
   if (bvh == nullptr) bvh = &scene.bvh;
-  const std::vector<BvhObject> objects = {{{1, scene.p_WA, scene.mesh.triangles}, bvh, scene.X_WA},
-                                          {{2, scene.p_WB, scene.mesh.triangles}, bvh, scene.X_WB}};
+  const std::vector<WorldObjectView> views = scene.Views();
+  const std::vector<ObjectHierarchy> hierarchies = {{bvh, scene.X_WA}, {bvh, scene.X_WB}};
   BvhQuery query;
-  query.objects = objects;
+  query.objects = views;
+  query.hierarchies = hierarchies;
   query.object_pairs = kPairs;
   query.want_candidates = false;
   return RunBvhTests(query, pool).exact;

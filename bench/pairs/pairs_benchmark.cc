@@ -31,31 +31,31 @@
 namespace far {
 namespace {
 
-std::vector<IdBox> RandomBoxes(int n, uint32_t seed) {
+std::vector<SlotBox> RandomBoxes(int n, uint32_t seed) {
   std::mt19937 rng(seed);
   // About 4 overlapping neighbours per box whatever n.
   const double extent = std::cbrt(static_cast<double>(n)) * 2.0;
   std::uniform_real_distribution<double> position(0, extent), size(0.2, 1.5);
-  std::vector<IdBox> boxes;
+  std::vector<SlotBox> boxes;
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d lo(position(rng), position(rng), position(rng));
     boxes.push_back(
-        {static_cast<uint32_t>(i),
+        {SlotAt(static_cast<size_t>(i)),
          Eigen::AlignedBox3d(lo, lo + Eigen::Vector3d(size(rng), size(rng), size(rng)))});
   }
   return boxes;
 }
 
-void Jitter(std::vector<IdBox>& boxes, std::mt19937& rng, double amount) {
+void Jitter(std::vector<SlotBox>& boxes, std::mt19937& rng, double amount) {
   std::uniform_real_distribution<double> jitter(-amount, amount);
-  for (IdBox& box : boxes) {
+  for (SlotBox& box : boxes) {
     const Eigen::Vector3d delta(jitter(rng), jitter(rng), jitter(rng));
     box.box_W = Eigen::AlignedBox3d(box.box_W.min() + delta, box.box_W.max() + delta);
   }
 }
 
 void BM_SweepAndPrune_Coherent(benchmark::State& state) {
-  std::vector<IdBox> boxes = RandomBoxes(static_cast<int>(state.range(0)), 1);
+  std::vector<SlotBox> boxes = RandomBoxes(static_cast<int>(state.range(0)), 1);
   std::mt19937 rng(2);
   SweepAndPrune sap;
   sap.Update(boxes);
@@ -73,7 +73,7 @@ void BM_SweepAndPrune_Coherent(benchmark::State& state) {
 BENCHMARK(BM_SweepAndPrune_Coherent)->Arg(1000)->Arg(10000)->Arg(100000);
 
 void BM_SweepAndPrune_Static(benchmark::State& state) {
-  const std::vector<IdBox> boxes = RandomBoxes(static_cast<int>(state.range(0)), 1);
+  const std::vector<SlotBox> boxes = RandomBoxes(static_cast<int>(state.range(0)), 1);
   SweepAndPrune sap;
   sap.Update(boxes);
   for (auto _ : state) benchmark::DoNotOptimize(sap.Update(boxes));
@@ -81,7 +81,7 @@ void BM_SweepAndPrune_Static(benchmark::State& state) {
 BENCHMARK(BM_SweepAndPrune_Static)->Arg(1000)->Arg(10000)->Arg(100000);
 
 void BM_SweepAndPrune_FromScratch(benchmark::State& state) {
-  std::vector<IdBox> boxes = RandomBoxes(static_cast<int>(state.range(0)), 1);
+  std::vector<SlotBox> boxes = RandomBoxes(static_cast<int>(state.range(0)), 1);
   std::mt19937 rng(2);
   for (auto _ : state) {
     state.PauseTiming();
@@ -118,16 +118,18 @@ Soups MakeSoups(int n) {
       soups.triangles[o].push_back({base, base + 1, base + 2});
     }
   }
-  for (uint32_t o = 0; o < 2; ++o)
-    soups.views.push_back({o, soups.positions[o], soups.triangles[o]});
+  for (uint32_t o = 0; o < 2; ++o) soups.views.push_back({soups.positions[o], soups.triangles[o]});
   return soups;
 }
 
 void BM_ExactStage_SortAndSweep(benchmark::State& state) {
   const Soups soups = MakeSoups(static_cast<int>(state.range(0)));
   ThreadPool pool(static_cast<int>(state.range(1)));
-  const std::vector<ObjectPair> pairs = {{0, 1}};
-  const ExactQuery query{soups.views, pairs, {}, true, 0.05};
+  const std::vector<SlotPair> pairs = {{SlotAt(0), SlotAt(1)}};
+  ExactQuery query;
+  query.objects = soups.views;
+  query.object_pairs = pairs;
+  query.max_distance = 0.05;
   size_t contacts = 0;
   for (auto _ : state) contacts = RunExactTests(query, pool).contacts.size();
   state.counters["contacts"] = static_cast<double>(contacts);
@@ -154,15 +156,16 @@ void BM_SortContacts(benchmark::State& state) {
   const auto n = static_cast<size_t>(state.range(0));
   const auto idle = std::chrono::microseconds(state.range(1));
   std::mt19937 rng(11);
-  std::vector<ContactPair> input(n);
-  for (ContactPair& p : input) {
-    p.object_a = 1 + rng() % 13;
-    p.object_b = p.object_a + 1 + rng() % 3;
+  std::vector<SlotContact> input(n);
+  for (SlotContact& p : input) {
+    const size_t a = 1 + rng() % 13;
+    p.object_a = SlotAt(a);
+    p.object_b = SlotAt(a + 1 + rng() % 3);
     p.triangle_a = rng() % 100000;
     p.triangle_b = rng() % 3000;
   }
   for (auto _ : state) {
-    std::vector<ContactPair> pairs = input;
+    std::vector<SlotContact> pairs = input;
     if (idle.count() > 0) std::this_thread::sleep_for(idle);
     const auto start = std::chrono::steady_clock::now();
     if (state.range(2) == 0) {

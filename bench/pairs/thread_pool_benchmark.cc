@@ -15,7 +15,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "far/pairs/thread_pool.h"
+#include "far/base/thread_pool.h"
 
 namespace far {
 namespace {

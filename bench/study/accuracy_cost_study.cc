@@ -196,12 +196,15 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_flag("--quick", o.quick,
                "smoke test: small scenes and scaling 2000,5000 (with the distance pass), 2 steps, "
                "resolutions 256,1024");
-  app.add_option("--gl-platform", o.gl_platform,
-                 "EGL platform: auto, device (a GPU only: fails without one) or surfaceless")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, far::GlPlatform>{{"auto", far::GlPlatform::kAuto},
-                                                 {"device", far::GlPlatform::kDevice},
-                                                 {"surfaceless", far::GlPlatform::kSurfaceless}}));
+  app.add_option_function<std::string>(
+         "--gl-platform",
+         [&o](const std::string& name) { o.gl_platform = *far::ParseGlPlatform(name); },
+         "EGL platform: auto, device (a GPU only: fails without one) or surfaceless")
+      ->check([](const std::string& name) {
+        return far::ParseGlPlatform(name)
+                   ? std::string()
+                   : "unknown platform '" + name + "' (" + far::GlPlatformNames() + ")";
+      });
 }
 
 // --quick: small sizes, unless a flag set them explicitly.

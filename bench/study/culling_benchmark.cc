@@ -136,17 +136,12 @@ int main(int argc, char** argv) {
       argv[kept++] = argv[i];
       continue;
     }
-    if (value == "auto") {
-      g_platform = far::GlPlatform::kAuto;
-    } else if (value == "device") {
-      g_platform = far::GlPlatform::kDevice;
-    } else if (value == "surfaceless") {
-      g_platform = far::GlPlatform::kSurfaceless;
+    const std::optional<far::GlPlatform> platform = far::ParseGlPlatform(value);
+    if (platform) {
+      g_platform = *platform;
     } else {
-      std::fprintf(stderr,
-                   "far_culling_benchmark: --gl-platform: unknown '%s' (auto, device, "
-                   "surfaceless)\n",
-                   value.c_str());
+      std::fprintf(stderr, "far_culling_benchmark: --gl-platform: unknown '%s' (%s)\n",
+                   value.c_str(), far::GlPlatformNames().c_str());
       return 2;
     }
   }

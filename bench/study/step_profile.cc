@@ -143,7 +143,8 @@ int main(int argc, char** argv) {
     for (const far::StageStats& stage : result->stats.stages) {
       char ms_text[32];
       std::snprintf(ms_text, sizeof ms_text, "%.3f", stage.ms);
-      stages += (stages.empty() ? "" : " ") + stage.name + "=" + ms_text;
+      stages +=
+          (stages.empty() ? "" : " ") + std::string(far::ToString(stage.stage)) + "=" + ms_text;
     }
     const far::DescentCounters& descent = result->stats.descent;
     std::printf("%zu,%.3f,%.3f,%zu,%zu,%lld,%lld,%lld,%lld,%lld,%lld,%lld,%lld,%s\n", s, ms,

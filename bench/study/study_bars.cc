@@ -7,6 +7,10 @@
 namespace far_study {
 namespace {
 
+// The culling stages' places in Row::stage_ms.
+constexpr size_t kObjectCull = StageIndex(far::Stage::kObjectCull);
+constexpr size_t kPrimitiveCull = StageIndex(far::Stage::kPrimitiveCull);
+
 // Where every bar writes.
 struct Out {
   std::ostringstream table, sections, summary;
@@ -324,10 +328,11 @@ void IdBufferBar(const Reports& small, const RunOptions& options, Out& out) {
   out.table << big->name << ", far @" << res << ", " << Count(big_input)
             << " triangles into the sub-object pass, " << Count(b->queries)
             << " queries: culling stages " << Ms(b->cull_ms) << " ms (queries) / " << Ms(a->cull_ms)
-            << " ms (ID buffer) = **" << Ratio(cull) << "** (object level " << Ms(b->stage_ms[1])
-            << " / " << Ms(a->stage_ms[1]) << ", sub-object level " << Ms(b->stage_ms[3]) << " / "
-            << Ms(a->stage_ms[3]) << "); whole step " << Ratio(step) << " wall, " << Ratio(cpu)
-            << " process CPU | >= 4x | "
+            << " ms (ID buffer) = **" << Ratio(cull) << "** (object level "
+            << Ms(b->stage_ms[kObjectCull]) << " / " << Ms(a->stage_ms[kObjectCull])
+            << ", sub-object level " << Ms(b->stage_ms[kPrimitiveCull]) << " / "
+            << Ms(a->stage_ms[kPrimitiveCull]) << "); whole step " << Ratio(step) << " wall, "
+            << Ratio(cpu) << " process CPU | >= 4x | "
             << (met ? "met" : "**not met** (needs " + Ratio(4 / cull) + " more)") << " |\n";
   out.summary << "id-buffer vs queries (" << big->name << " far @" << res << "): culling "
               << Ratio(cull) << ", step " << Ratio(step) << ", step CPU " << Ratio(cpu)
@@ -347,10 +352,11 @@ void IdBufferTable(const Reports& small, const RunOptions& options, Out& out) {
       if (!x || !y || x->samples == 0 || y->samples == 0) continue;
       out.sections << "| " << report->name << " | " << r << " | " << Count(x->subobject_input)
                    << " | " << Count(y->queries) << " | " << Ms(x->cull_ms) << " ("
-                   << Ms(x->stage_ms[1]) << " + " << Ms(x->stage_ms[3]) << ") | " << Ms(y->cull_ms)
-                   << " (" << Ms(y->stage_ms[1]) << " + " << Ms(y->stage_ms[3]) << ") | "
-                   << Ratio(y->cull_ms / x->cull_ms) << " | " << Ratio(y->ms_median / x->ms_median)
-                   << " | " << Ratio(y->cpu_ms / x->cpu_ms) << " |\n";
+                   << Ms(x->stage_ms[kObjectCull]) << " + " << Ms(x->stage_ms[kPrimitiveCull])
+                   << ") | " << Ms(y->cull_ms) << " (" << Ms(y->stage_ms[kObjectCull]) << " + "
+                   << Ms(y->stage_ms[kPrimitiveCull]) << ") | " << Ratio(y->cull_ms / x->cull_ms)
+                   << " | " << Ratio(y->ms_median / x->ms_median) << " | "
+                   << Ratio(y->cpu_ms / x->cpu_ms) << " |\n";
     }
   }
   out.sections << "\n";
@@ -382,9 +388,10 @@ void CullideBar(const Reports& small, const RunOptions& options, Out& out) {
       worst = std::max(worst, ratio);
       best = std::min(best, ratio);
       md << "| " << report->name << " | " << c.mechanism << " | " << c.resolution << " | "
-         << Ms(c.ms_median) << " (" << Ms(c.stage_ms[1]) << " + " << Ms(c.stage_ms[3]) << ") | "
-         << c.missed << " | " << Ms(f->ms_median) << " (" << Ms(f->stage_ms[1]) << " + "
-         << Ms(f->stage_ms[3]) << ") | " << f->missed << " | " << Ratio(ratio) << " |\n";
+         << Ms(c.ms_median) << " (" << Ms(c.stage_ms[kObjectCull]) << " + "
+         << Ms(c.stage_ms[kPrimitiveCull]) << ") | " << c.missed << " | " << Ms(f->ms_median)
+         << " (" << Ms(f->stage_ms[kObjectCull]) << " + " << Ms(f->stage_ms[kPrimitiveCull])
+         << ") | " << f->missed << " | " << Ratio(ratio) << " |\n";
     }
   }
   md << "\n";

@@ -26,7 +26,7 @@ void WriteCsvHeader(std::ofstream& out) {
   out << "scene,family,kind,triangles,objects,steps,config,method,mechanism,resolution,output,"
          "distance,samples,step_ms_median,step_ms_p25,step_ms_p75,step_ms_min,step_ms_max,"
          "cpu_ms,ingest_ms";
-  for (const char* stage : kStages) out << "," << stage << "_ms";
+  for (far::Stage stage : far::kStages) out << "," << far::ToString(stage) << "_ms";
   out << ",cull_ms,pcs_objects,pcs_primitives,object_pairs,pairs_considered,pairs_tested,"
          "subobject_input,contacts_total,reference_total,missed_total,false_positives_total,"
          "distance_pairs_total,distance_reference_total,distance_missed_total,"
@@ -120,8 +120,9 @@ std::string DistanceMisses(const Row& row) {
 std::string StageText(const Row& r) {
   std::ostringstream text;
   text << "ingest " << Ms(r.ingest_ms);
-  for (size_t i = 0; i < kStages.size(); ++i) {
-    if (r.stage_ms[i] >= 0.005) text << ", " << kStages[i] << " " << Ms(r.stage_ms[i]);
+  for (far::Stage stage : far::kStages) {
+    const double ms = r.stage_ms[StageIndex(stage)];
+    if (ms >= 0.005) text << ", " << far::ToString(stage) << " " << Ms(ms);
   }
   // The GPU methods' views inside the culling stages (StepStats::gl_*_ms).
   if (r.gl_passes_ms > 0) {

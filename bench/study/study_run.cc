@@ -14,10 +14,11 @@
 
 #include <Eigen/Geometry>
 
-#include "far/model/quantile.h"
+#include "far/base/quantile.h"
+#include "far/base/thread_pool.h"
 #include "far/model/scene_update.h"
+#include "far/model/slot_ids.h"
 #include "far/pairs/exact_stage.h"
-#include "far/pairs/thread_pool.h"
 #include "far/pipeline/pipeline.h"
 
 namespace far_study {
@@ -36,11 +37,6 @@ double ProcessCpuMs() {
   timespec t{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
-}
-
-bool IsGpu(far::Method method) {
-  return method == far::Method::kCullide || method == far::Method::kFar ||
-         method == far::Method::kFarExactOffset;
 }
 
 ConfigSpec Cpu(far::Method method, far::Output output = far::Output::kContacts) {
@@ -119,21 +115,22 @@ class BruteForceScene {
       for (const auto& p : object.mesh.p_MV) points.push_back(X_WO * p);
     }
     std::vector<far::WorldObjectView> views;
-    size_t i = 0;
-    for (const auto& [id, object] : objects_)
-      views.push_back({id, p_WV[i++], object.mesh.triangles});
+    std::vector<uint32_t> ids;  // by slot
+    for (const auto& [id, object] : objects_) {
+      views.push_back({p_WV[views.size()], object.mesh.triangles});
+      ids.push_back(id);
+    }
     far::StepResult result;
     result.stats.method = "exact";
-    result.stats.stages.push_back({"update", MillisecondsSince(start)});
+    result.stats.stages.push_back({far::Stage::kUpdate, MillisecondsSince(start)});
     const auto exact_start = Clock::now();
     far::ExactResult exact = far::BruteForceReference(views, distance, pool_);
-    result.stats.stages.push_back({"exact", MillisecondsSince(exact_start)});
+    result.stats.stages.push_back({far::Stage::kExact, MillisecondsSince(exact_start)});
     result.stats.pairs_considered = static_cast<int64_t>(exact.pairs_considered);
     result.stats.pairs_tested = static_cast<int64_t>(exact.pairs_tested);
-    result.contacts = std::move(exact.contacts);
-    result.distance_pairs = std::move(exact.distance_pairs);
-    std::sort(result.contacts.begin(), result.contacts.end());
-    std::sort(result.distance_pairs.begin(), result.distance_pairs.end());
+    const far::SlotIds slot_ids(ids);
+    result.contacts = slot_ids.WithIds(exact.contacts);
+    result.distance_pairs = slot_ids.WithIds(exact.distance_pairs);
     DeriveCullingOutputs(result);
     return result;
   }
@@ -211,8 +208,10 @@ far::StepRequest RequestFor(const ConfigSpec& spec, std::optional<double> distan
 // What a step's result says, apart from the times.
 void Record(far::StepResult& result, const std::map<uint32_t, int64_t>& triangles_of,
             Sample& sample) {
-  for (const auto& stage : result.stats.stages) sample.stage_ms[stage.name] += stage.ms;
-  sample.cull_ms = sample.stage_ms["object_cull"] + sample.stage_ms["primitive_cull"];
+  for (const auto& stage : result.stats.stages)
+    sample.stage_ms[StageIndex(stage.stage)] += stage.ms;
+  sample.cull_ms = sample.stage_ms[StageIndex(far::Stage::kObjectCull)] +
+                   sample.stage_ms[StageIndex(far::Stage::kPrimitiveCull)];
   sample.pcs_objects = static_cast<int64_t>(result.pcs_objects.size());
   for (const auto& [id, triangles] : result.pcs_primitives)
     sample.pcs_primitives += static_cast<int64_t>(triangles.size());
@@ -310,11 +309,8 @@ void SummarizeTimes(const std::vector<Sample>& s, Row& row) {
   row.cpu_ms = MedianOf(s, [](const Sample& x) { return x.cpu_ms; });
   row.ingest_ms = MedianOf(s, [](const Sample& x) { return x.ingest_ms; });
   row.cull_ms = MedianOf(s, [](const Sample& x) { return x.cull_ms; });
-  for (size_t i = 0; i < kStages.size(); ++i) {
-    row.stage_ms[i] = MedianOf(s, [&](const Sample& x) {
-      auto it = x.stage_ms.find(kStages[i]);
-      return it == x.stage_ms.end() ? 0.0 : it->second;
-    });
+  for (size_t i = 0; i < far::kStages.size(); ++i) {
+    row.stage_ms[i] = MedianOf(s, [&](const Sample& x) { return x.stage_ms[i]; });
   }
 }
 
@@ -384,7 +380,7 @@ std::optional<ConfigSpec> ParseGpuConfig(const std::string& text) {
   const auto mechanism = far::ParseMechanism(parts[1]);
   char* end = nullptr;
   const long resolution = std::strtol(parts[2].c_str(), &end, 10);
-  if (!method || !IsGpu(*method) || !mechanism || *end != '\0' || resolution < 8 ||
+  if (!method || !far::IsGpuMethod(*method) || !mechanism || *end != '\0' || resolution < 8 ||
       resolution > 8192) {
     return std::nullopt;
   }

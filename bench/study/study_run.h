@@ -15,7 +15,8 @@
 
 #include "study_scenes.h"
 
-#include "far/model/result.h"
+#include "far/base/result.h"
+#include "far/base/stage.h"
 #include "far/model/scene_update.h"
 #include "far/model/step_request.h"
 
@@ -56,8 +57,8 @@ struct RunOptions {
   int PrimaryResolution() const;
 };
 
-constexpr std::array<const char*, 5> kStages = {"update", "object_cull", "sweep_and_prune",
-                                                "primitive_cull", "exact"};
+/// A stage's place in the arrays of stage times below.
+constexpr size_t StageIndex(far::Stage stage) { return static_cast<size_t>(stage); }
 
 /// What one step of one configuration measured.
 struct Sample {
@@ -66,7 +67,7 @@ struct Sample {
   double cpu_ms = 0;     ///< the same span in CPU time of the whole process (llvmpipe's too)
   double ingest_ms = 0;  ///< Pipeline::Apply of the step's updates
   double cull_ms = 0;    ///< object_cull + primitive_cull stages
-  std::map<std::string, double> stage_ms;
+  std::array<double, far::kStages.size()> stage_ms{};  ///< by StageIndex
   int64_t pcs_objects = 0, pcs_primitives = 0, object_pairs = 0, pairs_considered = 0;
   int64_t pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
   double gl_prepare_ms = 0, gl_passes_ms = 0, gl_gpu_ms = 0;  ///< StepStats' GL split
@@ -88,7 +89,7 @@ struct Row {
   double ms_median = 0, ms_p25 = 0, ms_p75 = 0, ms_min = 0, ms_max = 0, cpu_ms = 0;
   std::map<int, double> ms_by_step;  ///< measured step -> its time (one sample per step)
   double ingest_ms = 0, cull_ms = 0;
-  std::array<double, kStages.size()> stage_ms{};
+  std::array<double, far::kStages.size()> stage_ms{};  ///< by StageIndex
   double pcs_objects = 0, pcs_primitives = 0, object_pairs = 0, pairs_considered = 0;
   double pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
   double gl_prepare_ms = 0, gl_passes_ms = 0, gl_gpu_ms = 0;  ///< medians

@@ -130,7 +130,8 @@ struct Client::Impl {
       if (it == pending.end() || !it->second.on_progress) return;
       callback = it->second.on_progress;
     }
-    callback({status->state, status->queue_position, status->stage, status->elapsed_ms});
+    callback(
+        {status->state, status->queue_position, ParseStage(status->stage), status->elapsed_ms});
   }
 
   void OnError(std::span<const uint8_t> inner) {

@@ -13,9 +13,9 @@
 
 #include <Eigen/Core>
 
+#include "far/base/result.h"
 #include "far/model/mesh.h"
 #include "far/model/pose.h"
-#include "far/model/result.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/lcm_log.h"
 #include "far/protocol/message.h"

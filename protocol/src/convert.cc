@@ -3,7 +3,7 @@
 #include <climits>
 #include <cstring>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 #include "far/protocol/version.h"
 
 namespace far::protocol {
@@ -184,7 +184,7 @@ void SetStats(far_lcm::step_reply_t& reply, const StepStats& stats) {
   reply.method_reason = stats.method_reason;
   reply.num_stages = static_cast<int32_t>(stats.stages.size());
   for (const StageStats& stage : stats.stages) {
-    reply.stage_name.push_back(stage.name);
+    reply.stage_name.emplace_back(ToString(stage.stage));
     reply.stage_ms.push_back(stage.ms);
   }
   reply.total_ms = stats.total_ms;
@@ -245,7 +245,7 @@ far_lcm::step_reply_t MakeStepErrorReply(const StepReplyIds& ids, const Error& e
 
 far_lcm::step_status_t MakeStepStatus(int64_t session_id, int64_t request_id, int64_t step_id,
                                       std::string_view state, int32_t queue_position,
-                                      std::string_view stage, double elapsed_ms) {
+                                      std::optional<Stage> stage, double elapsed_ms) {
   far_lcm::step_status_t message{};
   message.protocol_version = kProtocolVersion;
   message.session_id = session_id;
@@ -254,7 +254,7 @@ far_lcm::step_status_t MakeStepStatus(int64_t session_id, int64_t request_id, in
   message.step_id = step_id;
   message.state = std::string(state);
   message.queue_position = queue_position;
-  message.stage = stage.empty() ? "-" : std::string(stage);
+  message.stage = stage ? std::string(ToString(*stage)) : "-";
   message.elapsed_ms = elapsed_ms;
   return message;
 }
@@ -329,6 +329,10 @@ Result<void> CheckReplyArrays(const far_lcm::step_reply_t& reply) {
                                       {"distance_triangle_b", &reply.distance_triangle_b}}) {
     if (auto ok = check(field, *values, int64_t{INT32_MAX}); !ok) return ok.error();
   }
+  for (size_t i = 0; i < reply.stage_name.size(); ++i) {
+    if (!ParseStage(reply.stage_name[i]))
+      return BadReply("stage_name", "[" + std::to_string(i) + "] is no stage");
+  }
   int64_t primitive_sum = 0;
   for (const int32_t count : reply.pcs_primitive_count) primitive_sum += count;
   if (primitive_sum != reply.num_pcs_primitives) {
@@ -389,7 +393,7 @@ void ReadStats(const far_lcm::step_reply_t& reply, StepResult& result) {
   result.stats.method_reason = reply.method_reason;
   StepStats& stats = result.stats;
   for (int32_t i = 0; i < reply.num_stages; ++i) {
-    stats.stages.push_back({reply.stage_name[i], reply.stage_ms[i]});
+    stats.stages.push_back({*ParseStage(reply.stage_name[i]), reply.stage_ms[i]});
   }
   stats.total_ms = reply.total_ms;
   stats.primitives_rendered = reply.primitives_rendered;

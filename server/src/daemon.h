@@ -8,7 +8,7 @@
 
 #include "daemon_config.h"
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far::server {
 

@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 
 namespace far::server {
 namespace {
@@ -46,16 +46,11 @@ Result<void> ReadNumber(const std::string& key, const nlohmann::json& value, T* 
 }
 
 Result<void> ReadPlatform(const std::string& key, const nlohmann::json& value, GlPlatform* out) {
-  const auto name = value.get<std::string>();
-  if (name == "auto") {
-    *out = GlPlatform::kAuto;
-  } else if (name == "device") {
-    *out = GlPlatform::kDevice;
-  } else if (name == "surfaceless") {
-    *out = GlPlatform::kSurfaceless;
-  } else {
-    return Invalid(key, "unknown platform " + value.dump() + " (auto, device, surfaceless)");
+  const std::optional<GlPlatform> platform = ParseGlPlatform(value.get<std::string>());
+  if (!platform) {
+    return Invalid(key, "unknown platform " + value.dump() + " (" + GlPlatformNames() + ")");
   }
+  *out = *platform;
   return {};
 }
 

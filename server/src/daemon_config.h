@@ -5,8 +5,8 @@
 #include <string>
 #include <string_view>
 
-#include "far/gpu/gl_context.h"
-#include "far/model/result.h"
+#include "far/base/result.h"
+#include "far/gpu/gl_platform.h"
 #include "far/model/scene_model.h"
 #include "far/protocol/channels.h"
 #include "far/protocol/ring_records.h"

@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/model/step_request.h"
 
 namespace far::server {

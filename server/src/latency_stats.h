@@ -3,7 +3,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "far/model/quantile.h"
+#include "far/base/quantile.h"
 
 namespace far::server {
 

@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "far/gpu/gl_context.h"
 #include "far/model/version.h"
 
 namespace {
@@ -97,16 +98,13 @@ struct CommandLine {
     }
     for (const auto& apply : overrides) apply(config);
     if (!gl_platform.empty()) {
-      if (gl_platform == "auto") {
-        config.gl_platform = far::GlPlatform::kAuto;
-      } else if (gl_platform == "device") {
-        config.gl_platform = far::GlPlatform::kDevice;
-      } else if (gl_platform == "surfaceless") {
-        config.gl_platform = far::GlPlatform::kSurfaceless;
-      } else {
-        return far::MakeError(far::ErrorCode::kInvalidArgument,
-                              "--gl-platform: unknown '" + gl_platform + "'");
+      const std::optional<far::GlPlatform> platform = far::ParseGlPlatform(gl_platform);
+      if (!platform) {
+        return far::MakeError(
+            far::ErrorCode::kInvalidArgument,
+            "--gl-platform: unknown '" + gl_platform + "' (" + far::GlPlatformNames() + ")");
       }
+      config.gl_platform = *platform;
     }
     if (auto ok = far::server::ValidateDaemonConfig(config); !ok) return ok.error();
     return config;

@@ -39,7 +39,7 @@ void Replier::StepError(Session& session, const protocol::StepCommand& command,
 }
 
 void Replier::StepStatus(Session& session, const StepJob& job, std::string_view state,
-                         int32_t queue_position, std::string_view stage) {
+                         int32_t queue_position, std::optional<Stage> stage) {
   const auto message =
       protocol::MakeStepStatus(session.id, job.command.request_id, job.command.step_id, state,
                                queue_position, stage, MsBetween(job.received, Clock::now()));

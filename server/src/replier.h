@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -8,7 +9,8 @@
 #include "daemon_stats.h"
 #include "session.h"
 
-#include "far/model/result.h"
+#include "far/base/result.h"
+#include "far/base/stage.h"
 #include "far/protocol/lcm_bus.h"
 
 namespace far::server {
@@ -30,7 +32,7 @@ class Replier {
   void StepError(Session& session, const protocol::StepCommand& command, const Error& error);
   /// Where a step is: "queued" (with its place), "started", or "stage" (with the stage).
   void StepStatus(Session& session, const StepJob& job, std::string_view state,
-                  int32_t queue_position, std::string_view stage);
+                  int32_t queue_position, std::optional<Stage> stage);
   /// An error_t for the session (an authenticated message that cannot be answered otherwise,
   /// or the end of the session), counted.
   void SessionError(Session& session, int64_t request_id, const Error& error, bool session_closed);

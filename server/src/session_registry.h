@@ -12,7 +12,7 @@
 #include "daemon_config.h"
 #include "session.h"
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/protocol/local_socket.h"
 #include "far/protocol/message_validate.h"
 

@@ -14,7 +14,7 @@
 #include "step_cpu_meter.h"
 #include <spdlog/spdlog.h>
 
-#include "far/pairs/thread_pool.h"
+#include "far/base/thread_pool.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/shm_reply.h"
 
@@ -129,7 +129,7 @@ class SessionWorker {
     const uint64_t ring = session_->segment->layout().reply_ring_capacity;
     control.max_pairs = static_cast<size_t>(std::min<uint64_t>(
         static_cast<uint64_t>(context_.config.max_reply_pairs), (ring - 4096) / kWireBytesPerPair));
-    control.on_stage = [this, &job](std::string_view stage) {
+    control.on_stage = [this, &job](Stage stage) {
       context_.replier.StepStatus(*session_, job, "stage", 0, stage);
     };
     // Past heavy_step_ms of wall time and of the worker's own CPU time, every thread of the
@@ -190,7 +190,7 @@ class SessionWorker {
                   std::to_string(static_cast<int64_t>(MsBetween(job.received, Clock::now()))) +
                   " ms in the queue, past its deadline; it was not run"));
     }
-    replier.StepStatus(*session_, job, "started", 0, "-");
+    replier.StepStatus(*session_, job, "started", 0, std::nullopt);
     if (auto ok = EnsurePipeline(); !ok) return replier.StepError(*session_, command, ok.error());
     if (auto ingested = Ingest(command); !ingested) {
       replier.StepError(*session_, command, ingested.error());

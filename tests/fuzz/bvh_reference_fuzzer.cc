@@ -39,26 +39,24 @@
 #include "fuzz_input.h"
 #include <Eigen/Geometry>
 
+#include "far/base/thread_pool.h"
 #include "far/pairs/bvh_stage.h"
 #include "far/pairs/exact_stage.h"
-#include "far/pairs/thread_pool.h"
 #include "far/pairs/triangle_bvh.h"
 
 namespace far::fuzz {
 namespace {
 
 struct Object {
-  uint32_t id = 0;
   std::vector<Eigen::Vector3d> p_MV, p_WV;
   std::vector<TriangleIndices> triangles;
   Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
   TriangleBvh bvh;
 };
 
-Object ReadObject(FuzzInput& in, uint32_t id, double step, const Eigen::Vector3d& shift,
+Object ReadObject(FuzzInput& in, double step, const Eigen::Vector3d& shift,
                   const std::vector<Object>& earlier) {
   Object object;
-  object.id = id;
   const int vertices = 3 + in.Take<uint8_t>() % 14;
   const int triangles = 1 + in.Take<uint8_t>() % 12;
   const bool unrotated = in.Take<uint8_t>() & 1;
@@ -112,24 +110,24 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
   std::vector<Object> objects;
   for (int o = 0; o < count; ++o) {
-    objects.push_back(ReadObject(in, static_cast<uint32_t>(1 + 2 * o), scale / 16, shift, objects));
+    objects.push_back(ReadObject(in, scale / 16, shift, objects));
     Object& object = objects.back();
     object.bvh.Build(object.p_MV, object.triangles);
     if (refit) FAR_FUZZ_CHECK(!object.bvh.Refit(object.p_MV, object.triangles));
   }
 
   std::vector<WorldObjectView> views;
-  std::vector<BvhObject> bvh_objects;
-  std::vector<ObjectPair> pairs;
-  for (const Object& object : objects) {
-    views.push_back({object.id, object.p_WV, object.triangles});
-    bvh_objects.push_back({views.back(), &object.bvh, object.X_WM});
-    for (const Object& later : objects) {
-      if (object.id < later.id) pairs.push_back({object.id, later.id});
-    }
+  std::vector<ObjectHierarchy> hierarchies;
+  std::vector<SlotPair> pairs;
+  for (size_t o = 0; o < objects.size(); ++o) {
+    views.push_back({objects[o].p_WV, objects[o].triangles});
+    hierarchies.push_back({&objects[o].bvh, objects[o].X_WM});
+    for (size_t later = o + 1; later < objects.size(); ++later)
+      pairs.push_back({SlotAt(o), SlotAt(later)});
   }
   BvhQuery query;
-  query.objects = bvh_objects;
+  query.objects = views;
+  query.hierarchies = hierarchies;
   query.object_pairs = pairs;
   query.max_distance = max_distance;
   const BvhResult found = RunBvhTests(query, pool);
@@ -138,9 +136,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   FAR_FUZZ_CHECK(found.exact.stopped == StopReason::kNone);
   FAR_FUZZ_CHECK(found.exact.contacts == expected.contacts);
   FAR_FUZZ_CHECK(PairsOf(found.exact.distance_pairs) == PairsOf(expected.distance_pairs));
-  for (const ContactPair& c : expected.contacts) {
-    const auto candidate = [&](uint32_t id, uint32_t triangle) {
-      const size_t o = (id - 1) / 2;
+  for (const SlotContact& c : expected.contacts) {
+    const auto candidate = [&](ObjectSlot slot, uint32_t triangle) {
+      const size_t o = Index(slot);
       return std::binary_search(found.candidates[o].begin(), found.candidates[o].end(), triangle);
     };
     FAR_FUZZ_CHECK(candidate(c.object_a, c.triangle_a) && candidate(c.object_b, c.triangle_b));

@@ -39,9 +39,10 @@ inline Eigen::Vector3d GridPoint(FuzzInput& in, double step) {
 }
 
 /// The triangle pairs of distance pairs (their distances are each method's own bounds).
-inline std::vector<ContactPair> PairsOf(const std::vector<DistancePair>& list) {
-  std::vector<ContactPair> pairs;
-  for (const DistancePair& d : list) pairs.push_back(d.pair);
+template <typename Object>
+std::vector<BasicContactPair<Object>> PairsOf(const std::vector<BasicDistancePair<Object>>& list) {
+  std::vector<BasicContactPair<Object>> pairs;
+  for (const auto& d : list) pairs.push_back(d.pair);
   return pairs;
 }
 

@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "far/base/result.h"
 #include "far/client/client.h"
-#include "far/model/result.h"
 
 namespace far::integration {
 

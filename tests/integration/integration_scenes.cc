@@ -7,8 +7,8 @@
 #include "raw_session.h"
 #include "test_scenes.h"
 
+#include "far/base/thread_pool.h"
 #include "far/client/client.h"
-#include "far/pairs/thread_pool.h"
 
 namespace far::integration {
 

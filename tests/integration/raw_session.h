@@ -22,7 +22,7 @@
 #include <thread>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/model/step_request.h"
 #include "far/protocol/lcm_bus.h"
 #include "far/protocol/local_socket.h"

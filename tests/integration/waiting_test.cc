@@ -34,7 +34,8 @@ TEST_F(WaitingTest, TheDaemonSaysWhereAStepIsWhileItWorks) {
   request.method = Method::kAabb;
   std::vector<std::string> seen;  // "queued", "started", then "stage:<name>"
   auto result = (*client)->Step(request, [&](const client::StepProgress& progress) {
-    seen.push_back(progress.state == "stage" ? "stage:" + progress.stage : progress.state);
+    seen.push_back(progress.stage ? "stage:" + std::string(ToString(*progress.stage))
+                                  : progress.state);
   });
   ASSERT_TRUE(result.ok()) << far::ToString(result.error());
   const std::vector<std::string> expected = {"queued",

@@ -18,7 +18,7 @@ StepResult SampleResult() {
   result.pcs_primitives[7] = {3};
   result.contacts = {{1, 0, 2, 4}, {2, 8, 7, 3}};
   result.distance_pairs = {{{1, 5, 2, 1}, 0.5}, {{2, 2, 7, 0}, 1e-9}};
-  result.stats.stages = {{"update", 0.1}, {"object_cull", 2.5}, {"exact", 7}};
+  result.stats.stages = {{Stage::kUpdate, 0.1}, {Stage::kObjectCull, 2.5}, {Stage::kExact, 7}};
   result.stats.total_ms = 9.6;
   result.stats.primitives_rendered = 1234;
   result.stats.draws = 12;
@@ -106,7 +106,7 @@ TEST(ConvertTest, StepResultRoundTripsThroughTheWire) {
     EXPECT_EQ(parsed->distance_pairs[i].distance, result.distance_pairs[i].distance);
   }
   ASSERT_EQ(parsed->stats.stages.size(), 3u);
-  EXPECT_EQ(parsed->stats.stages[1].name, "object_cull");
+  EXPECT_EQ(parsed->stats.stages[1].stage, Stage::kObjectCull);
   EXPECT_EQ(parsed->stats.stages[1].ms, 2.5);
   EXPECT_EQ(parsed->stats.total_ms, 9.6);
   EXPECT_EQ(parsed->stats.primitives_rendered, 1234);
@@ -151,6 +151,13 @@ TEST(ConvertTest, ParseStepReplyRejectsInconsistentReplies) {
   ASSERT_FALSE(parsed);
   EXPECT_NE(parsed.error().message.find("counts add up to 4, num_pcs_primitives is 3"),
             std::string::npos);
+
+  reply = testing::SampleStepReply();
+  reply.stage_name[1] = "object_cul";  // a stage far has not
+  parsed = ParseStepReply(reply);
+  ASSERT_FALSE(parsed);
+  EXPECT_NE(parsed.error().message.find("stage_name: [1] is no stage"), std::string::npos)
+      << parsed.error().message;
 
   reply = testing::SampleStepReply();
   reply.num_contacts = 5;  // a hand-built message whose arrays do not match

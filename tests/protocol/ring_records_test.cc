@@ -437,7 +437,7 @@ TEST(ParseUpdateRecordTest, AcceptsNearlyUnitQuaternions) {
 TEST(ParseUpdateRecordTest, RejectsUnknownMotionAndReservedBitsAcceptsEveryId) {
   ExpectParseError(ForgeAddObject(1, 5, 3, 3, 1, kIdentity, kTriangle, {0, 1, 2}),
                    ErrorCode::kInvalidArgument, "motion: 3 is not 0 (static), 1 (rigid) or 2");
-  // Ids are every uint32, as in scene files (far/model/limits.h).
+  // Ids are every uint32, as in scene files (far/base/limits.h).
   for (uint32_t id : {0u, 0x80000000u, 0xFFFFFFFFu}) {
     auto parsed = ParseUpdateRecord(ForgeRemove(1, id), RingLimits{});
     ASSERT_TRUE(parsed) << parsed.error().message;

@@ -24,7 +24,7 @@ StepResult ContactsResult(int count) {
     result.contacts.push_back({static_cast<uint32_t>(i % 100), static_cast<uint32_t>(i),
                                static_cast<uint32_t>(100 + i % 7), static_cast<uint32_t>(3 * i)});
   }
-  result.stats.stages = {{"exact", 1.5}};
+  result.stats.stages = {{Stage::kExact, 1.5}};
   return result;
 }
 

@@ -1,5 +1,7 @@
 #include "test_scenes.h"
 
+#include "far/model/slot_ids.h"
+
 namespace far::testing {
 
 WorldScene PlaceInWorld(const std::vector<SceneObject>& objects) {
@@ -14,15 +16,18 @@ WorldScene PlaceInWorld(const std::vector<SceneObject>& objects) {
     world.p_WV.push_back(std::move(points));
   }
   for (size_t i = 0; i < objects.size(); ++i) {
-    world.views.push_back({objects[i].id, world.p_WV[i], objects[i].mesh.triangles});
+    world.views.push_back({world.p_WV[i], objects[i].mesh.triangles});
+    world.ids.push_back(objects[i].id);
   }
   return world;
 }
 
-ExactResult ReferenceAnswer(const std::vector<SceneObject>& objects, std::optional<double> distance,
-                            ThreadPool& pool) {
+ReferencePairs ReferenceAnswer(const std::vector<SceneObject>& objects,
+                               std::optional<double> distance, ThreadPool& pool) {
   const WorldScene world = PlaceInWorld(objects);
-  return BruteForceReference(world.views, distance, pool);
+  const ExactResult exact = BruteForceReference(world.views, distance, pool);
+  const SlotIds ids(world.ids);
+  return {ids.WithIds(exact.contacts), ids.WithIds(exact.distance_pairs)};
 }
 
 std::vector<SceneObject> Transformed(std::vector<SceneObject> objects, const Eigen::Isometry3d& X) {

@@ -6,9 +6,9 @@
 
 #include <Eigen/Geometry>
 
+#include "far/base/thread_pool.h"
 #include "far/model/scene.h"
 #include "far/pairs/exact_stage.h"
-#include "far/pairs/thread_pool.h"
 #include "far/pairs/world_object.h"
 #include "far/scenes/scenes.h"
 
@@ -22,16 +22,21 @@ using scenes::RandomSoup;
 using scenes::SphereMesh;
 
 /// The objects of `scene` placed in the world: vertices moved by each pose (and flushed, as
-/// the pipeline places them: FlushTinyCoordinates).
+/// the pipeline places them: FlushTinyCoordinates). views[i] is objects[i], slot i.
 struct WorldScene {
   std::vector<std::vector<Eigen::Vector3d>> p_WV;
   std::vector<WorldObjectView> views;
+  std::vector<uint32_t> ids;  ///< by slot: objects[i].id
 };
 WorldScene PlaceInWorld(const std::vector<SceneObject>& objects);
 
-/// The brute-force reference answer for `objects`.
-ExactResult ReferenceAnswer(const std::vector<SceneObject>& objects, std::optional<double> distance,
-                            ThreadPool& pool);
+/// The brute-force reference answer for `objects`, by id (as a step answers).
+struct ReferencePairs {
+  std::vector<ContactPair> contacts;
+  std::vector<DistancePair> distance_pairs;
+};
+ReferencePairs ReferenceAnswer(const std::vector<SceneObject>& objects,
+                               std::optional<double> distance, ThreadPool& pool);
 
 /// Returns `objects` moved by the rigid transform X (applied to every pose).
 std::vector<SceneObject> Transformed(std::vector<SceneObject> objects, const Eigen::Isometry3d& X);

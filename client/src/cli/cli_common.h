@@ -8,8 +8,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "far/base/result.h"
 #include "far/client/client.h"
-#include "far/model/result.h"
 
 namespace far::cli {
 

@@ -10,8 +10,8 @@
 #include "step_flags.h"
 #include <nlohmann/json.hpp>
 
+#include "far/base/quantile.h"
 #include "far/io/scene_io.h"
-#include "far/model/quantile.h"
 #include "far/scenes/scenes.h"
 
 namespace far::cli {

@@ -20,7 +20,7 @@ client::ProgressCallback ProgressLine(const std::string& label) {
     std::string what = progress.state;
     if (progress.state == "queued" && progress.queue_position > 0)
       what += " (" + std::to_string(progress.queue_position) + " ahead)";
-    if (progress.state == "stage") what = progress.stage;
+    if (progress.stage) what = far::ToString(*progress.stage);
     std::fprintf(stderr, "\r\033[K%s: %s, %.1f s", label.c_str(), what.c_str(),
                  progress.elapsed_ms / 1000.0);
     std::fflush(stderr);

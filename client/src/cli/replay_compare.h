@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/model/step_result.h"
 
 namespace far::cli {

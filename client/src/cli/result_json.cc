@@ -48,7 +48,7 @@ std::string CertificateText(const Certificate& certificate) {
 
 json StatsJson(const StepStats& stats) {
   json stages = json::object();
-  for (const auto& stage : stats.stages) stages[stage.name] = stage.ms;
+  for (const auto& stage : stats.stages) stages[std::string(ToString(stage.stage))] = stage.ms;
   return {{"method", stats.method},
           {"method_reason", stats.method_reason},
           {"total_ms", stats.total_ms},

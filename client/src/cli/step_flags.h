@@ -4,8 +4,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "far/base/result.h"
 #include "far/client/client.h"
-#include "far/model/result.h"
 #include "far/model/step_request.h"
 
 namespace far::cli {

@@ -251,13 +251,31 @@ bool AxesSeparate(const TrianglePoints& s, const TrianglePoints& t, double limit
 
 }  // namespace
 
+namespace {
+
+// Whether t comes before s in a fixed order of triangles (their nine coordinates, compared
+// lexicographically). The functions below evaluate a pair in that order, so that their answer,
+// rounding included, is the same whichever triangle the caller names first: the stages meet a
+// pair in the order of the objects' slots, which follow the history of a scene's updates.
+bool Before(const TrianglePoints& t, const TrianglePoints& s) {
+  const std::array<double, 9> x = {t.a.x(), t.a.y(), t.a.z(), t.b.x(), t.b.y(),
+                                   t.b.z(), t.c.x(), t.c.y(), t.c.z()};
+  const std::array<double, 9> y = {s.a.x(), s.a.y(), s.a.z(), s.b.x(), s.b.y(),
+                                   s.b.z(), s.c.x(), s.c.y(), s.c.z()};
+  return x < y;
+}
+
+}  // namespace
+
 double TriangleDistance(const TrianglePoints& s, const TrianglePoints& t) {
+  if (Before(t, s)) return TriangleDistance(t, s);
   if (TrianglesIntersect(s, t)) return 0.0;
   return DisjointDistance(s, t, PairBoxes(s, t).Scale());
 }
 
 std::optional<double> TriangleDistanceIfWithin(const TrianglePoints& s, const TrianglePoints& t,
                                                double max_distance) {
+  if (Before(t, s)) return TriangleDistanceIfWithin(t, s, max_distance);
   const PairBoxes boxes(s, t);
   const double scale = boxes.Scale();
   const double limit = max_distance + kSlack * kEps * scale;

@@ -11,7 +11,7 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 
 namespace far::internal {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <epoxy/gl.h>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far::internal {
 

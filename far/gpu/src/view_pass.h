@@ -8,8 +8,8 @@
 #include "piece_buffers.h"
 #include <epoxy/gl.h>
 
+#include "far/base/result.h"
 #include "far/gpu/culling_renderer.h"
-#include "far/model/result.h"
 
 namespace far::internal {
 

@@ -10,8 +10,8 @@
 #include <string>
 #include <string_view>
 
-#include "far/model/limits.h"
-#include "far/model/result.h"
+#include "far/base/limits.h"
+#include "far/base/result.h"
 
 namespace far::internal {
 

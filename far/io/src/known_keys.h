@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far::internal {
 

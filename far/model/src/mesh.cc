@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 
 namespace far {
 

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 
 namespace far {
 

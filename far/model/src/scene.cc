@@ -9,7 +9,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 #include "far/model/scene_model.h"
 
 namespace far {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <string>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 
 namespace far {
 namespace {

@@ -5,7 +5,7 @@
 #include <string>
 #include <utility>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 
 namespace far {
 namespace {
@@ -72,6 +72,10 @@ std::string OutputNames() { return NamesOf(kOutputNames); }
 std::string DepthFormatNames() { return NamesOf(kDepthNames); }
 
 bool IsReliable(Method method) { return method != Method::kCullide && method != Method::kFcl; }
+
+bool IsGpuMethod(Method method) {
+  return method == Method::kFar || method == Method::kFarExactOffset || method == Method::kCullide;
+}
 
 Result<void> CheckStepRequest(const StepRequest& request) {
   if (request.resolution < kMinResolution || request.resolution > kMaxResolution) {

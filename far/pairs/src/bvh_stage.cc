@@ -3,12 +3,13 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
-#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 
 #include "triangle_pair_test.h"
+
+#include "far/base/assert.h"
 
 // Why the descent never drops a pair the exact predicates accept. The exact stage tests the
 // world vertices p_WV = flush(fl(X_WM p_MV)) (FlushTinyCoordinates, world_object.h). A node's
@@ -35,6 +36,7 @@ namespace {
 using internal::BoxesWithin;
 using internal::BoxOf;
 using internal::Partial;
+using internal::SlotView;
 using internal::TestTrianglePair;
 using internal::TriangleBox;
 using internal::Wanted;
@@ -42,7 +44,7 @@ using Node = TriangleBvh::Node;
 
 // The relative pose of a pair, prepared once: B's boxes into A's frame and A's into B's.
 struct PairFrame {
-  uint32_t a = 0, b = 0;  // indices into the query's objects, a has the smaller id
+  uint32_t a = 0, b = 0;  // slots (Index) of the query's objects, a the smaller
   Eigen::Matrix3d R_AB, abs_R_AB, R_BA, abs_R_BA;
   Eigen::Vector3d t_AB, t_BA;
   double margin = 0;
@@ -58,8 +60,8 @@ double BoxMagnitude(const Node& node) {
   return (node.center.cwiseAbs() + node.half_extent).maxCoeff();
 }
 
-PairFrame MakePairFrame(const BvhObject& a, const BvhObject& b, uint32_t ia, uint32_t ib,
-                        double slack) {
+PairFrame MakePairFrame(const ObjectHierarchy& a, const ObjectHierarchy& b, uint32_t ia,
+                        uint32_t ib, double slack) {
   PairFrame f;
   f.a = ia;
   f.b = ib;
@@ -133,6 +135,9 @@ struct Output {
 struct Descent {
   const BvhQuery& query;
   const std::vector<PairFrame>& frames;
+
+  const ObjectHierarchy& hierarchy(uint32_t o) const { return query.hierarchies[o]; }
+  SlotView view(uint32_t o) const { return {SlotAt(o), query.objects[o]}; }
   const Wanted& wanted;
   std::vector<std::vector<uint8_t>>& marks;  // empty when candidates are not asked for
 
@@ -166,7 +171,7 @@ struct LeafProbe {
 
 LeafProbe MakeProbe(const PairFrame& f, const TriangleBvh& leaf_bvh, const Node& leaf,
                     bool leaf_in_a) {
-  assert(leaf.count <= TriangleBvh::kLeafSize);  // Build makes no larger leaf
+  FAR_DEMAND(leaf.count <= TriangleBvh::kLeafSize, "Build makes no larger leaf");
   LeafProbe p;
   p.leaf = &leaf;
   p.leaf_in_a = leaf_in_a;
@@ -251,7 +256,7 @@ struct WorldSlab {
 };
 
 // `leaf_center_W`: the center of the triangle's leaf in the world, X_WM c.
-void MakeWorldSlab(const BvhObject& object, bool rotated, uint32_t leaf_index,
+void MakeWorldSlab(const ObjectHierarchy& object, bool rotated, uint32_t leaf_index,
                    const Eigen::Vector3d& leaf_center_W, WorldSlab& w) {
   w.made = true;
   if (object.bvh->slabs().empty()) return;
@@ -291,8 +296,9 @@ bool SlabSeparates(const WorldSlab& s, const WorldObjectView& object, uint32_t t
 // (docs/culling.md).
 void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t live_x, const Node& y,
                 uint32_t live_y, Output& out) {
-  const BvhObject& a = d.query.objects[f.a];
-  const BvhObject& b = d.query.objects[f.b];
+  const ObjectHierarchy& a = d.hierarchy(f.a);
+  const ObjectHierarchy& b = d.hierarchy(f.b);
+  const SlotView view_a = d.view(f.a), view_b = d.view(f.b);
   TriangleBox boxes_a[TriangleBvh::kLeafSize], boxes_b[TriangleBvh::kLeafSize];
   uint32_t index_a[TriangleBvh::kLeafSize], index_b[TriangleBvh::kLeafSize];
   WorldSlab slabs_a[TriangleBvh::kLeafSize], slabs_b[TriangleBvh::kLeafSize];
@@ -300,13 +306,13 @@ void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t li
   for (uint32_t i = 0; i < x.count; ++i) {
     if (live_x >> i & 1) {
       index_a[na] = x.first + i;
-      boxes_a[na++] = BoxOf(a.world, a.bvh->order()[x.first + i]);
+      boxes_a[na++] = BoxOf(view_a.view, a.bvh->order()[x.first + i]);
     }
   }
   for (uint32_t j = 0; j < y.count; ++j) {
     if (live_y >> j & 1) {
       index_b[nb] = y.first + j;
-      boxes_b[nb++] = BoxOf(b.world, b.bvh->order()[y.first + j]);
+      boxes_b[nb++] = BoxOf(view_b.view, b.bvh->order()[y.first + j]);
     }
   }
   out.considered += size_t{na} * nb;
@@ -324,15 +330,15 @@ void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t li
       ++out.counters.boxes_met;
       const uint32_t j = static_cast<uint32_t>(std::countr_zero(met));
       if (!slabs_a[i].made) MakeWorldSlab(a, f.rotated_a, index_a[i], x_W, slabs_a[i]);
-      if (SlabSeparates(slabs_a[i], b.world, boxes_b[j].triangle, f.margin)) continue;
+      if (SlabSeparates(slabs_a[i], view_b.view, boxes_b[j].triangle, f.margin)) continue;
       if (!slabs_b[j].made) MakeWorldSlab(b, f.rotated_b, index_b[j], y_W, slabs_b[j]);
-      if (SlabSeparates(slabs_b[j], a.world, boxes_a[i].triangle, f.margin)) continue;
+      if (SlabSeparates(slabs_b[j], view_a.view, boxes_a[i].triangle, f.margin)) continue;
       if (!d.marks.empty()) {
         d.Mark(f.a, boxes_a[i].triangle);
         d.Mark(f.b, boxes_b[j].triangle);
       }
       if (d.query.run_exact) {
-        TestTrianglePair(a.world, boxes_a[i], b.world, boxes_b[j], d.wanted, out.partial);
+        TestTrianglePair(view_a, boxes_a[i], view_b, boxes_b[j], d.wanted, out.partial);
       }
     }
   }
@@ -343,7 +349,7 @@ void TestLeaves(const Descent& d, const PairFrame& f, const Node& x, uint32_t li
 // everything below it), down to T's leaves.
 void DescendLeaf(const Descent& d, const PairFrame& f, const LeafProbe& p, uint32_t root,
                  Output& out) {
-  const BvhObject& tree_object = d.query.objects[p.leaf_in_a ? f.b : f.a];
+  const ObjectHierarchy& tree_object = d.hierarchy(p.leaf_in_a ? f.b : f.a);
   const TriangleBvh& tree = *tree_object.bvh;
   const auto& nodes = tree.nodes();
   // Stack entries: a node of T and the probe's triangles still live above it (bit i: triangle i),
@@ -390,8 +396,8 @@ void DescendLeaf(const Descent& d, const PairFrame& f, const LeafProbe& p, uint3
 
 // A node pair where at least one node is a leaf: the leaf (x when both are) probes the other.
 void DescendFromLeaf(const Descent& d, const PairFrame& f, uint32_t x, uint32_t y, Output& out) {
-  const TriangleBvh& bvh_a = *d.query.objects[f.a].bvh;
-  const TriangleBvh& bvh_b = *d.query.objects[f.b].bvh;
+  const TriangleBvh& bvh_a = *d.hierarchy(f.a).bvh;
+  const TriangleBvh& bvh_b = *d.hierarchy(f.b).bvh;
   const Node& node_x = bvh_a.nodes()[x];
   if (node_x.leaf()) {
     DescendLeaf(d, f, MakeProbe(f, bvh_a, node_x, /*leaf_in_a=*/true), y, out);
@@ -407,8 +413,8 @@ void Expand(const Descent& d, const Task& task, std::vector<Task>& next, Output*
             DescentCounters& counters) {
   ++counters.node_pairs;
   const PairFrame& f = d.frames[task.frame];
-  const auto& nodes_a = d.query.objects[f.a].bvh->nodes();
-  const auto& nodes_b = d.query.objects[f.b].bvh->nodes();
+  const auto& nodes_a = d.hierarchy(f.a).bvh->nodes();
+  const auto& nodes_b = d.hierarchy(f.b).bvh->nodes();
   const Node& x = nodes_a[task.x];
   const Node& y = nodes_b[task.y];
   const bool split_x = NodeSize(x) >= NodeSize(y);
@@ -438,16 +444,16 @@ void Expand(const Descent& d, const Task& task, std::vector<Task>& next, Output*
 // Whether a task has reached a leaf on either side (then it is descended from that leaf).
 bool HasLeaf(const Descent& d, const Task& task) {
   const PairFrame& f = d.frames[task.frame];
-  return d.query.objects[f.a].bvh->nodes()[task.x].leaf() ||
-         d.query.objects[f.b].bvh->nodes()[task.y].leaf();
+  return d.hierarchy(f.a).bvh->nodes()[task.x].leaf() ||
+         d.hierarchy(f.b).bvh->nodes()[task.y].leaf();
 }
 
 // The descent of an aligned pair (same rotation: boxes differ by a translation only), with
 // small tasks: the plain box test along the shared axes.
 void DescendAligned(const Descent& d, const PairFrame& f, uint32_t root_x, uint32_t root_y,
                     Output& out) {
-  const auto& nodes_a = d.query.objects[f.a].bvh->nodes();
-  const auto& nodes_b = d.query.objects[f.b].bvh->nodes();
+  const auto& nodes_a = d.hierarchy(f.a).bvh->nodes();
+  const auto& nodes_b = d.hierarchy(f.b).bvh->nodes();
   const auto overlap = [&](const Node& x, const Node& y) {
     const Eigen::Array3d gap =
         (x.center - y.center - f.t_AB).array().abs() - (x.half_extent + y.half_extent).array();
@@ -491,34 +497,17 @@ void Descend(const Descent& d, const Task& root, Output& out) {
   }
 }
 
-// The object pairs as frames (indices into objects, smaller id first, each once).
+// The object pairs whose objects both have a hierarchy, as frames.
 std::vector<PairFrame> MakeFrames(const BvhQuery& query, double slack) {
-  std::vector<std::pair<uint32_t, uint32_t>> id_index(query.objects.size());
-  for (uint32_t i = 0; i < query.objects.size(); ++i) id_index[i] = {query.objects[i].world.id, i};
-  std::sort(id_index.begin(), id_index.end());
-  auto index_of = [&](uint32_t id) -> int64_t {
-    auto it = std::lower_bound(id_index.begin(), id_index.end(), std::make_pair(id, 0u));
-    return it != id_index.end() && it->first == id ? it->second : -1;
-  };
   std::vector<PairFrame> frames;
-  for (const ObjectPair& pair : query.object_pairs) {
-    const int64_t a = index_of(std::min(pair.object_a, pair.object_b));
-    const int64_t b = index_of(std::max(pair.object_a, pair.object_b));
-    assert(a >= 0 && b >= 0 && a != b);
-    if (a < 0 || b < 0 || a == b) continue;
-    const BvhObject& oa = query.objects[static_cast<size_t>(a)];
-    const BvhObject& ob = query.objects[static_cast<size_t>(b)];
+  for (const SlotPair& pair : query.object_pairs) {
+    const auto a = static_cast<uint32_t>(Index(pair.object_a));
+    const auto b = static_cast<uint32_t>(Index(pair.object_b));
+    const ObjectHierarchy& oa = query.hierarchies[a];
+    const ObjectHierarchy& ob = query.hierarchies[b];
     if (oa.bvh == nullptr || ob.bvh == nullptr || oa.bvh->empty() || ob.bvh->empty()) continue;
-    frames.push_back(
-        MakePairFrame(oa, ob, static_cast<uint32_t>(a), static_cast<uint32_t>(b), slack));
+    frames.push_back(MakePairFrame(oa, ob, a, b, slack));
   }
-  std::sort(frames.begin(), frames.end(), [](const PairFrame& x, const PairFrame& y) {
-    return std::tie(x.a, x.b) < std::tie(y.a, y.b);
-  });
-  frames.erase(
-      std::unique(frames.begin(), frames.end(),
-                  [](const PairFrame& x, const PairFrame& y) { return x.a == y.a && x.b == y.b; }),
-      frames.end());
   return frames;
 }
 
@@ -528,8 +517,8 @@ std::vector<Task> SeedTasks(const Descent& d, size_t target, DescentCounters& co
   std::vector<Task> tasks;
   for (uint32_t i = 0; i < d.frames.size(); ++i) {
     const PairFrame& f = d.frames[i];
-    const Node& x = d.query.objects[f.a].bvh->nodes()[0];
-    const Node& y = d.query.objects[f.b].bvh->nodes()[0];
+    const Node& x = d.hierarchy(f.a).bvh->nodes()[0];
+    const Node& y = d.hierarchy(f.b).bvh->nodes()[0];
     Task root{i, 0, 0, {}, {}, {}, {}};
     MoveIntoA(f, y, root);
     MoveIntoB(f, x, root);
@@ -570,13 +559,10 @@ void CollectMarked(const std::vector<uint8_t>& marks, std::vector<uint32_t>& mar
 }
 
 // The largest |coordinate| of the world vertices of the paired objects (for DistanceSlack).
-double WorldMagnitude(const BvhQuery& query, const std::vector<PairFrame>& frames) {
-  std::vector<uint8_t> used(query.objects.size(), 0);
-  for (const PairFrame& f : frames) used[f.a] = used[f.b] = 1;
+double WorldMagnitude(const BvhQuery& query, std::span<const ObjectSlot> paired) {
   double magnitude = 0;
-  for (size_t o = 0; o < used.size(); ++o) {
-    if (!used[o]) continue;
-    for (const Eigen::Vector3d& p : query.objects[o].world.p_WV)
+  for (ObjectSlot o : paired) {
+    for (const Eigen::Vector3d& p : query.objects[Index(o)].p_WV)
       magnitude = std::max(magnitude, p.cwiseAbs().maxCoeff());
   }
   return magnitude;
@@ -586,24 +572,24 @@ double WorldMagnitude(const BvhQuery& query, const std::vector<PairFrame>& frame
 
 BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
   // The distance widens the search (candidates within it) even when no distance pair is asked.
+  FAR_DEMAND(query.hierarchies.size() == query.objects.size(), "hierarchies indexed by slot");
+  const std::vector<ObjectSlot> paired = internal::PairedSlots(query);
   internal::Stopper stopper(query.control);
   Wanted wanted;
-  wanted.contacts = query.want_contacts;
   wanted.stopper = &stopper;
   const bool within = query.max_distance.has_value() && *query.max_distance >= 0;
   wanted.distance = within && query.want_distance_pairs;
-  std::vector<PairFrame> frames = MakeFrames(query, 0);
   if (within) {
     wanted.max_distance = *query.max_distance;
-    wanted.slack = internal::DistanceSlack(wanted.max_distance, WorldMagnitude(query, frames));
-    frames = MakeFrames(query, wanted.slack);
+    wanted.slack = internal::DistanceSlack(wanted.max_distance, WorldMagnitude(query, paired));
   }
+  const std::vector<PairFrame> frames = MakeFrames(query, wanted.slack);
   std::vector<std::vector<uint8_t>> marks;
   if (query.want_candidates) {
     marks.resize(query.objects.size());
     for (const PairFrame& f : frames) {
-      marks[f.a].resize(query.objects[f.a].world.triangles.size(), 0);
-      marks[f.b].resize(query.objects[f.b].world.triangles.size(), 0);
+      marks[f.a].resize(query.objects[f.a].triangles.size(), 0);
+      marks[f.b].resize(query.objects[f.b].triangles.size(), 0);
     }
   }
   const Descent descent{query, frames, wanted, marks};

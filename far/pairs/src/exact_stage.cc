@@ -1,12 +1,13 @@
 #include "far/pairs/exact_stage.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <utility>
 
 #include "triangle_pair_test.h"
+
+#include "far/base/assert.h"
 
 // The exact stage: for every candidate object pair, the candidate triangles of one object against
 // those of the other, an AABB prefilter, then the exact predicates (triangle_pair_test.h says
@@ -30,7 +31,9 @@ using internal::BoxesWithin;
 using internal::BoxOf;
 using internal::DistanceSlack;
 using internal::Merge;
+using internal::PairedSlots;
 using internal::Partial;
+using internal::SlotView;
 using internal::Stopper;
 using internal::TestTrianglePair;
 using internal::TriangleBox;
@@ -52,9 +55,9 @@ double Magnitude(const SortedBoxes& boxes) {
 
 // A range of one side's triangles of one object pair: each looks forward in the other side.
 struct WorkItem {
-  uint32_t object_a;  // index into objects, the smaller id
-  uint32_t object_b;  // index into objects, the larger id
-  bool from_b;        // the range is of object_b's list (else of object_a's)
+  ObjectSlot object_a;  // the smaller slot
+  ObjectSlot object_b;  // the larger slot
+  bool from_b;          // the range is of object_b's list (else of object_a's)
   uint32_t begin, end;
 };
 
@@ -64,10 +67,10 @@ struct WorkItem {
 void RunItem(const WorkItem& item, std::span<const WorldObjectView> objects,
              const std::vector<SortedBoxes>& boxes, const Wanted& wanted, Partial& out,
              Stopper& stopper) {
-  const WorldObjectView& object_a = objects[item.object_a];
-  const WorldObjectView& object_b = objects[item.object_b];
-  const SortedBoxes& own = boxes[item.from_b ? item.object_b : item.object_a];
-  const SortedBoxes& other = boxes[item.from_b ? item.object_a : item.object_b];
+  const SlotView object_a{item.object_a, objects[Index(item.object_a)]};
+  const SlotView object_b{item.object_b, objects[Index(item.object_b)]};
+  const SortedBoxes& own = boxes[Index(item.from_b ? item.object_b : item.object_a)];
+  const SortedBoxes& other = boxes[Index(item.from_b ? item.object_a : item.object_b)];
   // The first candidate in `other` for the range's first triangle; it only moves forward.
   const auto starts_before = [&](const TriangleBox& o, double lo) {
     return item.from_b ? o.lo[0] <= lo : o.lo[0] < lo;
@@ -99,35 +102,9 @@ void RunItem(const WorkItem& item, std::span<const WorldObjectView> objects,
 // Each side of an object pair is cut into ranges of this many triangles, a work item each.
 constexpr uint32_t kItemTriangles = 512;
 
-// The object pairs of a query as indices into its objects, smaller id first, each once
-// (unknown ids and self pairs break the precondition and are skipped).
-std::vector<std::pair<uint32_t, uint32_t>> IndexPairs(const ExactQuery& query) {
-  const std::span<const WorldObjectView> objects = query.objects;
-  std::vector<std::pair<uint32_t, uint32_t>> id_index(objects.size());
-  for (uint32_t i = 0; i < objects.size(); ++i) id_index[i] = {objects[i].id, i};
-  std::sort(id_index.begin(), id_index.end());
-  const auto index_of = [&](uint32_t id) -> int64_t {
-    auto it =
-        std::lower_bound(id_index.begin(), id_index.end(), std::pair<uint32_t, uint32_t>{id, 0});
-    return it != id_index.end() && it->first == id ? it->second : -1;
-  };
-  std::vector<std::pair<uint32_t, uint32_t>> pairs;
-  pairs.reserve(query.object_pairs.size());
-  for (const ObjectPair& pair : query.object_pairs) {
-    const int64_t a = index_of(std::min(pair.object_a, pair.object_b));
-    const int64_t b = index_of(std::max(pair.object_a, pair.object_b));
-    assert(a >= 0 && b >= 0 && a != b);
-    if (a < 0 || b < 0 || a == b) continue;
-    pairs.emplace_back(static_cast<uint32_t>(a), static_cast<uint32_t>(b));
-  }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  return pairs;
-}
-
-// The candidate triangle boxes of object `o` (its subset, each valid triangle once), sorted by
-// their low x.
-SortedBoxes CandidateBoxes(const ExactQuery& query, uint32_t o) {
+// The candidate triangle boxes of the object in slot `o` (its subset, each valid triangle once),
+// sorted by their low x.
+SortedBoxes CandidateBoxes(const ExactQuery& query, size_t o) {
   const WorldObjectView& object = query.objects[o];
   const auto num_triangles = static_cast<uint32_t>(object.triangles.size());
   SortedBoxes list;
@@ -138,7 +115,7 @@ SortedBoxes CandidateBoxes(const ExactQuery& query, uint32_t o) {
     std::vector<uint32_t> subset = query.triangle_subsets[o];
     std::sort(subset.begin(), subset.end());
     subset.erase(std::unique(subset.begin(), subset.end()), subset.end());
-    assert(subset.empty() || subset.back() < num_triangles);
+    FAR_ASSERT(subset.empty() || subset.back() < num_triangles, "a subset of the triangles");
     list.reserve(subset.size());
     for (uint32_t t : subset) {
       if (t < num_triangles) list.push_back(BoxOf(object, t));
@@ -152,15 +129,15 @@ SortedBoxes CandidateBoxes(const ExactQuery& query, uint32_t o) {
 
 // Cuts every object pair into work items of about kItemTriangles triangles; counts the
 // candidate triangle pairs.
-std::vector<WorkItem> CutIntoItems(std::span<const std::pair<uint32_t, uint32_t>> pairs,
-                                   const std::vector<SortedBoxes>& boxes, const Wanted& wanted,
+std::vector<WorkItem> CutIntoItems(std::span<const SlotPair> pairs,
+                                   const std::vector<SortedBoxes>& boxes,
                                    size_t* pairs_considered) {
   std::vector<WorkItem> items;
   for (const auto& [a, b] : pairs) {
-    const auto size_a = static_cast<uint32_t>(boxes[a].size());
-    const auto size_b = static_cast<uint32_t>(boxes[b].size());
+    const auto size_a = static_cast<uint32_t>(boxes[Index(a)].size());
+    const auto size_b = static_cast<uint32_t>(boxes[Index(b)].size());
     *pairs_considered += static_cast<size_t>(size_a) * size_b;
-    if (size_a == 0 || size_b == 0 || !(wanted.contacts || wanted.distance)) continue;
+    if (size_a == 0 || size_b == 0) continue;
     for (bool from_b : {false, true}) {
       const uint32_t size = from_b ? size_b : size_a;
       for (uint32_t begin = 0; begin < size; begin += kItemTriangles) {
@@ -175,33 +152,31 @@ std::vector<WorkItem> CutIntoItems(std::span<const std::pair<uint32_t, uint32_t>
 
 ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
   const std::span<const WorldObjectView> objects = query.objects;
-  assert(query.triangle_subsets.empty() || query.triangle_subsets.size() == objects.size());
-  const std::vector<std::pair<uint32_t, uint32_t>> pairs = IndexPairs(query);
+  FAR_ASSERT(query.triangle_subsets.empty() || query.triangle_subsets.size() == objects.size(),
+             "subsets indexed like the objects");
 
   // Build and sort the candidate triangle boxes of every object in some pair, once.
-  std::vector<uint32_t> used;
-  for (const auto& [a, b] : pairs) used.insert(used.end(), {a, b});
-  std::sort(used.begin(), used.end());
-  used.erase(std::unique(used.begin(), used.end()), used.end());
+  const std::vector<ObjectSlot> used = PairedSlots(query);
   std::vector<SortedBoxes> boxes(objects.size());
   pool.ParallelFor(used.size(), 1, [&](size_t begin, size_t end) {
-    for (size_t u = begin; u < end; ++u) boxes[used[u]] = CandidateBoxes(query, used[u]);
+    for (size_t u = begin; u < end; ++u)
+      boxes[Index(used[u])] = CandidateBoxes(query, Index(used[u]));
   });
 
   // Decide what to compute and the prefilter slack. A negative or NaN max_distance finds nothing.
   Stopper stopper(query.control);
   Wanted wanted;
-  wanted.contacts = query.want_contacts;
-  wanted.distance = query.max_distance.has_value() && *query.max_distance >= 0;
+  wanted.distance =
+      query.want_distance_pairs && query.max_distance.has_value() && *query.max_distance >= 0;
   wanted.stopper = &stopper;
   if (wanted.distance) {
     wanted.max_distance = *query.max_distance;
     double magnitude = 0;
-    for (uint32_t o : used) magnitude = std::max(magnitude, Magnitude(boxes[o]));
+    for (ObjectSlot o : used) magnitude = std::max(magnitude, Magnitude(boxes[Index(o)]));
     wanted.slack = DistanceSlack(wanted.max_distance, magnitude);
   }
   size_t pairs_considered = 0;
-  const std::vector<WorkItem> items = CutIntoItems(pairs, boxes, wanted, &pairs_considered);
+  const std::vector<WorkItem> items = CutIntoItems(query.object_pairs, boxes, &pairs_considered);
 
   // Run the items on the pool, each chunk of items into its own output.
   const size_t threads = static_cast<size_t>(pool.num_threads());
@@ -213,6 +188,15 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
       RunItem(items[i], objects, boxes, wanted, out, stopper);
   });
   return Merge(partials, pairs_considered, &stopper);
+}
+
+std::vector<ObjectSlot> SlotsInPairs(std::span<const SlotPair> pairs) {
+  std::vector<ObjectSlot> slots;
+  slots.reserve(2 * pairs.size());
+  for (const SlotPair& pair : pairs) slots.insert(slots.end(), {pair.object_a, pair.object_b});
+  std::sort(slots.begin(), slots.end());
+  slots.erase(std::unique(slots.begin(), slots.end()), slots.end());
+  return slots;
 }
 
 uint64_t BruteForcePairs(std::span<const WorldObjectView> objects) {
@@ -233,22 +217,17 @@ uint64_t BruteForcePairs(std::span<const WorldObjectView> objects) {
 ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
                                 std::optional<double> max_distance, ThreadPool& pool,
                                 const StepControl* control) {
-  // Objects in id order; every triangle's box.
-  std::vector<const WorldObjectView*> sorted;
-  for (const WorldObjectView& object : objects) sorted.push_back(&object);
-  std::sort(sorted.begin(), sorted.end(),
-            [](const WorldObjectView* x, const WorldObjectView* y) { return x->id < y->id; });
-  std::vector<SortedBoxes> boxes(sorted.size());
+  // Every triangle's box.
+  std::vector<SortedBoxes> boxes(objects.size());
   double magnitude = 0;
-  for (size_t o = 0; o < sorted.size(); ++o) {
-    for (uint32_t t = 0; t < sorted[o]->triangles.size(); ++t) {
-      boxes[o].push_back(BoxOf(*sorted[o], t));
+  for (size_t o = 0; o < objects.size(); ++o) {
+    for (uint32_t t = 0; t < objects[o].triangles.size(); ++t) {
+      boxes[o].push_back(BoxOf(objects[o], t));
     }
     magnitude = std::max(magnitude, Magnitude(boxes[o]));
   }
   Stopper stopper(control);
   Wanted wanted;
-  wanted.contacts = true;
   wanted.distance = max_distance.has_value() && *max_distance >= 0;
   wanted.stopper = &stopper;
   if (wanted.distance) {
@@ -260,8 +239,9 @@ ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
   std::vector<Partial> partials;
   size_t pairs_considered = 0;
   constexpr size_t kGrain = 64;
-  for (size_t i = 0; i < sorted.size() && !stopper.stopped(); ++i) {
-    for (size_t j = i + 1; j < sorted.size() && !stopper.stopped(); ++j) {
+  for (size_t i = 0; i < objects.size() && !stopper.stopped(); ++i) {
+    for (size_t j = i + 1; j < objects.size() && !stopper.stopped(); ++j) {
+      const SlotView a{SlotAt(i), objects[i]}, b{SlotAt(j), objects[j]};
       pairs_considered += boxes[i].size() * boxes[j].size();
       const size_t first = partials.size();
       partials.resize(first + (boxes[i].size() + kGrain - 1) / kGrain);
@@ -271,7 +251,7 @@ ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
           if (stopper.Poll()) return;
           for (size_t tb = 0; tb < boxes[j].size(); ++tb) {
             if (!BoxesWithin(boxes[i][ta], boxes[j][tb], wanted.slack)) continue;
-            TestTrianglePair(*sorted[i], boxes[i][ta], *sorted[j], boxes[j][tb], wanted, out);
+            TestTrianglePair(a, boxes[i][ta], b, boxes[j][tb], wanted, out);
           }
         }
       });

@@ -1,8 +1,9 @@
 #include "far/pairs/sweep_and_prune.h"
 
 #include <algorithm>
-#include <cassert>
 #include <limits>
+
+#include "far/base/assert.h"
 
 // Incremental sweep-and-prune (Cohen, Lin, Manocha, Ponamgi: I-COLLIDE).
 //
@@ -64,37 +65,29 @@ bool SweepAndPrune::EndpointOrder(const Endpoint& a, const Endpoint& b) {
   return EndpointLess(a.value, a.is_max, b.value, b.is_max);
 }
 
-// Refreshes every object's grown interval, giving new ids a slot. An object whose box was empty
-// has no pairs and its endpoints sit at +inf in an order that says nothing about overlap, so
-// one that turns non-empty is looked at afresh, like a new one.
-SweepAndPrune::Refreshed SweepAndPrune::RefreshSlots(std::span<const IdBox> boxes, double half) {
+// Refreshes every object's grown interval. An object whose box was empty has no pairs and its
+// endpoints sit at +inf in an order that says nothing about overlap, so one that turns non-empty
+// is looked at afresh, like a new one.
+SweepAndPrune::Refreshed SweepAndPrune::RefreshSlots(std::span<const SlotBox> boxes, double half) {
   const double inf = std::numeric_limits<double>::infinity();
   Refreshed refreshed;
-  for (const IdBox& id_box : boxes) {
-    auto [it, inserted] = id_slots_.try_emplace(id_box.id, 0);
-    if (inserted) {
-      if (free_slots_.empty()) {
-        it->second = static_cast<uint32_t>(slots_.size());
-        slots_.emplace_back();
-      } else {
-        it->second = free_slots_.back();
-        free_slots_.pop_back();
-      }
-      refreshed.added.push_back(it->second);
-    }
-    Slot& slot = slots_[it->second];
-    assert(slot.stamp != stamp_ && "ids must be unique");
-    const bool was_empty = !inserted && slot.empty;
-    slot.id = id_box.id;
+  for (const SlotBox& slot_box : boxes) {
+    const auto s = static_cast<uint32_t>(Index(slot_box.slot));
+    if (s >= slots_.size()) slots_.resize(s + 1);
+    Slot& slot = slots_[s];
+    FAR_ASSERT(slot.stamp != stamp_, "slots must be unique");
+    const bool added = !slot.live;
+    if (added) refreshed.added.push_back(s);
+    const bool was_empty = !added && slot.empty;
     slot.live = true;
     slot.stamp = stamp_;
-    const Eigen::Vector3d& lo = id_box.box_W.min();
-    const Eigen::Vector3d& hi = id_box.box_W.max();
+    const Eigen::Vector3d& lo = slot_box.box_W.min();
+    const Eigen::Vector3d& hi = slot_box.box_W.max();
     // An empty or non-finite box pairs with nothing; its endpoints park at +inf so that they
     // keep the lists totally ordered (a NaN would break the sort for everyone).
     slot.empty = !(lo.allFinite() && hi.allFinite() && (lo.array() <= hi.array()).all());
     refreshed.any_empty = refreshed.any_empty || slot.empty;
-    if (was_empty && !slot.empty) refreshed.revived.push_back(it->second);
+    if (was_empty && !slot.empty) refreshed.revived.push_back(s);
     for (int axis = 0; axis < 3; ++axis) {
       slot.lo[axis] = slot.empty ? inf : lo[axis] - half;
       slot.hi[axis] = slot.empty ? inf : hi[axis] + half;
@@ -106,12 +99,9 @@ SweepAndPrune::Refreshed SweepAndPrune::RefreshSlots(std::span<const IdBox> boxe
 // Forgets the objects that were not in this Update, with their endpoints and pairs.
 void SweepAndPrune::DropUnseen() {
   bool any_removed = false;
-  for (uint32_t s = 0; s < slots_.size(); ++s) {
-    Slot& slot = slots_[s];
+  for (Slot& slot : slots_) {
     if (!slot.live || slot.stamp == stamp_) continue;
     slot.live = false;
-    id_slots_.erase(slot.id);
-    free_slots_.push_back(s);
     any_removed = true;
   }
   if (!any_removed) return;
@@ -193,8 +183,8 @@ void SweepAndPrune::SweepNewPairs(const std::vector<uint8_t>& is_new) {
   }
 }
 
-std::vector<ObjectPair> SweepAndPrune::Update(std::span<const IdBox> boxes, double margin) {
-  assert(margin >= 0);
+std::vector<SlotPair> SweepAndPrune::Update(std::span<const SlotBox> boxes, double margin) {
+  FAR_ASSERT(margin >= 0, "a distance");
   // A negative or NaN margin is treated as 0 (the contract asks for margin >= 0).
   const double half = margin > 0 ? margin / 2 : 0.0;
   ++stamp_;
@@ -217,13 +207,11 @@ std::vector<ObjectPair> SweepAndPrune::Update(std::span<const IdBox> boxes, doub
       return slots_[pair >> 32].empty || slots_[static_cast<uint32_t>(pair)].empty;
     });
   }
-  // Report the pairs by id, sorted.
-  std::vector<ObjectPair> pairs;
+  // Report the pairs, sorted (PairKey puts the smaller slot in the high half).
+  std::vector<SlotPair> pairs;
   pairs.reserve(overlaps_.size());
   for (uint64_t pair : overlaps_) {
-    const uint32_t a = slots_[pair >> 32].id;
-    const uint32_t b = slots_[static_cast<uint32_t>(pair)].id;
-    pairs.push_back({std::min(a, b), std::max(a, b)});
+    pairs.push_back({SlotAt(pair >> 32), SlotAt(static_cast<uint32_t>(pair))});
   }
   std::sort(pairs.begin(), pairs.end());
   return pairs;

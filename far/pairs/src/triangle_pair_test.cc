@@ -1,20 +1,32 @@
 #include "triangle_pair_test.h"
 
+#include "far/base/assert.h"
 #include "far/pairs/internal/pair_sort.h"
 
 namespace far::internal {
 
-void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
-                      const WorldObjectView& object_b, const TriangleBox& b, const Wanted& wanted,
-                      Partial& out) {
+// The slots of the query's object pairs, each once. A slot outside the objects would read out of
+// bounds: checked in every build.
+std::vector<ObjectSlot> PairedSlots(const PairQuery& query) {
+  for (const SlotPair& pair : query.object_pairs) {
+    FAR_DEMAND(
+        Index(pair.object_a) < query.objects.size() && Index(pair.object_b) < query.objects.size(),
+        "an object pair of slots of the query's objects");
+    FAR_ASSERT(pair.object_a < pair.object_b, "the smaller slot first");
+  }
+  return SlotsInPairs(query.object_pairs);
+}
+
+void TestTrianglePair(const SlotView& object_a, const TriangleBox& a, const SlotView& object_b,
+                      const TriangleBox& b, const Wanted& wanted, Partial& out) {
   ++out.pairs_tested;
-  const TrianglePoints s = Corners(object_a, a.triangle);
-  const TrianglePoints t = Corners(object_b, b.triangle);
-  const ContactPair pair{object_a.id, a.triangle, object_b.id, b.triangle};
+  const TrianglePoints s = Corners(object_a.view, a.triangle);
+  const TrianglePoints t = Corners(object_b.view, b.triangle);
+  const SlotContact pair{object_a.slot, a.triangle, object_b.slot, b.triangle};
   // Intersection needs the boxes to touch; when they do not, only the distance test can pass.
   bool intersects = false;
   const size_t before = out.contacts.size() + out.distance_pairs.size();
-  if (wanted.contacts && (wanted.slack == 0 || BoxesWithin(a, b, 0))) {
+  if (wanted.slack == 0 || BoxesWithin(a, b, 0)) {
     // The caller's prefilter found the boxes within the slack; here they also touch.
     intersects = TrianglesIntersectWithinBoxes(s, t);
     if (intersects) out.contacts.push_back(pair);

@@ -18,8 +18,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "far/base/step_control.h"
 #include "far/geometry/triangle_tests.h"
-#include "far/model/step_control.h"
 #include "far/pairs/exact_stage.h"
 #include "far/pairs/world_object.h"
 
@@ -111,8 +111,7 @@ class Stopper {
 
 /// What to compute for one candidate triangle pair.
 struct Wanted {
-  bool contacts = false;
-  bool distance = false;
+  bool distance = false;  ///< distance pairs too (contacts always)
   double max_distance = 0;
   double slack = 0;            ///< the prefilter slack: 0 for contacts only, else DistanceSlack
   Stopper* stopper = nullptr;  ///< counts the pairs found (the pair cap); may be null
@@ -120,8 +119,8 @@ struct Wanted {
 
 /// One work item's output.
 struct Partial {
-  std::vector<ContactPair> contacts;
-  std::vector<DistancePair> distance_pairs;
+  std::vector<SlotContact> contacts;
+  std::vector<SlotDistancePair> distance_pairs;
   size_t pairs_tested = 0;
   size_t unreported = 0;  ///< pairs found and not yet added to the stopper
 };
@@ -132,11 +131,21 @@ inline void Report(Partial& out, Stopper* stopper) {
   out.unreported = 0;
 }
 
-/// Runs the exact tests on triangles `a` of object `object_a` and `b` of `object_b` (ids
-/// object_a.id < object_b.id) whose boxes passed the prefilter with wanted.slack.
-void TestTrianglePair(const WorldObjectView& object_a, const TriangleBox& a,
-                      const WorldObjectView& object_b, const TriangleBox& b, const Wanted& wanted,
-                      Partial& out);
+/// An object of a pair test: its slot and its world view.
+struct SlotView {
+  ObjectSlot slot;
+  const WorldObjectView& view;
+};
+
+/// Runs the exact tests on triangles `a` of object `object_a` and `b` of `object_b` (slots
+/// object_a.slot < object_b.slot) whose boxes passed the prefilter with wanted.slack.
+void TestTrianglePair(const SlotView& object_a, const TriangleBox& a, const SlotView& object_b,
+                      const TriangleBox& b, const Wanted& wanted, Partial& out);
+
+/// The slots in the query's object pairs, sorted, each once. Checks that each indexes the
+/// query's objects (FAR_DEMAND: a slot past them would read out of bounds) and that pairs put
+/// the smaller slot first (FAR_ASSERT).
+std::vector<ObjectSlot> PairedSlots(const PairQuery& query);
 
 /// Concatenates the partial outputs and sorts them (the order does not depend on threads).
 /// With a stopper, the result says why the stage stopped (an answer over the pair cap counts

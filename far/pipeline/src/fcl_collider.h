@@ -2,25 +2,26 @@
 
 #include <cstdint>
 #include <memory>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Geometry>
 
+#include "far/base/step_control.h"
 #include "far/model/contact_pair.h"
 #include "far/model/mesh.h"
-#include "far/model/step_control.h"
+#include "far/model/object_slot.h"
 
 namespace far::internal {
 
 /// FCL as a comparison method: a BVHModel<OBBRSS> per object (built once, refit when a
 /// deformable object's vertices change), a dynamic AABB tree broadphase kept across calls, and
 /// FCL's mesh-mesh collide reporting every intersecting triangle pair: the answer FCL gives on
-/// fresh models of the same objects. FCL types stay in the .cc.
+/// fresh models of the same objects. Objects are kept by slot (far/model/object_slot.h). FCL
+/// types stay in the .cc.
 class FclCollider {
  public:
   struct Object {
-    uint32_t id;
+    ObjectSlot slot;
     uint64_t geometry_stamp;  ///< changes when the vertices change: triggers a refit
     const Mesh* mesh;         ///< frame M; aliased for the call
     Eigen::Isometry3d X_WM;
@@ -39,12 +40,12 @@ class FclCollider {
   FclCollider();
   ~FclCollider();
 
-  /// Returns FCL's contact pairs (sorted, object_a < object_b) among `objects`; `stats` (may be
-  /// null) gets what it took.
-  std::vector<ContactPair> Collide(const std::vector<Object>& objects, CollideStats* stats,
+  /// Returns FCL's contact pairs by slot (sorted, object_a < object_b) among `objects`; `stats`
+  /// (may be null) gets what it took.
+  std::vector<SlotContact> Collide(const std::vector<Object>& objects, CollideStats* stats,
                                    const StepControl* control = nullptr);
-  /// Forgets an object's model.
-  void Remove(uint32_t id);
+  /// Forgets the model of the object in `slot`.
+  void Remove(ObjectSlot slot);
 
  private:
   struct Impl;

@@ -71,10 +71,11 @@ Eigen::AlignedBox3d TransformBox(const Eigen::Isometry3d& X, const Eigen::Aligne
   return Eigen::AlignedBox3d(center - half, center + half);
 }
 
-ViewObject MakeViewObject(const CachedObject& object, uint32_t group, uint32_t first_primitive) {
+// An object drawn in a view: its slot is its group (each object its own).
+ViewObject MakeViewObject(const CachedObject& object, uint32_t first_primitive) {
   ViewObject view;
-  view.slot = object.slot;
-  view.group = group;
+  view.slot = static_cast<uint32_t>(Index(object.slot));
+  view.group = view.slot;
   view.first_primitive = first_primitive;
   view.num_triangles = static_cast<uint32_t>(object.mesh.triangles.size());
   view.X_WA = object.X_WA();
@@ -163,6 +164,9 @@ Result<GpuCuller::RendererEntry*> GpuCuller::RendererFor(const StepRequest& requ
 
 namespace {
 
+// The renderers' name of an object's slot.
+uint32_t Slot(const CachedObject& object) { return static_cast<uint32_t>(Index(object.slot)); }
+
 // The GPU pieces of one object in one set, in the object's anchored frame.
 std::vector<PieceInstance> BuildPieces(const CachedObject& object, PieceSet set) {
   std::vector<PieceInstance> pieces;
@@ -170,13 +174,13 @@ std::vector<PieceInstance> BuildPieces(const CachedObject& object, PieceSet set)
     // @pre the hierarchy is up to date (SceneCache::RefreshHierarchies).
     for (const TriangleBvh::Node* node : HierarchyCut(object.bvh, ProxyBoxesFor(object)))
       pieces.push_back(
-          ProxyBoxPiece(object.slot, node->center - object.anchor_M, node->half_extent));
+          ProxyBoxPiece(Slot(object), node->center - object.anchor_M, node->half_extent));
     return pieces;
   }
   pieces.reserve(object.mesh.triangles.size() * InstancesPerTriangle(set));
   for (size_t t = 0; t < object.mesh.triangles.size(); ++t) {
     const auto& tri = object.mesh.triangles[t];
-    AppendPieces(set, object.slot, static_cast<uint32_t>(t),
+    AppendPieces(set, Slot(object), static_cast<uint32_t>(t),
                  object.mesh.p_MV[tri[0]] - object.anchor_M,
                  object.mesh.p_MV[tri[1]] - object.anchor_M,
                  object.mesh.p_MV[tri[2]] - object.anchor_M, &pieces);
@@ -195,8 +199,9 @@ void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject*
   // changed (deformable objects, every step).
   std::vector<std::pair<const CachedObject*, PieceSet>> stale, changed;
   for (const CachedObject* object : objects) {
+    if (object == nullptr) continue;
     for (PieceSet set : sets) {
-      auto it = entry.built.find({object->slot, static_cast<int>(set)});
+      auto it = entry.built.find({Slot(*object), static_cast<int>(set)});
       if (it == entry.built.end()) {
         stale.emplace_back(object, set);
       } else if (it->second != object->geometry_stamp) {
@@ -222,8 +227,8 @@ void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject*
     const auto [object, set] = stale[i];
     counters_.piece_builds++;
     counters_.piece_bytes += static_cast<int64_t>(built[i].size() * sizeof(PieceInstance));
-    entry.renderer->SetPieces(set, object->slot, std::move(built[i]));
-    entry.built[{object->slot, static_cast<int>(set)}] = object->geometry_stamp;
+    entry.renderer->SetPieces(set, Slot(*object), std::move(built[i]));
+    entry.built[{Slot(*object), static_cast<int>(set)}] = object->geometry_stamp;
   }
 }
 
@@ -305,15 +310,16 @@ Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
   (*entry)->first_step = first_step;
   const std::vector<PieceSet> sets = ObjectLevelSetsFor(request.method);
   EnsurePieces(**entry, objects, sets, control);
-  // One primitive per object; each object is its own group.
+  // One primitive per slot (a free slot's is never alive); each object is its own group.
   std::vector<ViewObject> view_objects;
-  std::vector<Eigen::AlignedBox3d> boxes;
-  for (size_t i = 0; i < objects.size(); ++i) {
-    view_objects.push_back(
-        MakeViewObject(*objects[i], static_cast<uint32_t>(i), static_cast<uint32_t>(i)));
-    boxes.push_back(TransformBox(objects[i]->X_WM, objects[i]->rect_box_M));
+  std::vector<Eigen::AlignedBox3d> boxes(objects.size());
+  std::vector<uint8_t> alive(objects.size(), 0);
+  for (size_t s = 0; s < objects.size(); ++s) {
+    if (objects[s] == nullptr) continue;
+    view_objects.push_back(MakeViewObject(*objects[s], static_cast<uint32_t>(s)));
+    boxes[s] = TransformBox(objects[s]->X_WM, objects[s]->rect_box_M);
+    alive[s] = 1;
   }
-  std::vector<uint8_t> alive(objects.size(), 1);
   LevelCertificate level{.level = "object"};
   if (auto ok = CullLevel(**entry, request, sets, view_objects, 0, boxes, alive, stats, level);
       !ok.ok()) {
@@ -325,7 +331,7 @@ Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
 
 Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
     const StepRequest& request, std::span<const CachedObject* const> objects,
-    std::span<const size_t> paired, std::span<const std::vector<uint32_t>> candidates,
+    std::span<const ObjectSlot> paired, std::span<const std::vector<uint32_t>> candidates,
     StepStats& stats, const StepControl& control) {
   auto entry = RendererFor(request);
   if (!entry.ok()) return entry.error();
@@ -337,8 +343,8 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
   const int k = request.subobject_size;
   std::vector<ViewObject> view_objects;
   uint32_t num_primitives = 0;
-  for (size_t i : paired) {
-    view_objects.push_back(MakeViewObject(*objects[i], static_cast<uint32_t>(i), num_primitives));
+  for (ObjectSlot slot : paired) {
+    view_objects.push_back(MakeViewObject(*objects[Index(slot)], num_primitives));
     num_primitives += PrimitivesOf(view_objects.back(), k);
   }
   // Only the sub-objects holding a candidate triangle take part: the others are not drawn.
@@ -385,11 +391,12 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
   return subsets;
 }
 
-void GpuCuller::RemoveSlot(uint32_t slot) {
+void GpuCuller::RemoveSlot(ObjectSlot slot) {
   // No GL here: the renderers drop the slot's pieces on the CPU and upload at their next view.
+  const auto s = static_cast<uint32_t>(Index(slot));
   for (auto& [key, entry] : renderers_) {
-    entry.renderer->RemoveSlot(slot);
-    for (int set = 0; set < kNumPieceSets; ++set) entry.built.erase({slot, set});
+    entry.renderer->RemoveSlot(s);
+    for (int set = 0; set < kNumPieceSets; ++set) entry.built.erase({s, set});
   }
 }
 

@@ -11,9 +11,9 @@
 #include "scene_cache.h"
 #include <Eigen/Geometry>
 
+#include "far/base/result.h"
+#include "far/base/step_control.h"
 #include "far/gpu/culling_renderer.h"
-#include "far/model/result.h"
-#include "far/model/step_control.h"
 #include "far/model/step_request.h"
 #include "far/model/step_result.h"
 
@@ -33,7 +33,8 @@ class GpuCuller {
   GpuCuller(const GpuCuller&) = delete;
   GpuCuller& operator=(const GpuCuller&) = delete;
 
-  /// Culls whole objects: returns, indexed like `objects`, 1 for objects in the object PCS.
+  /// Culls whole objects: `objects` by slot (null: a free slot); returns, by slot, 1 for the
+  /// objects in the object PCS.
   /// @pre the objects' hierarchies are up to date (SceneCache::RefreshHierarchies): the FAR
   /// methods draw a cut of each hierarchy at this level.
   /// The first step of a renderer (its shaders compiled, its pieces built and uploaded) and the
@@ -42,18 +43,18 @@ class GpuCuller {
                                            std::span<const CachedObject* const> objects,
                                            StepStats& stats, const StepControl& control);
 
-  /// Culls sub-objects of k = request.subobject_size triangles of the objects `paired`
-  /// (indices into `objects`): returns, indexed like `objects`, the sorted triangles of each
-  /// object that stay in the primitive PCS. With `candidates` (indexed like `objects`, sorted;
-  /// empty span: every triangle), only the sub-objects holding a candidate are drawn and only
-  /// candidates are returned: the triangles the CPU hierarchy found near a partner.
+  /// Culls sub-objects of k = request.subobject_size triangles of the objects in the slots
+  /// `paired`: returns, by slot, the sorted triangles of each object that stay in the primitive
+  /// PCS. With `candidates` (by slot, sorted; empty span: every triangle), only the sub-objects
+  /// holding a candidate are drawn and only candidates are returned: the triangles the CPU
+  /// hierarchy found near a partner.
   Result<std::vector<std::vector<uint32_t>>> CullPrimitives(
       const StepRequest& request, std::span<const CachedObject* const> objects,
-      std::span<const size_t> paired, std::span<const std::vector<uint32_t>> candidates,
+      std::span<const ObjectSlot> paired, std::span<const std::vector<uint32_t>> candidates,
       StepStats& stats, const StepControl& control);
 
   /// Frees a removed object's pieces in every renderer.
-  void RemoveSlot(uint32_t slot);
+  void RemoveSlot(ObjectSlot slot);
 
  private:
   struct RendererEntry {

@@ -6,9 +6,10 @@
 #include <map>
 #include <mutex>
 
+#include "step_runner.h"
+
 #include "far/gpu/culling_renderer.h"
 #include "far/gpu/gl_lock.h"
-#include "far/pipeline/pipeline.h"
 
 namespace far::internal {
 namespace {
@@ -43,13 +44,11 @@ Mesh Ball(double radius, int n) {
 }
 
 // The time of a FAR step (the second: the first builds shaders and pieces) over 27 overlapping
-// balls of ball_n bands; `triangles` gets their count.
+// balls of ball_n bands; `triangles` gets their count. The step runs on a world of its own, in
+// the context current on this thread, with the pipeline's own stages (step_runner.h).
 std::optional<double> Measure(int ball_n, int* triangles) {
-  PipelineOptions options;
-  options.use_current_context = true;
-  options.num_threads = 1;
-  auto pipeline = Pipeline::Create(options);
-  if (!pipeline) return std::nullopt;
+  ThreadPool pool(1);
+  StepWorld world(pool, /*with_gpu=*/true);
   // 27 balls on a grid, each overlapping its neighbours.
   const Mesh ball = Ball(0.6, ball_n);
   *triangles = 27 * ball.num_triangles();
@@ -59,7 +58,7 @@ std::optional<double> Measure(int ball_n, int* triangles) {
       for (int z = 0; z < 3; ++z) {
         Pose pose;
         pose.translation = Eigen::Vector3d(x, y, z);
-        if (!(*pipeline)->AddObject(id++, ball, Motion::kRigid, pose)) return std::nullopt;
+        world.Apply(AddObject{id++, ball, Motion::kRigid, pose});
       }
     }
   }
@@ -67,9 +66,9 @@ std::optional<double> Measure(int ball_n, int* triangles) {
   request.method = Method::kFar;
   request.mechanism = QueryMechanism::kIdBuffer;
   request.resolution = 256;
-  if (!(*pipeline)->Step(request)) return std::nullopt;  // shaders, buffers, pieces
+  if (!RunStep(world, request, {})) return std::nullopt;  // shaders, buffers, pieces
   const auto start = std::chrono::steady_clock::now();
-  if (!(*pipeline)->Step(request)) return std::nullopt;
+  if (!RunStep(world, request, {})) return std::nullopt;
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return ms;

@@ -6,9 +6,9 @@
 
 namespace far::internal {
 
-int64_t SceneCache::Apply(SceneUpdate update) {
+std::optional<ObjectSlot> SceneCache::Apply(SceneUpdate update) {
   return std::visit(
-      [this](auto& u) -> int64_t {
+      [this](auto& u) -> std::optional<ObjectSlot> {
         using T = std::decay_t<decltype(u)>;
         if constexpr (std::is_same_v<T, AddObject>) {
           ++structure_;
@@ -21,19 +21,23 @@ int64_t SceneCache::Apply(SceneUpdate update) {
             object.slot = free_slots_.back();
             free_slots_.pop_back();
           } else {
-            object.slot = next_slot_++;
+            object.slot = SlotAt(slots_.size());
+            slots_.emplace_back();
+            ids_.emplace_back();
           }
           RefreshGeometry(object);
-          objects_.insert_or_assign(u.id, std::move(object));
+          slot_of_id_[u.id] = object.slot;
+          ids_[Index(object.slot)] = u.id;
+          slots_[Index(object.slot)] = std::move(object);
         } else if constexpr (std::is_same_v<T, RemoveObject>) {
           ++structure_;
-          auto it = objects_.find(u.id);
-          const uint32_t slot = it->second.slot;
+          const ObjectSlot slot = slot_of_id_.at(u.id);
+          slots_[Index(slot)].reset();
+          slot_of_id_.erase(u.id);
           free_slots_.push_back(slot);
-          objects_.erase(it);
           return slot;
         } else if constexpr (std::is_same_v<T, SetPose>) {
-          CachedObject& object = objects_.at(u.id);
+          CachedObject& object = At(u.id);
           const Eigen::Isometry3d X_WM = NormalizedPose(u.X_WO).ToIsometry();
           // A pose equal to the current one changes nothing: static-looking rigid objects
           // keep their world vertices.
@@ -42,11 +46,11 @@ int64_t SceneCache::Apply(SceneUpdate update) {
             object.world_dirty = true;
           }
         } else {
-          CachedObject& object = objects_.at(u.id);
+          CachedObject& object = At(u.id);
           object.mesh.p_MV = std::move(u.p_MV);
           RefreshGeometry(object);
         }
-        return -1;
+        return std::nullopt;
       },
       update);
 }
@@ -79,8 +83,8 @@ void SceneCache::ComputeGpuGeometry(CachedObject& object) {
 
 void SceneCache::RefreshGpuGeometry(ThreadPool& pool) {
   std::vector<CachedObject*> stale;
-  for (auto& [id, object] : objects_) {
-    if (object.gpu_stamp != object.geometry_stamp) stale.push_back(&object);
+  for (auto& object : slots_) {
+    if (object && object->gpu_stamp != object->geometry_stamp) stale.push_back(&*object);
   }
   pool.ParallelFor(stale.size(), 1, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) ComputeGpuGeometry(*stale[i]);
@@ -88,8 +92,9 @@ void SceneCache::RefreshGpuGeometry(ThreadPool& pool) {
 }
 
 void SceneCache::RefreshWorld() {
-  for (auto& [id, object] : objects_) {
-    if (!object.world_dirty) continue;
+  for (auto& slot : slots_) {
+    if (!slot || !slot->world_dirty) continue;
+    CachedObject& object = *slot;
     object.p_WV.resize(object.mesh.p_MV.size());
     object.box_W.setEmpty();
     for (size_t v = 0; v < object.p_WV.size(); ++v) {
@@ -101,13 +106,13 @@ void SceneCache::RefreshWorld() {
   }
 }
 
-void SceneCache::RefreshHierarchies(std::span<const CachedObject* const> objects, ThreadPool& pool,
+void SceneCache::RefreshHierarchies(std::span<const ObjectSlot> slots, ThreadPool& pool,
                                     const StepControl& control) {
   std::vector<CachedObject*> builds, refits;
-  for (const CachedObject* object : objects) {
-    if (object->bvh_stamp == object->geometry_stamp) continue;
-    CachedObject& stale = objects_.at(object->id);
-    (stale.bvh.empty() ? builds : refits).push_back(&stale);
+  for (ObjectSlot slot : slots) {
+    CachedObject& object = *slots_[Index(slot)];
+    if (object.bvh_stamp == object.geometry_stamp) continue;
+    (object.bvh.empty() ? builds : refits).push_back(&object);
   }
   if (!builds.empty()) {
     // One-off work: later steps of these objects do not repeat it.
@@ -128,17 +133,18 @@ void SceneCache::RefreshHierarchies(std::span<const CachedObject* const> objects
 }
 
 std::vector<const CachedObject*> SceneCache::Objects() const {
-  std::vector<const CachedObject*> all;
-  all.reserve(objects_.size());
-  for (const auto& [id, object] : objects_) all.push_back(&object);
-  return all;
+  std::vector<const CachedObject*> objects(slots_.size(), nullptr);
+  for (size_t s = 0; s < slots_.size(); ++s) {
+    if (slots_[s]) objects[s] = &*slots_[s];
+  }
+  return objects;
 }
 
 std::vector<WorldObjectView> SceneCache::WorldViews() const {
-  std::vector<WorldObjectView> world;
-  world.reserve(objects_.size());
-  for (const auto& [id, object] : objects_)
-    world.push_back({id, object.p_WV, object.mesh.triangles});
+  std::vector<WorldObjectView> world(slots_.size());
+  for (size_t s = 0; s < slots_.size(); ++s) {
+    if (slots_[s]) world[s] = {slots_[s]->p_WV, slots_[s]->mesh.triangles};
+  }
   return world;
 }
 

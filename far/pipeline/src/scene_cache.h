@@ -1,19 +1,22 @@
 #pragma once
 
 #include <cstdint>
-#include <map>
+#include <optional>
+#include <span>
+#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Geometry>
 
+#include "far/base/step_control.h"
+#include "far/base/thread_pool.h"
 #include "far/model/mesh.h"
+#include "far/model/object_slot.h"
 #include "far/model/pose.h"
 #include "far/model/scene_update.h"
-#include "far/model/step_control.h"
-#include "far/pairs/thread_pool.h"
 #include "far/pairs/triangle_bvh.h"
 #include "far/pairs/world_object.h"
-#include "far/pipeline/pipeline.h"
+#include "far/pipeline/scene_counters.h"
 
 namespace far::internal {
 
@@ -21,7 +24,7 @@ namespace far::internal {
 /// recomputed only when the vertices change, world data only when the pose or vertices change.
 struct CachedObject {
   uint32_t id = 0;
-  uint32_t slot = 0;  ///< dense index reused after removals: the renderers' per-object slot
+  ObjectSlot slot{};  ///< its index in every array of a step (object_slot.h)
   Motion motion = Motion::kStatic;
   Mesh mesh;  ///< frame M
   Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
@@ -43,43 +46,54 @@ struct CachedObject {
   Eigen::Isometry3d X_WA() const { return X_WM * Eigen::Translation3d(anchor_M); }
 };
 
-/// The objects of a pipeline by id (deterministic order), kept up to date by updates that the
-/// scene model has already accepted. Thread safety: none (the pipeline's thread).
+/// The objects of a pipeline by slot, kept up to date by updates that the scene model has
+/// already accepted. A new object takes the most recently freed slot, else the next one: slots
+/// stay dense. Thread safety: none (the pipeline's thread).
 class SceneCache {
  public:
   /// Applies one update. @pre far::SceneModel accepted it (ids alive, sizes and poses valid).
-  /// Returns the slot an object removal freed (its GPU pieces must go), or -1.
-  int64_t Apply(SceneUpdate update);
+  /// Returns the slot an object removal freed (its GPU pieces and FCL model must go).
+  std::optional<ObjectSlot> Apply(SceneUpdate update);
 
   /// Recomputes the world-frame vertices of objects that moved or deformed.
   void RefreshWorld();
 
-  /// Every object in id order, and their world views (valid until the next Apply).
+  /// Every slot's object (null: a free slot), indexed by slot; valid until the next Apply.
   std::vector<const CachedObject*> Objects() const;
+  /// Every slot's world view (empty: a free slot), indexed by slot; valid until the next Apply.
+  std::vector<WorldObjectView> WorldViews() const;
+  /// Every slot's object id (a free slot's is meaningless), indexed by slot: what turns a step's
+  /// answers into ids (far/model/slot_ids.h).
+  std::span<const uint32_t> ids() const { return ids_; }
+
   /// Computes the GPU methods' data from the vertices (anchor, piece extent, rectangle boxes)
   /// of the objects whose vertices changed since, on `pool`.
   void RefreshGpuGeometry(ThreadPool& pool);
-  /// Brings the hierarchies of `objects` up to date with their vertices on `pool`: built once
-  /// for static and rigid objects, refit (rebuilt when loose) for deformed ones. The builds are
-  /// the step's setup (`control`'s on_setup_begin and on_setup_end around them); the refits
-  /// are per-step work.
-  void RefreshHierarchies(std::span<const CachedObject* const> objects, ThreadPool& pool,
+  /// Brings the hierarchies of the objects in `slots` up to date with their vertices on `pool`:
+  /// built once for static and rigid objects, refit (rebuilt when loose) for deformed ones.
+  /// The builds are the step's setup (`control`'s on_setup_begin and on_setup_end around
+  /// them); the refits are per-step work.
+  void RefreshHierarchies(std::span<const ObjectSlot> slots, ThreadPool& pool,
                           const StepControl& control);
-  std::vector<WorldObjectView> WorldViews() const;
 
-  int size() const { return static_cast<int>(objects_.size()); }
+  /// Objects in the scene.
+  int size() const { return static_cast<int>(slot_of_id_.size()); }
+  /// Slots in use or free: one past the largest slot.
+  size_t num_slots() const { return slots_.size(); }
   /// Changes whenever an object is added or removed.
   uint64_t structure() const { return structure_; }
   const SceneCounters& counters() const { return counters_; }
   SceneCounters& counters() { return counters_; }
 
  private:
+  CachedObject& At(uint32_t id) { return *slots_[Index(slot_of_id_.at(id))]; }
   void RefreshGeometry(CachedObject& object);
   static void ComputeGpuGeometry(CachedObject& object);
 
-  std::map<uint32_t, CachedObject> objects_;
-  std::vector<uint32_t> free_slots_;
-  uint32_t next_slot_ = 0;
+  std::vector<std::optional<CachedObject>> slots_;
+  std::vector<uint32_t> ids_;  // by slot
+  std::unordered_map<uint32_t, ObjectSlot> slot_of_id_;
+  std::vector<ObjectSlot> free_slots_;
   uint64_t next_stamp_ = 1;
   uint64_t structure_ = 0;
   SceneCounters counters_;

@@ -13,8 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "far/base/result.h"
 #include "far/model/mesh.h"
-#include "far/model/result.h"
 
 namespace far::testing {
 

@@ -6,8 +6,8 @@
 #include "io_test_util.h"
 #include <gtest/gtest.h>
 
+#include "far/base/limits.h"
 #include "far/io/mesh_io.h"
-#include "far/model/limits.h"
 
 namespace far {
 namespace {

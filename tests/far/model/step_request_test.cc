@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "far/model/limits.h"
-#include "far/model/quantile.h"
+#include "far/base/limits.h"
+#include "far/base/quantile.h"
 
 namespace far {
 namespace {

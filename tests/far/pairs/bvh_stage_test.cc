@@ -17,9 +17,9 @@
 namespace far {
 namespace {
 
-// One object: mesh in its frame M, pose, world vertices and hierarchy.
+// One object: mesh in its frame M, pose, world vertices and hierarchy. Object o of a scene is
+// slot o.
 struct Object {
-  uint32_t id = 0;
   std::vector<Eigen::Vector3d> p_MV;
   std::vector<TriangleIndices> triangles;
   Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
@@ -30,7 +30,7 @@ struct Object {
     p_WV.clear();
     for (const auto& p : p_MV) p_WV.push_back(FlushTinyCoordinates(X_WM * p));  // as the pipeline
   }
-  WorldObjectView View() const { return {id, p_WV, triangles}; }
+  WorldObjectView View() const { return {p_WV, triangles}; }
 };
 
 Eigen::Isometry3d RandomPose(std::mt19937& rng, double extent, double offset) {
@@ -64,7 +64,6 @@ std::vector<Object> RandomScene(uint32_t seed, int objects, int triangles, doubl
   std::vector<Object> scene(static_cast<size_t>(objects));
   for (int o = 0; o < objects; ++o) {
     Object& object = scene[static_cast<size_t>(o)];
-    object.id = static_cast<uint32_t>(3 * o + seed % 5);
     RandomMesh(rng, triangles, 0.6 * scale, 0.15 * scale, object);
     object.X_WM = RandomPose(rng, 0.4 * scale, offset);
     object.Place();
@@ -73,42 +72,47 @@ std::vector<Object> RandomScene(uint32_t seed, int objects, int triangles, doubl
   return scene;
 }
 
-std::vector<BvhObject> BvhObjects(const std::vector<Object>& scene) {
-  std::vector<BvhObject> objects;
-  for (const Object& o : scene) objects.push_back({o.View(), &o.bvh, o.X_WM});
-  return objects;
+std::vector<WorldObjectView> Views(const std::vector<Object>& scene) {
+  std::vector<WorldObjectView> views;
+  for (const Object& o : scene) views.push_back(o.View());
+  return views;
 }
 
-std::vector<ObjectPair> AllPairs(const std::vector<Object>& scene) {
-  std::vector<ObjectPair> pairs;
-  for (const Object& a : scene)
-    for (const Object& b : scene)
-      if (a.id < b.id) pairs.push_back({a.id, b.id});
+std::vector<ObjectHierarchy> Hierarchies(const std::vector<Object>& scene) {
+  std::vector<ObjectHierarchy> hierarchies;
+  for (const Object& o : scene) hierarchies.push_back({&o.bvh, o.X_WM});
+  return hierarchies;
+}
+
+std::vector<SlotPair> AllPairs(const std::vector<Object>& scene) {
+  std::vector<SlotPair> pairs;
+  for (size_t a = 0; a < scene.size(); ++a)
+    for (size_t b = a + 1; b < scene.size(); ++b) pairs.push_back({SlotAt(a), SlotAt(b)});
   return pairs;
 }
 
 ExactResult Reference(const std::vector<Object>& scene, std::optional<double> distance) {
-  std::vector<WorldObjectView> views;
-  for (const Object& o : scene) views.push_back(o.View());
   ThreadPool pool(2);
-  return BruteForceReference(views, distance, pool);
+  return BruteForceReference(Views(scene), distance, pool);
 }
 
 BvhResult RunStage(const std::vector<Object>& scene, std::optional<double> distance,
                    int threads = 2) {
-  const std::vector<BvhObject> objects = BvhObjects(scene);
-  const std::vector<ObjectPair> pairs = AllPairs(scene);
+  const std::vector<WorldObjectView> views = Views(scene);
+  const std::vector<ObjectHierarchy> hierarchies = Hierarchies(scene);
+  const std::vector<SlotPair> pairs = AllPairs(scene);
   BvhQuery query;
-  query.objects = objects;
+  query.objects = views;
   query.object_pairs = pairs;
   query.max_distance = distance;
+  query.hierarchies = hierarchies;
   ThreadPool pool(threads);
   return RunBvhTests(query, pool);
 }
 
-std::vector<ContactPair> PairsOf(const std::vector<DistancePair>& list) {
-  std::vector<ContactPair> pairs;
-  for (const DistancePair& d : list) pairs.push_back(d.pair);
+std::vector<SlotContact> PairsOf(const std::vector<SlotDistancePair>& list) {
+  std::vector<SlotContact> pairs;
+  for (const SlotDistancePair& d : list) pairs.push_back(d.pair);
   return pairs;
 }
 
@@ -256,13 +260,10 @@ TEST(BvhStageTest, ContactsMatchTheReferenceUnderRandomPoses) {
     const BvhResult got = RunStage(scene, std::nullopt);
     EXPECT_EQ(got.exact.contacts, expected.contacts);
     // Every contact's triangles are candidates.
-    for (const ContactPair& c : expected.contacts) {
-      for (const auto& [object_id, t] :
+    for (const SlotContact& c : expected.contacts) {
+      for (const auto& [slot, t] :
            {std::pair{c.object_a, c.triangle_a}, {c.object_b, c.triangle_b}}) {
-        const uint32_t id = object_id;  // a lambda may not capture a structured binding in clang 15
-        const size_t o = static_cast<size_t>(
-            std::find_if(scene.begin(), scene.end(), [&](const Object& x) { return x.id == id; }) -
-            scene.begin());
+        const size_t o = Index(slot);
         EXPECT_TRUE(std::binary_search(got.candidates[o].begin(), got.candidates[o].end(), t));
       }
     }
@@ -297,10 +298,8 @@ TEST(BvhStageTest, AroundAndBelowTheTinyWorldCoordinate) {
 TEST(BvhStageTest, TouchingAtACornerUnderARotatedPose) {
   // Two triangles that share exactly one world corner; B's mesh is given in a rotated frame.
   Object a, b;
-  a.id = 1;
   a.p_MV = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   a.triangles = {{0, 1, 2}};
-  b.id = 2;
   b.X_WM = Eigen::Isometry3d::Identity();
   b.X_WM.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   b.X_WM.translation() = Eigen::Vector3d(1, 0, 0);
@@ -352,8 +351,6 @@ TEST(BvhStageTest, CountersFollowTheDescent) {
 // mapped into B's own frame through X_BW (B's pose inverted), so that they land on A's only up
 // to the rounding of the two poses.
 void MakeMirrorPair(std::mt19937& rng, int triangles, double offset, Object& a, Object& b) {
-  a.id = 1;
-  b.id = 2;
   RandomMesh(rng, triangles, 1.0, 0.2, a);
   a.X_WM = RandomPose(rng, 0.1, offset);
   a.Place();
@@ -465,7 +462,6 @@ TEST(BvhStageTest, SliverFansMatchTheReferenceAndTheirSlabsPrune) {
     SCOPED_TRACE(offset);
     std::vector<Object> scene(4);
     for (uint32_t o = 0; o < scene.size(); ++o) {
-      scene[o].id = o + 1;
       Fan(200, 1.0, Eigen::Vector3d(0.2, -0.1, 0.6), scene[o]);
       Fan(150, 0.7, Eigen::Vector3d(-0.1, 0.2, -0.5), scene[o]);
       scene[o].X_WM = RandomPose(rng, 0.3, offset);

@@ -5,24 +5,28 @@
 #include <cstdint>
 #include <optional>
 #include <random>
+#include <span>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "far/base/assert.h"
 #include "far/geometry/triangle_tests.h"
 
 namespace far {
 namespace {
 
-// Objects that own their vertices and triangles, and views of them.
+// Objects that own their vertices and triangles, and views of them: object o is slot o.
 struct Scene {
-  std::vector<uint32_t> ids;
   std::vector<std::vector<Eigen::Vector3d>> positions;
   std::vector<std::vector<TriangleIndices>> triangles;
 
+  size_t size() const { return positions.size(); }
   std::vector<WorldObjectView> Views() const {
     std::vector<WorldObjectView> views;
-    for (size_t o = 0; o < ids.size(); ++o) views.push_back({ids[o], positions[o], triangles[o]});
+    for (size_t o = 0; o < size(); ++o) views.push_back({positions[o], triangles[o]});
     return views;
   }
 
@@ -31,18 +35,26 @@ struct Scene {
     return {positions[object][v[0]], positions[object][v[1]], positions[object][v[2]]};
   }
 
-  // Every object pair by id, a < b.
-  std::vector<ObjectPair> AllPairs() const {
-    std::vector<ObjectPair> pairs;
-    for (uint32_t a : ids) {
-      for (uint32_t b : ids) {
-        if (a < b) pairs.push_back({a, b});
-      }
+  // Every object pair by slot, a < b.
+  std::vector<SlotPair> AllPairs() const {
+    std::vector<SlotPair> pairs;
+    for (size_t a = 0; a < size(); ++a) {
+      for (size_t b = a + 1; b < size(); ++b) pairs.push_back({SlotAt(a), SlotAt(b)});
     }
-    std::sort(pairs.begin(), pairs.end());
     return pairs;
   }
 };
+
+// A query of `views` and `pairs`: with subsets when not empty, with distance pairs within D.
+ExactQuery Query(std::span<const WorldObjectView> views, std::span<const SlotPair> pairs,
+                 std::span<const std::vector<uint32_t>> subsets, std::optional<double> distance) {
+  ExactQuery query;
+  query.objects = views;
+  query.object_pairs = pairs;
+  query.triangle_subsets = subsets;
+  query.max_distance = distance;
+  return query;
+}
 
 // Random triangle soups. With `grid`, coordinates are multiples of 1/8 and a fifth of the corners
 // of later objects are copied from earlier objects' corners or edge midpoints, so that shared
@@ -60,10 +72,7 @@ Scene RandomSoup(uint32_t seed, int num_objects, int triangles_each, double exte
     return p;
   };
   Scene scene;
-  uint32_t id = seed % 7;
   for (int o = 0; o < num_objects; ++o) {
-    id += 1 + static_cast<uint32_t>(unit(rng) * 5);  // not contiguous
-    scene.ids.push_back(id);
     std::vector<Eigen::Vector3d> points;
     std::vector<TriangleIndices> triangles;
     for (int t = 0; t < triangles_each; ++t) {
@@ -101,15 +110,14 @@ Scene RandomSoup(uint32_t seed, int num_objects, int triangles_each, double exte
 }
 
 // The unfiltered O(n^2) loops: every cross-object triangle pair straight into the predicates.
-std::vector<ContactPair> UnfilteredContacts(const Scene& scene) {
-  std::vector<ContactPair> contacts;
-  for (size_t i = 0; i < scene.ids.size(); ++i) {
-    for (size_t j = 0; j < scene.ids.size(); ++j) {
-      if (scene.ids[i] >= scene.ids[j]) continue;
+std::vector<SlotContact> UnfilteredContacts(const Scene& scene) {
+  std::vector<SlotContact> contacts;
+  for (size_t i = 0; i < scene.size(); ++i) {
+    for (size_t j = i + 1; j < scene.size(); ++j) {
       for (uint32_t a = 0; a < scene.triangles[i].size(); ++a) {
         for (uint32_t b = 0; b < scene.triangles[j].size(); ++b) {
           if (TrianglesIntersect(scene.Corners(i, a), scene.Corners(j, b))) {
-            contacts.push_back({scene.ids[i], a, scene.ids[j], b});
+            contacts.push_back({SlotAt(i), a, SlotAt(j), b});
           }
         }
       }
@@ -119,15 +127,14 @@ std::vector<ContactPair> UnfilteredContacts(const Scene& scene) {
   return contacts;
 }
 
-std::vector<ContactPair> UnfilteredWithin(const Scene& scene, double max_distance) {
-  std::vector<ContactPair> pairs;
-  for (size_t i = 0; i < scene.ids.size(); ++i) {
-    for (size_t j = 0; j < scene.ids.size(); ++j) {
-      if (scene.ids[i] >= scene.ids[j]) continue;
+std::vector<SlotContact> UnfilteredWithin(const Scene& scene, double max_distance) {
+  std::vector<SlotContact> pairs;
+  for (size_t i = 0; i < scene.size(); ++i) {
+    for (size_t j = i + 1; j < scene.size(); ++j) {
       for (uint32_t a = 0; a < scene.triangles[i].size(); ++a) {
         for (uint32_t b = 0; b < scene.triangles[j].size(); ++b) {
           if (TrianglesWithinDistance(scene.Corners(i, a), scene.Corners(j, b), max_distance)) {
-            pairs.push_back({scene.ids[i], a, scene.ids[j], b});
+            pairs.push_back({SlotAt(i), a, SlotAt(j), b});
           }
         }
       }
@@ -137,30 +144,26 @@ std::vector<ContactPair> UnfilteredWithin(const Scene& scene, double max_distanc
   return pairs;
 }
 
-std::vector<ContactPair> PairsOf(const std::vector<DistancePair>& distance_pairs) {
-  std::vector<ContactPair> pairs;
-  for (const DistancePair& d : distance_pairs) pairs.push_back(d.pair);
+std::vector<SlotContact> PairsOf(const std::vector<SlotDistancePair>& distance_pairs) {
+  std::vector<SlotContact> pairs;
+  for (const SlotDistancePair& d : distance_pairs) pairs.push_back(d.pair);
   return pairs;
-}
-
-size_t IndexOf(const Scene& scene, uint32_t id) {
-  return static_cast<size_t>(std::find(scene.ids.begin(), scene.ids.end(), id) - scene.ids.begin());
 }
 
 // Sorted, unique, object_a < object_b, and every distance is TriangleDistance of the pair.
 void ExpectWellFormed(const Scene& scene, const ExactResult& result) {
-  for (const ContactPair& c : result.contacts) EXPECT_LT(c.object_a, c.object_b);
+  for (const SlotContact& c : result.contacts) EXPECT_LT(c.object_a, c.object_b);
   for (size_t i = 1; i < result.contacts.size(); ++i) {
     EXPECT_LT(result.contacts[i - 1], result.contacts[i]);
   }
   for (size_t i = 1; i < result.distance_pairs.size(); ++i) {
     EXPECT_LT(result.distance_pairs[i - 1].pair, result.distance_pairs[i].pair);
   }
-  for (const DistancePair& d : result.distance_pairs) {
+  for (const SlotDistancePair& d : result.distance_pairs) {
     EXPECT_LT(d.pair.object_a, d.pair.object_b);
     const double expected =
-        TriangleDistance(scene.Corners(IndexOf(scene, d.pair.object_a), d.pair.triangle_a),
-                         scene.Corners(IndexOf(scene, d.pair.object_b), d.pair.triangle_b));
+        TriangleDistance(scene.Corners(Index(d.pair.object_a), d.pair.triangle_a),
+                         scene.Corners(Index(d.pair.object_b), d.pair.triangle_b));
     EXPECT_NEAR(d.distance, expected, 1e-12 * (1 + expected));
   }
   EXPECT_LE(result.pairs_tested, result.pairs_considered);
@@ -172,8 +175,8 @@ TEST(ExactStageTest, FullQueryMatchesBruteForce) {
     SCOPED_TRACE(testing::Message() << "seed " << seed);
     const Scene scene = RandomSoup(seed, 5, 60, 4.0, 0.6, seed % 2 == 0);
     const std::vector<WorldObjectView> views = scene.Views();
-    const std::vector<ObjectPair> pairs = scene.AllPairs();
-    const ExactQuery query{views, pairs, {}, true, 0.1};
+    const std::vector<SlotPair> pairs = scene.AllPairs();
+    const ExactQuery query = Query(views, pairs, {}, 0.1);
     const ExactResult result = RunExactTests(query, pool);
     const ExactResult reference = BruteForceReference(views, 0.1, pool);
     ExpectWellFormed(scene, result);
@@ -197,36 +200,36 @@ TEST(ExactStageTest, SubsetsMatchBruteForceRestrictedToThem) {
     std::mt19937 rng(seed);
     std::uniform_int_distribution<int> percent(0, 99);
     // Random object pairs and random triangle subsets (one object gets an empty subset).
-    std::vector<ObjectPair> pairs;
-    for (const ObjectPair& pair : scene.AllPairs()) {
+    std::vector<SlotPair> pairs;
+    for (const SlotPair& pair : scene.AllPairs()) {
       if (percent(rng) < 70) pairs.push_back(pair);
     }
-    std::vector<std::vector<uint32_t>> subsets(scene.ids.size());
-    for (size_t o = 1; o < scene.ids.size(); ++o) {
+    std::vector<std::vector<uint32_t>> subsets(scene.size());
+    for (size_t o = 1; o < scene.size(); ++o) {
       for (uint32_t t = 0; t < scene.triangles[o].size(); ++t) {
         if (percent(rng) < 60) subsets[o].push_back(t);
       }
       std::shuffle(subsets[o].begin(), subsets[o].end(), rng);
     }
-    const ExactQuery query{views, pairs, subsets, true, 0.2};
+    const ExactQuery query = Query(views, pairs, subsets, 0.2);
     const ExactResult result = RunExactTests(query, pool);
     ExpectWellFormed(scene, result);
 
     // The reference restricted to the query's object pairs and subsets.
-    const auto in_query = [&](const ContactPair& c) {
-      const auto in_subset = [&](uint32_t id, uint32_t t) {
-        const std::vector<uint32_t>& subset = subsets[IndexOf(scene, id)];
+    const auto in_query = [&](const SlotContact& c) {
+      const auto in_subset = [&](ObjectSlot slot, uint32_t t) {
+        const std::vector<uint32_t>& subset = subsets[Index(slot)];
         return std::find(subset.begin(), subset.end(), t) != subset.end();
       };
-      return std::binary_search(pairs.begin(), pairs.end(), ObjectPair{c.object_a, c.object_b}) &&
+      return std::binary_search(pairs.begin(), pairs.end(), SlotPair{c.object_a, c.object_b}) &&
              in_subset(c.object_a, c.triangle_a) && in_subset(c.object_b, c.triangle_b);
     };
     const ExactResult reference = BruteForceReference(views, 0.2, pool);
-    std::vector<ContactPair> expected_contacts;
+    std::vector<SlotContact> expected_contacts;
     std::copy_if(reference.contacts.begin(), reference.contacts.end(),
                  std::back_inserter(expected_contacts), in_query);
-    std::vector<ContactPair> expected_within;
-    for (const ContactPair& c : PairsOf(reference.distance_pairs)) {
+    std::vector<SlotContact> expected_within;
+    for (const SlotContact& c : PairsOf(reference.distance_pairs)) {
       if (in_query(c)) expected_within.push_back(c);
     }
     EXPECT_FALSE(expected_contacts.empty());
@@ -234,9 +237,8 @@ TEST(ExactStageTest, SubsetsMatchBruteForceRestrictedToThem) {
     EXPECT_EQ(PairsOf(result.distance_pairs), expected_within);
 
     size_t considered = 0;
-    for (const ObjectPair& pair : pairs) {
-      considered += subsets[IndexOf(scene, pair.object_a)].size() *
-                    subsets[IndexOf(scene, pair.object_b)].size();
+    for (const SlotPair& pair : pairs) {
+      considered += subsets[Index(pair.object_a)].size() * subsets[Index(pair.object_b)].size();
     }
     EXPECT_EQ(result.pairs_considered, considered);
   }
@@ -249,10 +251,10 @@ TEST(ExactStageTest, PrefilterNeverDropsAnIntersectingPair) {
     // Dense, small, on a grid: many touching and coplanar pairs.
     const Scene scene = RandomSoup(seed, 4, 40, 2.0, 0.5, true);
     const std::vector<WorldObjectView> views = scene.Views();
-    const std::vector<ObjectPair> pairs = scene.AllPairs();
-    const std::vector<ContactPair> expected = UnfilteredContacts(scene);
+    const std::vector<SlotPair> pairs = scene.AllPairs();
+    const std::vector<SlotContact> expected = UnfilteredContacts(scene);
     EXPECT_FALSE(expected.empty());
-    const ExactResult result = RunExactTests({views, pairs, {}, true, std::nullopt}, pool);
+    const ExactResult result = RunExactTests(Query(views, pairs, {}, std::nullopt), pool);
     ExpectWellFormed(scene, result);
     EXPECT_EQ(result.contacts, expected);
     EXPECT_TRUE(result.distance_pairs.empty());
@@ -264,17 +266,17 @@ TEST(ExactStageTest, PrefilterNeverDropsAnIntersectingPair) {
 TEST(ExactStageTest, TouchingAtOneCornerIsAContact) {
   // Two triangles that share a vertex and whose boxes share only boundary points.
   Scene scene;
-  scene.ids = {4, 9};
   scene.positions = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{1, 0, 0}, {2, 1, 1}, {2, 0, 1}}};
   scene.triangles = {{{0, 1, 2}}, {{0, 1, 2}}};
   // And a point triangle lying on the first one's face, on its box's boundary plane z = 0.
-  scene.ids.push_back(12);
   scene.positions.push_back({{0.25, 0.25, 0}});
   scene.triangles.push_back({{0, 0, 0}});
   const std::vector<WorldObjectView> views = scene.Views();
   ThreadPool pool(1);
-  const ExactResult result = RunExactTests({views, scene.AllPairs(), {}, true, std::nullopt}, pool);
-  EXPECT_EQ(result.contacts, (std::vector<ContactPair>{{4, 0, 9, 0}, {4, 0, 12, 0}}));
+  const std::vector<SlotPair> pairs = scene.AllPairs();
+  const ExactResult result = RunExactTests(Query(views, pairs, {}, std::nullopt), pool);
+  const ObjectSlot s0 = SlotAt(0), s1 = SlotAt(1), s2 = SlotAt(2);
+  EXPECT_EQ(result.contacts, (std::vector<SlotContact>{{s0, 0, s1, 0}, {s0, 0, s2, 0}}));
   EXPECT_EQ(result.contacts, UnfilteredContacts(scene));
 }
 
@@ -287,14 +289,14 @@ TEST(ExactStageTest, DistancePairsMatchUnfilteredLoop) {
       const double offset = seed % 3 == 0 ? 1e5 : 0.0;  // far from the origin
       const Scene scene = RandomSoup(seed, 4, 30, 3.0, 0.4, grid, offset);
       const std::vector<WorldObjectView> views = scene.Views();
-      const std::vector<ObjectPair> pairs = scene.AllPairs();
-      const std::vector<ContactPair> expected = UnfilteredWithin(scene, max_distance);
-      const ExactResult result = RunExactTests({views, pairs, {}, false, max_distance}, pool);
+      const std::vector<SlotPair> pairs = scene.AllPairs();
+      const std::vector<SlotContact> expected = UnfilteredWithin(scene, max_distance);
+      const ExactResult result = RunExactTests(Query(views, pairs, {}, max_distance), pool);
       ExpectWellFormed(scene, result);
-      EXPECT_TRUE(result.contacts.empty());
+      EXPECT_EQ(result.contacts, UnfilteredContacts(scene));
       EXPECT_EQ(PairsOf(result.distance_pairs), expected);
       EXPECT_EQ(PairsOf(BruteForceReference(views, max_distance, pool).distance_pairs), expected);
-      for (const DistancePair& d : result.distance_pairs)
+      for (const SlotDistancePair& d : result.distance_pairs)
         EXPECT_LE(d.distance, max_distance + 1e-9);
     }
   }
@@ -308,7 +310,6 @@ TEST(ExactStageTest, DistancePrefilterIsNoStricterThanThePredicate) {
     for (double max_distance : {0.0, 0.1}) {
       SCOPED_TRACE(testing::Message() << "offset " << offset << " D " << max_distance);
       Scene scene;
-      scene.ids = {1, 2};
       scene.positions = {{{offset, 0, 0}, {offset, 1, 0}, {offset, 0, 1}}, {}};
       scene.triangles = {{{0, 1, 2}}, {}};
       double x = offset + max_distance;
@@ -320,13 +321,13 @@ TEST(ExactStageTest, DistancePrefilterIsNoStricterThanThePredicate) {
         x = std::nextafter(x, 1e300);
       }
       const std::vector<WorldObjectView> views = scene.Views();
-      const std::vector<ContactPair> expected = UnfilteredWithin(scene, max_distance);
+      const std::vector<SlotContact> expected = UnfilteredWithin(scene, max_distance);
       // Near the origin the predicate's slack spans several ulps; far away, less than one.
       if (offset == 0) {
         EXPECT_GT(expected.size(), 1u);
       }
-      const ExactResult result =
-          RunExactTests({views, scene.AllPairs(), {}, false, max_distance}, pool);
+      const std::vector<SlotPair> pairs = scene.AllPairs();
+      const ExactResult result = RunExactTests(Query(views, pairs, {}, max_distance), pool);
       EXPECT_EQ(PairsOf(result.distance_pairs), expected);
       EXPECT_EQ(PairsOf(BruteForceReference(views, max_distance, pool).distance_pairs), expected);
     }
@@ -337,15 +338,14 @@ TEST(ExactStageTest, ThreadCountsGiveIdenticalOutput) {
   // Two big objects (many work items each) and several small ones.
   Scene scene = RandomSoup(41, 2, 3000, 10.0, 0.4, false);
   const Scene small = RandomSoup(42, 6, 40, 10.0, 1.0, true);
-  for (size_t o = 0; o < small.ids.size(); ++o) {
-    scene.ids.push_back(1000 + small.ids[o]);
+  for (size_t o = 0; o < small.size(); ++o) {
     scene.positions.push_back(small.positions[o]);
     scene.triangles.push_back(small.triangles[o]);
   }
   const std::vector<WorldObjectView> views = scene.Views();
-  const std::vector<ObjectPair> pairs = scene.AllPairs();
+  const std::vector<SlotPair> pairs = scene.AllPairs();
   ThreadPool one(1), four(4);
-  const ExactQuery query{views, pairs, {}, true, 0.05};
+  const ExactQuery query = Query(views, pairs, {}, 0.05);
   const ExactResult a = RunExactTests(query, one);
   const ExactResult b = RunExactTests(query, four);
   ExpectWellFormed(scene, a);
@@ -368,13 +368,12 @@ TEST(ExactStageTest, ThreadCountsGiveIdenticalOutput) {
 
 TEST(ExactStageTest, ObjectsWithoutTrianglesGiveNothing) {
   Scene scene = RandomSoup(51, 3, 20, 1.0, 0.5, true);
-  scene.ids.push_back(500);
-  scene.positions.emplace_back();
+  scene.positions.emplace_back();  // slot 3: no triangles
   scene.triangles.emplace_back();
   const std::vector<WorldObjectView> views = scene.Views();
   ThreadPool pool(2);
-  const std::vector<ObjectPair> pairs = {{scene.ids[0], 500}, {scene.ids[2], 500}};
-  const ExactResult result = RunExactTests({views, pairs, {}, true, 1.0}, pool);
+  const std::vector<SlotPair> pairs = {{SlotAt(0), SlotAt(3)}, {SlotAt(2), SlotAt(3)}};
+  const ExactResult result = RunExactTests(Query(views, pairs, {}, 1.0), pool);
   EXPECT_TRUE(result.contacts.empty());
   EXPECT_TRUE(result.distance_pairs.empty());
   EXPECT_EQ(result.pairs_considered, 0u);
@@ -382,11 +381,12 @@ TEST(ExactStageTest, ObjectsWithoutTrianglesGiveNothing) {
 
   // Empty subsets likewise, and no pairs at all.
   const std::vector<std::vector<uint32_t>> empty_subsets(views.size());
+  const std::vector<SlotPair> all_pairs = scene.AllPairs();
   const ExactResult subset_result =
-      RunExactTests({views, scene.AllPairs(), empty_subsets, true, 1.0}, pool);
+      RunExactTests(Query(views, all_pairs, empty_subsets, 1.0), pool);
   EXPECT_TRUE(subset_result.contacts.empty());
   EXPECT_EQ(subset_result.pairs_considered, 0u);
-  const ExactResult no_pairs = RunExactTests({views, {}, {}, true, 1.0}, pool);
+  const ExactResult no_pairs = RunExactTests(Query(views, {}, {}, 1.0), pool);
   EXPECT_TRUE(no_pairs.contacts.empty());
   EXPECT_EQ(no_pairs.pairs_considered, 0u);
   EXPECT_TRUE(BruteForceReference({}, 1.0, pool).contacts.empty());
@@ -398,25 +398,43 @@ TEST(ExactStageTest, ObjectsWithoutTrianglesGiveNothing) {
 TEST(ExactStageTest, OnlyTheAskedOutputsAreComputed) {
   const Scene scene = RandomSoup(61, 3, 40, 2.0, 0.5, true);
   const std::vector<WorldObjectView> views = scene.Views();
-  const std::vector<ObjectPair> pairs = scene.AllPairs();
+  const std::vector<SlotPair> pairs = scene.AllPairs();
   ThreadPool pool(2);
-  const ExactResult contacts_only = RunExactTests({views, pairs, {}, true, std::nullopt}, pool);
+  const ExactResult contacts_only = RunExactTests(Query(views, pairs, {}, std::nullopt), pool);
   EXPECT_FALSE(contacts_only.contacts.empty());
   EXPECT_TRUE(contacts_only.distance_pairs.empty());
-  const ExactResult both = RunExactTests({views, pairs, {}, true, 0.1}, pool);
+  const ExactResult both = RunExactTests(Query(views, pairs, {}, 0.1), pool);
   EXPECT_EQ(both.contacts, contacts_only.contacts);
   // Every contact is a distance pair at distance 0.
-  for (const ContactPair& c : both.contacts) {
+  for (const SlotContact& c : both.contacts) {
     const auto it = std::lower_bound(both.distance_pairs.begin(), both.distance_pairs.end(),
-                                     DistancePair{c, 0});
+                                     SlotDistancePair{c, 0});
     ASSERT_NE(it, both.distance_pairs.end());
     EXPECT_EQ(it->pair, c);
     EXPECT_EQ(it->distance, 0.0);
   }
-  const ExactResult neither = RunExactTests({views, pairs, {}, false, std::nullopt}, pool);
-  EXPECT_TRUE(neither.contacts.empty());
-  EXPECT_TRUE(neither.distance_pairs.empty());
-  EXPECT_EQ(neither.pairs_tested, 0u);
+  // A distance that only widens the search (want_distance_pairs false) reports no distance
+  // pairs, and the same contacts.
+  ExactQuery widened = Query(views, pairs, {}, 0.1);
+  widened.want_distance_pairs = false;
+  const ExactResult wide = RunExactTests(widened, pool);
+  EXPECT_EQ(wide.contacts, contacts_only.contacts);
+  EXPECT_TRUE(wide.distance_pairs.empty());
+}
+
+TEST(ExactStageTest, APairOfSlotsOutsideTheObjectsIsRefusedBeforeAnyRead) {
+  // FAR_DEMAND: a slot past the query's objects would read out of bounds in every build. The
+  // test's handler throws instead of aborting (far/base/assert.h).
+  const internal::AssertionHandler previous =
+      internal::SetAssertionHandler([](const internal::AssertionFailure& failure) {
+        throw std::logic_error(std::string(failure.message));
+      });
+  const Scene scene = RandomSoup(71, 2, 10, 1.0, 0.5, true);
+  const std::vector<WorldObjectView> views = scene.Views();
+  const std::vector<SlotPair> pairs = {{SlotAt(0), SlotAt(2)}};
+  ThreadPool pool(1);
+  EXPECT_THROW((void)RunExactTests(Query(views, pairs, {}, std::nullopt), pool), std::logic_error);
+  internal::SetAssertionHandler(previous);
 }
 
 }  // namespace

@@ -12,24 +12,26 @@ namespace {
 
 // Pairs with fields drawn below the given bounds (1 << 32 and beyond: any uint32_t), with many
 // equal fields so that every pass and the ties between fields matter.
-std::vector<ContactPair> RandomPairs(size_t n, uint64_t object_bound, uint64_t triangle_bound,
+std::vector<SlotContact> RandomPairs(size_t n, uint64_t object_bound, uint64_t triangle_bound,
                                      uint32_t seed) {
   std::mt19937_64 rng(seed);
   const auto below = [&](uint64_t bound) { return static_cast<uint32_t>(rng() % bound); };
-  std::vector<ContactPair> pairs(n);
-  for (ContactPair& p : pairs) {
-    p = {below(object_bound), below(triangle_bound), below(object_bound), below(triangle_bound)};
+  std::vector<SlotContact> pairs(n);
+  for (SlotContact& p : pairs) {
+    p = {SlotAt(below(object_bound)), below(triangle_bound), SlotAt(below(object_bound)),
+         below(triangle_bound)};
   }
   return pairs;
 }
 
-TEST(PairSortTest, ContactsComeOutInContactPairOrder) {
+TEST(PairSortTest, ContactsComeOutInPairOrder) {
   struct Case {
     size_t n;
     uint64_t objects, triangles;
   };
   // Sizes on both sides of the comparison-sort cutoff; small ids (few passes), ids with their
-  // top bits set (all sixteen passes), and fields that never vary (skipped passes).
+  // top bits set (all sixteen passes), and fields that never vary (skipped passes). Slots are
+  // small in practice; the sort is right for any uint32_t.
   const Case cases[] = {{0, 4, 10},
                         {1, 4, 10},
                         {5, 4, 10},
@@ -43,8 +45,8 @@ TEST(PairSortTest, ContactsComeOutInContactPairOrder) {
                         {3000, 70000, 1ull << 32}};
   uint32_t seed = 1;
   for (const Case& c : cases) {
-    std::vector<ContactPair> pairs = RandomPairs(c.n, c.objects, c.triangles, seed++);
-    std::vector<ContactPair> expected = pairs;
+    std::vector<SlotContact> pairs = RandomPairs(c.n, c.objects, c.triangles, seed++);
+    std::vector<SlotContact> expected = pairs;
     std::sort(expected.begin(), expected.end());
     SortPairs(pairs);
     EXPECT_EQ(pairs, expected) << "n " << c.n << ", objects < " << c.objects << ", triangles < "
@@ -56,12 +58,13 @@ TEST(PairSortTest, DistancePairsKeepTheirDistancesAndEqualPairsTheirOrder) {
   for (size_t n : {size_t{50}, size_t{2000}}) {
     // Few distinct pairs, so that many are equal: a stable sort keeps those in input order,
     // which the distances (the input positions) show.
-    const std::vector<ContactPair> keys = RandomPairs(n, 3, 5, 7);
-    std::vector<DistancePair> pairs(n);
+    const std::vector<SlotContact> keys = RandomPairs(n, 3, 5, 7);
+    std::vector<SlotDistancePair> pairs(n);
     for (size_t i = 0; i < n; ++i) pairs[i] = {keys[i], static_cast<double>(i)};
-    std::vector<DistancePair> expected = pairs;
-    std::stable_sort(expected.begin(), expected.end(),
-                     [](const DistancePair& x, const DistancePair& y) { return x.pair < y.pair; });
+    std::vector<SlotDistancePair> expected = pairs;
+    std::stable_sort(
+        expected.begin(), expected.end(),
+        [](const SlotDistancePair& x, const SlotDistancePair& y) { return x.pair < y.pair; });
     SortPairs(pairs);
     ASSERT_EQ(pairs.size(), expected.size());
     for (size_t i = 0; i < n; ++i) {

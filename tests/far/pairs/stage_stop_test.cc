@@ -39,16 +39,13 @@ struct Grid {
 struct TwoGrids {
   Grid a, b;
   explicit TwoGrids(int n) : a(n, 0), b(n, 0.5) {}
-  std::vector<WorldObjectView> Views() const {
-    return {{1, a.p, a.triangles}, {2, b.p, b.triangles}};
-  }
-  std::vector<BvhObject> BvhObjects() const {
-    return {{{1, a.p, a.triangles}, &a.bvh, Eigen::Isometry3d::Identity()},
-            {{2, b.p, b.triangles}, &b.bvh, Eigen::Isometry3d::Identity()}};
+  std::vector<WorldObjectView> Views() const { return {{a.p, a.triangles}, {b.p, b.triangles}}; }
+  std::vector<ObjectHierarchy> Hierarchies() const {
+    return {{&a.bvh, Eigen::Isometry3d::Identity()}, {&b.bvh, Eigen::Isometry3d::Identity()}};
   }
 };
 
-const std::vector<ObjectPair> kPair = {{1, 2}};
+const std::vector<SlotPair> kPair = {{SlotAt(0), SlotAt(1)}};
 
 ExactResult RunExact(const TwoGrids& scene, ThreadPool& pool, const StepControl* control) {
   const auto views = scene.Views();
@@ -60,9 +57,11 @@ ExactResult RunExact(const TwoGrids& scene, ThreadPool& pool, const StepControl*
 }
 
 ExactResult RunBvh(const TwoGrids& scene, ThreadPool& pool, const StepControl* control) {
-  const auto objects = scene.BvhObjects();
+  const auto views = scene.Views();
+  const auto hierarchies = scene.Hierarchies();
   BvhQuery query;
-  query.objects = objects;
+  query.objects = views;
+  query.hierarchies = hierarchies;
   query.object_pairs = kPair;
   query.control = control;
   return RunBvhTests(query, pool).exact;
@@ -136,7 +135,7 @@ TEST(StageStopTest, ABruteForceRunIsCancelledFromAnotherThreadWhileItRuns) {
 TEST(StageStopTest, BruteForcePairsCountsEveryCrossObjectPair) {
   const std::vector<Eigen::Vector3d> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   const std::vector<TriangleIndices> two(2, {0, 1, 2}), three(3, {0, 1, 2}), five(5, {0, 1, 2});
-  const std::vector<WorldObjectView> views = {{1, p, two}, {2, p, three}, {3, p, five}};
+  const std::vector<WorldObjectView> views = {{p, two}, {p, three}, {p, five}};
   EXPECT_EQ(BruteForcePairs(views), 2u * 3 + 2 * 5 + 3 * 5);
   EXPECT_EQ(BruteForcePairs({}), 0u);
 }

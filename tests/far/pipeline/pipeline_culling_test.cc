@@ -50,7 +50,7 @@ class PipelineCullingTest : public ::testing::Test {
   }
 
   // Every reference contact is in the PCS (objects and primitives) and in the contacts.
-  static void ExpectNoMiss(const ExactResult& reference, const StepResult& result,
+  static void ExpectNoMiss(const testing::ReferencePairs& reference, const StepResult& result,
                            const std::string& what) {
     const std::set<uint32_t> pcs(result.pcs_objects.begin(), result.pcs_objects.end());
     for (const ContactPair& c : reference.contacts) {
@@ -84,7 +84,7 @@ TEST_F(PipelineCullingTest, ReliableMethodsNeverMissOnRandomScenes) {
     const int num_objects = 3 + static_cast<int>(seed % 6);
     const auto objects = RandomSoup(seed, num_objects, 4 + static_cast<int>(seed % 13), 2.0, 0.6);
     Load(objects);
-    const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+    const testing::ReferencePairs reference = ReferenceAnswer(objects, std::nullopt, pool_);
     contacts += static_cast<int>(reference.contacts.size());
     StepRequest request;
     // Resolutions 32..2048 (the big ones less often: each view costs more on llvmpipe).
@@ -146,7 +146,7 @@ std::vector<SceneObject> CrossingNeedles() {
 TEST_F(PipelineCullingTest, CullideMissesThinCrossingWhereFarDoesNot) {
   const auto objects = CrossingNeedles();
   Load(objects);
-  const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+  const testing::ReferencePairs reference = ReferenceAnswer(objects, std::nullopt, pool_);
   ASSERT_EQ(reference.contacts.size(), 1u) << "the needles must really intersect";
   for (QueryMechanism mechanism : {QueryMechanism::kIdBuffer, QueryMechanism::kOcclusionQuery}) {
     StepRequest request;
@@ -224,7 +224,7 @@ TEST_F(PipelineCullingTest, HardCasesFarFromOriginAndTinyFeatures) {
       const auto objects =
           RandomSoup(seed, 5, 8, 4e-3, 1e-3, Eigen::Vector3d(origin, -origin, origin));
       Load(objects);
-      const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+      const testing::ReferencePairs reference = ReferenceAnswer(objects, std::nullopt, pool_);
       StepRequest request;
       request.resolution = kResolutions[seed % 7];
       for (Method method :
@@ -254,7 +254,7 @@ TEST_F(PipelineCullingTest, ReliableMethodsAgreeAtTheEndsOfTheCoordinateRange) {
   for (const int exponent : {38, -250, -254, -256, -262}) {
     const auto objects = ScaledBy(RandomSoup(7, 5, 12, 1.0, 0.4), exponent);
     Load(objects);
-    const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+    const testing::ReferencePairs reference = ReferenceAnswer(objects, std::nullopt, pool_);
     EXPECT_GT(reference.contacts.size(), 0u);
     StepRequest request;
     request.resolution = 256;
@@ -317,7 +317,7 @@ TEST_F(PipelineCullingTest, OneHugeObjectWithManyTinyOnes) {
     objects.push_back(object);
   }
   Load(objects);
-  const ExactResult reference = ReferenceAnswer(objects, std::nullopt, pool_);
+  const testing::ReferencePairs reference = ReferenceAnswer(objects, std::nullopt, pool_);
   for (int resolution : {64, 512, 2048}) {
     for (Method method :
          {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
@@ -356,7 +356,7 @@ TEST_F(PipelineCullingTest, TinyContactOfABigTiltedObject) {
       const auto objects = TinyContactOfABigObject(tiny, span);
       Load(objects);
       for (std::optional<double> distance : {std::optional<double>(), std::optional(tiny)}) {
-        const ExactResult reference = ReferenceAnswer(objects, distance, pool_);
+        const testing::ReferencePairs reference = ReferenceAnswer(objects, distance, pool_);
         ASSERT_EQ(reference.contacts.size(), 1u);
         for (QueryMechanism mechanism :
              {QueryMechanism::kIdBuffer, QueryMechanism::kOcclusionQuery}) {
@@ -387,7 +387,7 @@ TEST_F(PipelineCullingTest, DistanceCullingNeverMissesAPairCloserThanD) {
     const auto objects = RandomSoup(seed, 5, 6, 3.0, 0.5);
     Load(objects);
     const double D = 0.05 + 0.1 * static_cast<double>(seed % 4);
-    const ExactResult reference = ReferenceAnswer(objects, D, pool_);
+    const testing::ReferencePairs reference = ReferenceAnswer(objects, D, pool_);
     StepRequest request;
     request.distance = D;
     request.output = Output::kDistancePairs;
@@ -452,7 +452,7 @@ TEST_F(PipelineCullingTest, StagesPastTheDeepestOutputDoNotRun) {
     request.output = output;
     const StepResult result = Run(request);
     std::vector<std::string> ran;
-    for (const auto& stage : result.stats.stages) ran.push_back(stage.name);
+    for (const auto& stage : result.stats.stages) ran.emplace_back(ToString(stage.stage));
     EXPECT_EQ(ran, stages) << ToString(output);
     if (output < Output::kContacts) {
       EXPECT_TRUE(result.contacts.empty());
@@ -475,7 +475,8 @@ TEST_F(PipelineCullingTest, GlViewTimesAreInsideTheCullingStages) {
           std::string(ToString(method)) + " " + std::string(ToString(mechanism));
       double cull_ms = 0;
       for (const auto& stage : stats.stages) {
-        if (stage.name == "object_cull" || stage.name == "primitive_cull") cull_ms += stage.ms;
+        if (stage.stage == Stage::kObjectCull || stage.stage == Stage::kPrimitiveCull)
+          cull_ms += stage.ms;
       }
       if (method == Method::kBvh) {
         EXPECT_EQ(stats.gl_prepare_ms + stats.gl_passes_ms + stats.gl_gpu_ms, 0.0) << what;

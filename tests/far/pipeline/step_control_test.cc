@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 #include "far/pipeline/pipeline.h"
 
 namespace far {
@@ -53,16 +53,16 @@ StepRequest Request(Method method) {
 
 TEST(StepControlTest, ReportsEveryStageItEntersInOrder) {
   auto pipeline = TwoGrids(6);
-  std::vector<std::string> stages;
+  std::vector<Stage> stages;
   StepControl control;
-  control.on_stage = [&](std::string_view stage) { stages.emplace_back(stage); };
+  control.on_stage = [&](Stage stage) { stages.push_back(stage); };
   ASSERT_TRUE(pipeline->Step(Request(Method::kBvh), control).ok());
-  EXPECT_EQ(stages,
-            (std::vector<std::string>{"update", "object_cull", "sweep_and_prune", "exact"}));
+  EXPECT_EQ(stages, (std::vector<Stage>{Stage::kUpdate, Stage::kObjectCull, Stage::kSweepAndPrune,
+                                        Stage::kExact}));
   stages.clear();
   ASSERT_TRUE(pipeline->Step(Request(Method::kAabb), control).ok());
-  EXPECT_EQ(stages, (std::vector<std::string>{"update", "object_cull", "sweep_and_prune",
-                                              "primitive_cull", "exact"}));
+  EXPECT_EQ(stages, (std::vector<Stage>{Stage::kUpdate, Stage::kObjectCull, Stage::kSweepAndPrune,
+                                        Stage::kPrimitiveCull, Stage::kExact}));
 }
 
 TEST(StepControlTest, ACancelledStepIsAnErrorAndTheNextStepRunsOnTheSameScene) {
@@ -72,8 +72,8 @@ TEST(StepControlTest, ACancelledStepIsAnErrorAndTheNextStepRunsOnTheSameScene) {
   std::atomic<bool> cancel{false};
   StepControl control;
   control.cancel = &cancel;
-  control.on_stage = [&](std::string_view stage) {
-    if (stage == "sweep_and_prune") cancel = true;
+  control.on_stage = [&](Stage stage) {
+    if (stage == Stage::kSweepAndPrune) cancel = true;
   };
   const auto cancelled = pipeline->Step(Request(Method::kBvh), control);
   ASSERT_FALSE(cancelled.ok());
@@ -138,8 +138,8 @@ StepControl LoggingSetup(SetupLog& log) {
     log.other_thread |= std::this_thread::get_id() != caller;
     log.balanced &= --log.depth >= 0;
   };
-  control.on_stage = [&log](std::string_view stage) {
-    (log.depth > 0 ? log.stages_inside : log.stages_outside).emplace_back(stage);
+  control.on_stage = [&log](Stage stage) {
+    (log.depth > 0 ? log.stages_inside : log.stages_outside).emplace_back(ToString(stage));
   };
   return control;
 }
@@ -193,11 +193,11 @@ TEST(StepControlTest, TheAabbPrimitiveCullChecksAsItGoes) {
   // 2 x 80,000 triangles: the AABB method's primitive cull tests 160,000 boxes, and checks
   // (here: reports the slow step) every 65,536 of them, not only as the stage starts.
   auto pipeline = TwoGrids(200);
-  std::string stage;
+  Stage stage = Stage::kUpdate;
   int during_primitive_cull = 0;
   StepControl control;
-  control.on_stage = [&](std::string_view name) { stage = name; };
-  control.on_slow = [&] { during_primitive_cull += stage == "primitive_cull"; };
+  control.on_stage = [&](Stage name) { stage = name; };
+  control.on_slow = [&] { during_primitive_cull += stage == Stage::kPrimitiveCull; };
   control.slow_after = StepControl::Clock::now();
   StepRequest request = Request(Method::kAabb);
   request.output = Output::kPrimitivePcs;

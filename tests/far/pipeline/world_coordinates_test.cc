@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
 #include "far/pairs/world_object.h"
 #include "far/pipeline/pipeline.h"
 

@@ -10,10 +10,10 @@
 
 #include <gtest/gtest.h>
 
+#include "far/base/thread_pool.h"
 #include "far/io/mesh_io.h"
 #include "far/model/scene.h"
 #include "far/pairs/exact_stage.h"
-#include "far/pairs/thread_pool.h"
 
 namespace far::scenes {
 namespace {
@@ -118,11 +118,14 @@ std::vector<std::set<IdPair>> ContactsPerFrame(const Scene& scene) {
       for (const Eigen::Vector3d& p_OV : object.mesh.p_MV) points.push_back(X_WO * p_OV);
     }
     std::vector<WorldObjectView> views;
-    size_t i = 0;
-    for (const auto& [id, object] : alive) views.push_back({id, p_WV[i++], object.mesh.triangles});
+    std::vector<uint32_t> ids;  // by slot
+    for (const auto& [id, object] : alive) {
+      views.push_back({p_WV[views.size()], object.mesh.triangles});
+      ids.push_back(id);
+    }
     std::set<IdPair> pairs;
-    for (const ContactPair& c : BruteForceReference(views, std::nullopt, pool).contacts)
-      pairs.emplace(c.object_a, c.object_b);
+    for (const SlotContact& c : BruteForceReference(views, std::nullopt, pool).contacts)
+      pairs.emplace(ids[Index(c.object_a)], ids[Index(c.object_b)]);
     per_frame.push_back(std::move(pairs));
   }
   return per_frame;

@@ -13,8 +13,9 @@
 
 #include <Eigen/Core>
 
+#include "far/base/result.h"
+#include "far/base/stage.h"
 #include "far/model/mesh.h"
-#include "far/model/result.h"
 #include "far/model/scene.h"
 #include "far/model/step_request.h"
 #include "far/model/step_result.h"
@@ -55,10 +56,10 @@ struct ClientOptions {
 
 /// Where a step is while its reply has not come: the daemon's step_status_t.
 struct StepProgress {
-  std::string state;       ///< "queued", "started" or "stage"
-  int queue_position = 0;  ///< queued: this session's steps ahead of it
-  std::string stage;       ///< stage: its name ("update", "exact", ...)
-  double elapsed_ms = 0;   ///< since the daemon received the request
+  std::string state;           ///< "queued", "started" or "stage"
+  int queue_position = 0;      ///< queued: this session's steps ahead of it
+  std::optional<Stage> stage;  ///< state "stage": which one
+  double elapsed_ms = 0;       ///< since the daemon received the request
 };
 using ProgressCallback = std::function<void(const StepProgress&)>;
 

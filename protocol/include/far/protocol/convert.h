@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/model/step_request.h"
 #include "far/model/step_result.h"
 #include "far/protocol/message.h"
@@ -46,10 +46,10 @@ Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output outp
 /// Builds the reply of a failed step: status and message from `error`, every array empty.
 far_lcm::step_reply_t MakeStepErrorReply(const StepReplyIds& ids, const Error& error);
 
-/// Builds a step_status_t (auth zero: it travels sealed).
+/// Builds a step_status_t (auth zero: it travels sealed); stage "-" when none.
 far_lcm::step_status_t MakeStepStatus(int64_t session_id, int64_t request_id, int64_t step_id,
                                       std::string_view state, int32_t queue_position,
-                                      std::string_view stage, double elapsed_ms);
+                                      std::optional<Stage> stage, double elapsed_ms);
 
 /// Builds an error_t (auth zero).
 far_lcm::error_t MakeErrorMessage(int64_t session_id, int64_t request_id, const Error& error,

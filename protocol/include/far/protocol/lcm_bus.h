@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far::protocol {
 

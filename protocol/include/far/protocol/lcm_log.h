@@ -23,7 +23,7 @@
 #include <string_view>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far::protocol {
 

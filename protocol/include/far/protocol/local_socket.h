@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far::protocol {
 

@@ -39,7 +39,7 @@
 #include "far_lcm/step_request_t.hpp"
 #include "far_lcm/step_status_t.hpp"
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/protocol/version.h"
 
 namespace far::protocol {

@@ -8,14 +8,14 @@
 #include <cstdint>
 #include <string>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/model/step_request.h"
 #include "far/protocol/message.h"
 
 namespace far::protocol {
 
 /// The longest client name (open_session_t.client_name). Step request ranges are the model's
-/// (far/model/limits.h, far::CheckStepRequest), shared with far::Pipeline.
+/// (far/base/limits.h, far::CheckStepRequest), shared with far::Pipeline.
 inline constexpr size_t kMaxClientNameLength = 64;
 
 /// A checked open_session_t.

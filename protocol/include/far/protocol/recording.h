@@ -26,9 +26,9 @@
 #include <string_view>
 #include <vector>
 
+#include "far/base/result.h"
 #include "far/model/mesh.h"
 #include "far/model/pose.h"
-#include "far/model/result.h"
 #include "far/model/step_result.h"
 #include "far/protocol/lcm_log.h"
 #include "far/protocol/message.h"

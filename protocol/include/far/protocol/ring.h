@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/protocol/ring_layout.h"
 
 namespace far::protocol {

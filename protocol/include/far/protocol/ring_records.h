@@ -25,9 +25,9 @@
 
 #include <Eigen/Core>
 
-#include "far/model/limits.h"
+#include "far/base/limits.h"
+#include "far/base/result.h"
 #include "far/model/mesh.h"
-#include "far/model/result.h"
 #include "far/model/scene_update.h"
 #include "far/protocol/ring.h"
 #include "far/protocol/ring_layout.h"

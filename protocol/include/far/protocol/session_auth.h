@@ -20,7 +20,7 @@
 #include <span>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/protocol/message.h"
 
 namespace far::protocol {

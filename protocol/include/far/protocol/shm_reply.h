@@ -16,7 +16,7 @@
 #include <span>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/protocol/message.h"
 #include "far/protocol/ring.h"
 #include "far/protocol/session_auth.h"

@@ -18,7 +18,7 @@
 #include <string>
 #include <string_view>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/protocol/ring.h"
 #include "far/protocol/ring_layout.h"
 #include "far/protocol/session_auth.h"

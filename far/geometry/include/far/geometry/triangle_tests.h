@@ -23,7 +23,8 @@ bool TrianglesIntersect(const TrianglePoints& s, const TrianglePoints& t);
 bool TrianglesIntersectWithinBoxes(const TrianglePoints& s, const TrianglePoints& t);
 
 /// Returns the Euclidean distance between the closed triangles `s` and `t` (0 if they
-/// intersect), computed in double. Stable for near-parallel and degenerate triangles.
+/// intersect), computed in double. Stable for near-parallel and degenerate triangles. Symmetric
+/// bit for bit: (s, t) and (t, s) give the same value (so do the two functions below).
 /// @pre all coordinates finite. Thread-safe.
 double TriangleDistance(const TrianglePoints& s, const TrianglePoints& t);
 

@@ -9,7 +9,7 @@
 
 #include <Eigen/Geometry>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/model/step_request.h"
 #include "far/offsets/bounding_offset.h"
 

@@ -4,16 +4,10 @@
 #include <string>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
+#include "far/gpu/gl_platform.h"
 
 namespace far {
-
-/// Which EGL platform a context may come from.
-enum class GlPlatform {
-  kAuto,         ///< EGL device platform (hardware first), then Mesa surfaceless
-  kDevice,       ///< EGL_EXT_platform_device, hardware devices (GPUs) only: never software
-  kSurfaceless,  ///< EGL_MESA_platform_surfaceless only (llvmpipe on machines with no GPU)
-};
 
 /// A headless OpenGL 4.5 core context made with EGL (no X server, no window).
 ///

@@ -10,9 +10,9 @@
 
 #include <Eigen/Core>
 
+#include "far/base/result.h"
 #include "far/model/mesh.h"
 #include "far/model/pose.h"
-#include "far/model/result.h"
 
 namespace far {
 

@@ -23,8 +23,8 @@
 #include <filesystem>
 #include <string_view>
 
+#include "far/base/result.h"
 #include "far/model/mesh.h"
-#include "far/model/result.h"
 
 namespace far {
 

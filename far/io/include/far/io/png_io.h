@@ -7,7 +7,7 @@
 #include <span>
 #include <vector>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far {
 

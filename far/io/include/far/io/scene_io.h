@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <string_view>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 #include "far/model/scene.h"
 
 namespace far {

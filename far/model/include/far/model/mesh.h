@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far {
 

@@ -7,7 +7,7 @@
 
 #include <Eigen/Geometry>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far {
 

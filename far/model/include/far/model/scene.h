@@ -9,9 +9,9 @@
 #include <utility>
 #include <vector>
 
+#include "far/base/result.h"
 #include "far/model/mesh.h"
 #include "far/model/pose.h"
-#include "far/model/result.h"
 
 namespace far {
 

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <mutex>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far {
 

@@ -21,9 +21,9 @@
 
 #include <Eigen/Core>
 
+#include "far/base/result.h"
 #include "far/model/mesh.h"
 #include "far/model/pose.h"
-#include "far/model/result.h"
 #include "far/model/scene_budget.h"
 #include "far/model/scene_update.h"
 

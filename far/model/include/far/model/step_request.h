@@ -4,7 +4,7 @@
 #include <string>
 #include <string_view>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 namespace far {
 
 /// Depth buffer formats a culling pass can render with.
@@ -74,7 +74,11 @@ std::string DepthFormatNames();
 /// unfattened primitives can be pruned, and fcl, whose triangle test is wrong on hard cases).
 bool IsReliable(Method method);
 
-/// Checks a request against the limits of far/model/limits.h: resolution in [kMinResolution,
+/// True for the methods that cull on the GPU (far, far-exact-offset, cullide): they need a GL
+/// context.
+bool IsGpuMethod(Method method);
+
+/// Checks a request against the limits of far/base/limits.h: resolution in [kMinResolution,
 /// kMaxResolution], subobject_size in [1, kMaxSubobjectSize], a distance that is finite and in
 /// [0, kMaxDistance], output "distance" only with a distance, method "fcl" only without one.
 /// The pipeline and the protocol's validation both call it. Errors (kInvalidArgument) start

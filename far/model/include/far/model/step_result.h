@@ -9,13 +9,14 @@
 #include <string>
 #include <vector>
 
+#include "far/base/stage.h"
 #include "far/model/contact_pair.h"
 
 namespace far {
 
 /// Time and work of one stage of a step.
 struct StageStats {
-  std::string name;  ///< "update", "object_cull", "sweep_and_prune", "primitive_cull", "exact"
+  Stage stage = Stage::kUpdate;
   double ms = 0;
 };
 

@@ -6,40 +6,32 @@
 
 #include <Eigen/Geometry>
 
+#include "far/base/thread_pool.h"
 #include "far/model/contact_pair.h"
 #include "far/model/step_result.h"
 #include "far/pairs/exact_stage.h"
-#include "far/pairs/thread_pool.h"
 #include "far/pairs/triangle_bvh.h"
 #include "far/pairs/world_object.h"
 
 namespace far {
 
-/// One object of a hierarchy query: its world view (id, world vertices, triangles), its
-/// hierarchy in its own frame M and the pose X_WM that places M in the world. The world
-/// vertices must be X_WM applied to the vertices the hierarchy was built or refit from, then
-/// FlushTinyCoordinates (as the pipeline computes them).
-struct BvhObject {
-  WorldObjectView world;
-  const TriangleBvh* bvh = nullptr;  ///< aliased; not empty
+/// An object's hierarchy in its own frame M and the pose X_WM that places M in the world. Its
+/// world view (PairQuery::objects) must be X_WM applied to the vertices the hierarchy was built
+/// or refit from, then FlushTinyCoordinates (as the pipeline computes them).
+struct ObjectHierarchy {
+  const TriangleBvh* bvh = nullptr;  ///< aliased; null or empty: the object pairs with nothing
   Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
 };
 
-/// Which object pairs to test and what to compute.
-struct BvhQuery {
-  std::span<const BvhObject> objects;        ///< ids unique
-  std::span<const ObjectPair> object_pairs;  ///< ids of `objects`, object_a < object_b
-  bool want_contacts = true;                 ///< intersecting triangle pairs
-  /// Pairs within this distance are candidates, and distance pairs when want_distance_pairs.
-  std::optional<double> max_distance;
-  bool want_distance_pairs = true;
+/// What the hierarchy stage is asked: the object pairs (PairQuery) and each object's hierarchy.
+struct BvhQuery : PairQuery {
+  /// Indexed like `objects` (by slot).
+  std::span<const ObjectHierarchy> hierarchies;
   bool run_exact = true;        ///< false: no exact tests (only candidates, when asked)
   bool want_candidates = true;  ///< fill BvhResult::candidates (the primitive PCS)
-  /// Cancellation, deadline and pair cap (null: none); see ExactResult::stopped.
-  const StepControl* control = nullptr;
 };
 
-/// The answer, and the candidate triangles: per object (indexed like `objects`), sorted, the
+/// The answer, and the candidate triangles: per slot (indexed like `objects`), sorted, the
 /// triangles whose world box is within the query's slack of a triangle box of a partner, where
 /// no slab of either triangle (its plane or the direction across it, see RunBvhTests) separates
 /// the two.

@@ -5,31 +5,42 @@
 #include <span>
 #include <vector>
 
+#include "far/base/step_control.h"
+#include "far/base/thread_pool.h"
 #include "far/model/contact_pair.h"
-#include "far/model/step_control.h"
-#include "far/pairs/thread_pool.h"
+#include "far/model/object_slot.h"
 #include "far/pairs/world_object.h"
 
 namespace far {
 
-/// Which triangle pairs to test exactly: for every object pair, the listed triangles of the
-/// first object against the listed triangles of the second.
-struct ExactQuery {
-  std::span<const WorldObjectView> objects;  ///< ids unique
-  std::span<const ObjectPair> object_pairs;  ///< ids of `objects`, object_a < object_b
-  /// Optional per-object triangle subsets, indexed like `objects` (the primitive PCS). Empty
-  /// span: every triangle of every object.
-  std::span<const std::vector<uint32_t>> triangle_subsets;
-  bool want_contacts = true;           ///< compute intersecting pairs
-  std::optional<double> max_distance;  ///< also compute pairs with distance <= this
+/// What both exact paths are asked (the sort-and-sweep exact stage, RunExactTests, and the
+/// hierarchy stage, RunBvhTests): the objects by slot, the object pairs to test, and the
+/// distance of a localized query.
+struct PairQuery {
+  /// Indexed by slot: objects[Index(s)] is the object in slot s (an empty view: a free slot).
+  std::span<const WorldObjectView> objects;
+  /// Slots of `objects`, object_a < object_b, each pair once.
+  std::span<const SlotPair> object_pairs;
+  /// Pairs within this distance are candidates (the search widens by it), and they are reported
+  /// as distance pairs when want_distance_pairs. Contacts are always computed.
+  std::optional<double> max_distance;
+  bool want_distance_pairs = true;
   /// Cancellation, deadline and pair cap (null: none); see ExactResult::stopped.
   const StepControl* control = nullptr;
 };
 
-/// Exact answers, sorted ascending (object_a < object_b).
+/// Which triangle pairs the exact stage tests: for every object pair, the listed triangles of
+/// the first object against the listed triangles of the second.
+struct ExactQuery : PairQuery {
+  /// Optional per-slot triangle subsets, indexed like `objects` (the primitive PCS). Empty
+  /// span: every triangle of every object.
+  std::span<const std::vector<uint32_t>> triangle_subsets;
+};
+
+/// Exact answers by slot, sorted ascending (object_a < object_b).
 struct ExactResult {
-  std::vector<ContactPair> contacts;
-  std::vector<DistancePair> distance_pairs;
+  std::vector<SlotContact> contacts;
+  std::vector<SlotDistancePair> distance_pairs;
   size_t pairs_considered = 0;  ///< triangle pairs before the AABB prefilter
   size_t pairs_tested = 0;      ///< triangle pairs that reached an exact test
   /// Why the stage stopped early (its control's cancel flag, deadline or pair cap); when it is
@@ -37,9 +48,13 @@ struct ExactResult {
   StopReason stopped = StopReason::kNone;
 };
 
+/// The slots in some pair of `pairs`, sorted, each once.
+std::vector<ObjectSlot> SlotsInPairs(std::span<const SlotPair> pairs);
+
 /// Runs exact triangle-triangle tests (TrianglesIntersect, TrianglesWithinDistance) on the
 /// query's candidate pairs, with a per-pair AABB prefilter, on `pool`.
-/// @pre every id in object_pairs is in objects; subsets hold valid triangle indices.
+/// @pre every slot in object_pairs indexes objects (checked: FAR_DEMAND); subsets hold valid
+/// triangle indices.
 ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool);
 
 /// The margin a cull in front of the exact tests must grow boxes by for a distance query with
@@ -50,8 +65,8 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool);
 /// box by it (a few ulps of the coordinates and of the limit).
 double CullSlack(double max_distance, double magnitude);
 
-/// The brute-force reference: every cross-object triangle pair (AABB prefilter only). The
-/// oracle every culling path is tested against.
+/// The brute-force reference: every cross-object triangle pair (AABB prefilter only), the objects
+/// taken as slots 0, 1, ... in the order given. The oracle every culling path is tested against.
 ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
                                 std::optional<double> max_distance, ThreadPool& pool,
                                 const StepControl* control = nullptr);

@@ -2,31 +2,34 @@
 
 #include <cstdint>
 #include <span>
-#include <unordered_map>
 #include <unordered_set>
 #include <vector>
 
 #include <Eigen/Geometry>
 
 #include "far/model/contact_pair.h"
+#include "far/model/object_slot.h"
 
 namespace far {
 
-/// An object's id and its world-frame axis-aligned bounding box.
-struct IdBox {
-  uint32_t id = 0;
+/// An object's slot and its world-frame axis-aligned bounding box.
+struct SlotBox {
+  ObjectSlot slot{};
   Eigen::AlignedBox3d box_W;
 };
 
 /// Object-level sweep-and-prune (I-COLLIDE style), incremental across steps: the sorted
 /// endpoint lists are kept between calls and repaired by insertion sort, so objects that did not
-/// move cost no re-sorting. Thread safety: none (one owner).
+/// move cost no re-sorting. Objects are tracked by slot (far/model/object_slot.h): its arrays are
+/// indexed by slot, so memory grows with the largest slot seen. Thread safety: none (one owner).
 class SweepAndPrune {
  public:
-  /// Replaces the set of boxes (any order, ids unique; ids absent from `boxes` are removed)
+  /// Replaces the set of boxes (any order, slots unique; slots absent from `boxes` are removed)
   /// and returns every pair whose boxes are within `margin` of each other (boxes closed:
-  /// touching counts), sorted ascending with object_a < object_b. @pre margin >= 0.
-  std::vector<ObjectPair> Update(std::span<const IdBox> boxes, double margin = 0.0);
+  /// touching counts), sorted ascending with object_a < object_b. A slot whose object changed
+  /// since the last call (removed, and the slot given to a new one) is tracked as one object
+  /// that moved: the answer is the same. @pre margin >= 0.
+  std::vector<SlotPair> Update(std::span<const SlotBox> boxes, double margin = 0.0);
 
   /// Number of endpoint swaps the last Update performed (0 when nothing moved).
   size_t last_swaps() const { return last_swaps_; }
@@ -38,9 +41,8 @@ class SweepAndPrune {
     uint32_t slot;
     bool is_max;
   };
-  // A tracked object: its id, its grown box and when it was last seen.
+  // A tracked object (by slot): its grown box and when it was last seen.
   struct Slot {
-    uint32_t id = 0;
     bool live = false;
     bool empty = false;  // empty or non-finite input box: pairs with nothing
     uint64_t stamp = 0;  // the Update that last saw it
@@ -49,11 +51,11 @@ class SweepAndPrune {
   };
   // What RefreshSlots found.
   struct Refreshed {
-    std::vector<uint32_t> added;    // slots of ids seen for the first time
+    std::vector<uint32_t> added;    // slots not live before
     std::vector<uint32_t> revived;  // slots whose box turned non-empty
     bool any_empty = false;
   };
-  Refreshed RefreshSlots(std::span<const IdBox> boxes, double half);
+  Refreshed RefreshSlots(std::span<const SlotBox> boxes, double half);
   void DropUnseen();
   bool RepairAxis(int axis, bool rebuild, std::span<const uint32_t> added);
   void SweepNewPairs(const std::vector<uint8_t>& is_new);
@@ -61,10 +63,8 @@ class SweepAndPrune {
   static uint64_t PairKey(uint32_t a, uint32_t b);
   static bool EndpointOrder(const Endpoint& a, const Endpoint& b);
 
-  std::vector<Endpoint> axes_[3];  // sorted by (value, min before max)
-  std::vector<Slot> slots_;
-  std::vector<uint32_t> free_slots_;
-  std::unordered_map<uint32_t, uint32_t> id_slots_;  // id -> slot
+  std::vector<Endpoint> axes_[3];          // sorted by (value, min before max)
+  std::vector<Slot> slots_;                // indexed by slot
   std::unordered_set<uint64_t> overlaps_;  // slot pairs (low << 32 | high) overlapping on all axes
   uint64_t stamp_ = 0;
   size_t last_swaps_ = 0;

@@ -27,10 +27,10 @@ inline Eigen::Vector3d FlushTinyCoordinates(Eigen::Vector3d p) {
   return p;
 }
 
-/// A read-only view of one object placed in the world: its id, its world-frame vertex
-/// positions and its triangles. Aliased: the spans must outlive the view.
+/// A read-only view of one object placed in the world: its world-frame vertex positions and its
+/// triangles. The stages take views in a span indexed by slot (far/model/object_slot.h); a free
+/// slot's view is empty. Aliased: the spans must outlive the view.
 struct WorldObjectView {
-  uint32_t id = 0;
   std::span<const Eigen::Vector3d> p_WV;  ///< vertex positions in world frame W
   std::span<const TriangleIndices> triangles;
 };

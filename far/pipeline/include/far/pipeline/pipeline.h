@@ -9,15 +9,16 @@
 
 #include <Eigen/Core>
 
+#include "far/base/result.h"
+#include "far/base/step_control.h"
 #include "far/gpu/gl_context.h"
 #include "far/model/mesh.h"
-#include "far/model/result.h"
 #include "far/model/scene.h"
 #include "far/model/scene_model.h"
 #include "far/model/scene_update.h"
-#include "far/model/step_control.h"
 #include "far/model/step_request.h"
 #include "far/model/step_result.h"
+#include "far/pipeline/scene_counters.h"
 
 namespace far {
 
@@ -35,14 +36,6 @@ struct PipelineOptions {
   SceneLimits scene_limits;
   /// A budget shared with other pipelines (a daemon's sessions), or null; must outlive this.
   SharedSceneBudget* shared_budget = nullptr;
-};
-
-/// Work the scene bookkeeping did since the pipeline was made: what "only what changed is
-/// recomputed or re-uploaded" is tested against.
-struct SceneCounters {
-  int64_t world_updates = 0;  ///< objects whose world-frame vertices were recomputed
-  int64_t piece_builds = 0;   ///< (object, offset kind) GPU piece sets built from vertices
-  int64_t piece_bytes = 0;    ///< bytes of piece data handed to the GPU
 };
 
 /// The FAR step pipeline: one scene, its GPU resources and a CPU pool. One call runs one step.

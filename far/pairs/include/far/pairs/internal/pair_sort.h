@@ -1,7 +1,7 @@
 #pragma once
 
-// Sorting an exact stage's answer into ContactPair order (object_a, triangle_a, object_b,
-// triangle_b), the order every stage reports in, whatever the number of threads.
+// Sorting an exact stage's answer into pair order (object_a, triangle_a, object_b, triangle_b:
+// slots and triangles), the order every stage reports in, whatever the number of threads.
 //
 // Why not std::sort: a step's merge sorts right after the pool went idle between steps, and on
 // the 2-vCPU VM a comparison sort is then several times slower (most likely its branches run on a
@@ -19,9 +19,9 @@
 
 namespace far::internal {
 
-/// Sorts by ContactPair's order (stable: equal pairs keep their order).
-void SortPairs(std::vector<ContactPair>& pairs);
+/// Sorts by the pair's order (stable: equal pairs keep their order).
+void SortPairs(std::vector<SlotContact>& pairs);
 /// Sorts by the pair, in the same order (stable).
-void SortPairs(std::vector<DistancePair>& pairs);
+void SortPairs(std::vector<SlotDistancePair>& pairs);
 
 }  // namespace far::internal

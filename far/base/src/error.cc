@@ -1,6 +1,6 @@
 #include <charconv>
 
-#include "far/model/result.h"
+#include "far/base/result.h"
 
 namespace far {
 

@@ -1,4 +1,4 @@
-#include "far/pairs/thread_pool.h"
+#include "far/base/thread_pool.h"
 
 #include <sched.h>
 

@@ -10,7 +10,8 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
-#include <string_view>
+
+#include "far/base/stage.h"
 
 namespace far {
 
@@ -33,9 +34,8 @@ struct StepControl {
   /// The most contacts + distance pairs a step may report: a reply larger than this is refused
   /// while the pairs are found, not after they all are.
   size_t max_pairs = std::numeric_limits<size_t>::max();
-  /// Called at the start of each stage with its name ("update", "object_cull", ...), on the
-  /// step's thread: progress for a client that waits.
-  std::function<void(std::string_view stage)> on_stage;
+  /// Called at the start of each stage, on the step's thread: progress for a client that waits.
+  std::function<void(Stage stage)> on_stage;
   /// Called by every check (Check) from `slow_after` on, on the thread that checks: each
   /// thread working on a step that runs long hears it within milliseconds, which lets a daemon
   /// lower that thread's CPU priority while the step still runs, whether it ends well or not.
