@@ -118,6 +118,18 @@ void AppendTube(Mesh* mesh, const Eigen::Vector3d& a, const Eigen::Vector3d& b, 
   }
 }
 
+std::vector<TriangleIndices> GridTriangles(int cells) {
+  std::vector<TriangleIndices> triangles;
+  const auto index = [&](int i, int j) { return static_cast<uint32_t>(i * (cells + 1) + j); };
+  for (int i = 0; i < cells; ++i) {
+    for (int j = 0; j < cells; ++j) {
+      triangles.push_back({index(i, j), index(i + 1, j), index(i + 1, j + 1)});
+      triangles.push_back({index(i, j), index(i + 1, j + 1), index(i, j + 1)});
+    }
+  }
+  return triangles;
+}
+
 Mesh LatheMesh(std::span<const Eigen::Vector2d> radius_z, double z_bottom, double z_top,
                int slices) {
   Mesh mesh;

@@ -1,8 +1,8 @@
 #pragma once
 
 // Mesh building blocks shared by the scene generators (private to far::scenes): tubes, surfaces
-// of revolution, height fields, fracturing, and placing a rigid body so that it touches a
-// height field.
+// of revolution, grids, height fields, fracturing, placing a rigid body so that it touches a
+// height field, and the generators' random numbers.
 
 #include <cstdint>
 #include <random>
@@ -24,6 +24,11 @@ int TubeTriangles(int sides, int segments);
 /// rings along, each end capped by a fan to its center. Outward-facing.
 void AppendTube(Mesh* mesh, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r_a,
                 double r_b, int sides, int segments);
+
+/// Returns the triangles of a grid of cells x cells quads over (cells + 1)^2 vertices numbered row
+/// by row (vertex (i, j) is i * (cells + 1) + j), two per quad, split by the (i, j)-(i + 1, j + 1)
+/// diagonal.
+std::vector<TriangleIndices> GridTriangles(int cells);
 
 /// A closed surface of revolution about z: a pole at z_bottom, rings (radius[i], z[i]) for the
 /// profile points in order of increasing z, a pole at z_top. 2 * slices * profile.size()
@@ -84,6 +89,31 @@ struct Fragment {
 /// `core`, so that the pieces are solid-looking wedges. Every piece is non-empty.
 std::vector<Fragment> Fracture(const Mesh& mesh, int num_pieces, const Eigen::Vector3d& core,
                                std::mt19937_64* rng);
+
+/// The random numbers of one scene: one generator seeded once, drawn from in the order of the
+/// calls, so that a generator split into helpers draws what it drew in one piece (pass it by
+/// pointer; never copy it). Draws that are arguments of one call, as in
+/// Eigen::Vector2d(Uniform(..), Uniform(..)), come in the order the compiler picks (GCC 12: the
+/// last argument first; Clang: the first), so GCC and Clang builds make different scenes from
+/// one seed; the generators keep such calls as written, so that the scenes of a GCC build (the
+/// studies') do not change.
+class Random {
+ public:
+  explicit Random(uint64_t seed) : rng_(seed) {}
+  Random(const Random&) = delete;
+  Random& operator=(const Random&) = delete;
+
+  /// Draws a number uniform in [0, 1).
+  double Unit() { return unit_(rng_); }
+  /// Draws a number uniform in [lo, hi), as lo + (hi - lo) * Unit().
+  double Uniform(double lo, double hi) { return lo + (hi - lo) * Unit(); }
+  /// Returns the generator itself, for helpers that draw on their own (Fracture).
+  std::mt19937_64* engine() { return &rng_; }
+
+ private:
+  std::mt19937_64 rng_;
+  std::uniform_real_distribution<double> unit_{0.0, 1.0};
+};
 
 /// A unit quaternion from a rotation vector (angle * axis); identity for zero.
 Eigen::Quaterniond RotationVector(const Eigen::Vector3d& angle_axis);

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mesh_tools.h"
@@ -15,6 +15,7 @@ namespace far::scenes {
 namespace {
 
 using internal::AppendTube;
+using internal::Random;
 using internal::TubeTriangles;
 
 constexpr double kDt = 0.1;     // seconds per frame
@@ -96,16 +97,116 @@ std::vector<Eigen::Vector3d> LeafVertices(const Leaf& leaf, int cells, double t)
   return p_WV;
 }
 
-std::vector<TriangleIndices> GridTriangles(int cells) {
-  std::vector<TriangleIndices> triangles;
-  const auto index = [&](int i, int j) { return static_cast<uint32_t>(i * (cells + 1) + j); };
-  for (int i = 0; i < cells; ++i) {
-    for (int j = 0; j < cells; ++j) {
-      triangles.push_back({index(i, j), index(i + 1, j), index(i + 1, j + 1)});
-      triangles.push_back({index(i, j), index(i + 1, j + 1), index(i, j + 1)});
+// The tree at the coarsest detail with enough triangles.
+TreeDetail CoarsestDetail(int min_tree_triangles) {
+  int k = 4;
+  while (TreeDetail(k).Triangles() < min_tree_triangles && k < 400) ++k;
+  return TreeDetail(k);
+}
+
+// The tree (id 0): a trunk, then branch by branch a branch and its twigs, each branch drawing its
+// angle and elevation in that order. Adds to `perches` where leaves may hang on each.
+SceneObject Tree(const TreeDetail& detail, Random* random, std::vector<Segment>* perches) {
+  SceneObject tree;
+  tree.id = 0;
+  tree.name = "tree";
+  tree.motion = Motion::kStatic;
+  tree.mesh_path = "leaves_tree.obj";
+  AppendTube(&tree.mesh, {0, 0, 0}, {0, 0, 7.0}, 0.35, 0.18, detail.trunk_sides,
+             detail.trunk_segments);
+  for (int b = 0; b < kBranches; ++b) {
+    const double height = 2.2 + 4.4 * b / (kBranches - 1);
+    const double angle = 2.4 * b + random->Uniform(-0.2, 0.2),
+                 elevation = random->Uniform(0.25, 0.45);
+    const double length = 2.6 - 1.0 * b / (kBranches - 1);
+    const Eigen::Vector3d direction(std::cos(angle) * std::cos(elevation),
+                                    std::sin(angle) * std::cos(elevation), std::sin(elevation));
+    const Eigen::Vector3d start(0, 0, height), end = start + length * direction;
+    AppendTube(&tree.mesh, start, end, 0.09, 0.04, detail.branch_sides, detail.branch_segments);
+    perches->push_back({start + 0.3 * (end - start), end});
+    for (int w = 0; w < kTwigsPerBranch; ++w) {
+      const Eigen::Vector3d root = start + (w == 0 ? 0.5 : 0.85) * (end - start);
+      const double twig_angle = angle + (w == 0 ? 0.8 : -0.8);
+      const Eigen::Vector3d twig_direction =
+          Eigen::Vector3d(std::cos(twig_angle), std::sin(twig_angle), 0.6).normalized();
+      const Eigen::Vector3d tip = root + 0.9 * twig_direction;
+      AppendTube(&tree.mesh, root, tip, 0.035, 0.018, detail.twig_sides, detail.twig_segments);
+      perches->push_back({root + 0.2 * (tip - root), tip});
     }
   }
-  return triangles;
+  return tree;
+}
+
+// Where leaf l hangs: a first leaf of a pair on a random perch, the second at the first's stem
+// point and phase, turned across it.
+void PlaceLeaf(std::vector<Leaf>* leaves, int l, const std::vector<Segment>& perches,
+               Random* random) {
+  Leaf& leaf = (*leaves)[static_cast<size_t>(l)];
+  if (l % 2 == 1) {
+    const Leaf& first = (*leaves)[static_cast<size_t>(l - 1)];
+    leaf.p_WS = first.p_WS;
+    leaf.phase = first.phase;
+    leaf.yaw = first.yaw + random->Uniform(1.2, 1.9);  // across the first leaf
+  } else {
+    const Segment& perch = perches[static_cast<size_t>(random->Unit() * perches.size())];
+    leaf.p_WS = perch.a + random->Unit() * (perch.b - perch.a);
+    leaf.phase = random->Uniform(0.0, kCycle);
+    const Eigen::Vector3d out = perch.b - perch.a;
+    leaf.yaw = std::atan2(out.y(), out.x()) + random->Uniform(-0.6, 0.6);
+  }
+}
+
+// The rest of a leaf: its shape, how it sways, and how it falls.
+void DrawShapeAndMotion(Leaf* leaf, Random* random) {
+  leaf->pitch = random->Uniform(0.5, 1.2);
+  leaf->length = random->Uniform(0.32, 0.42);
+  leaf->width = 0.55 * leaf->length;
+  leaf->hang = random->Uniform(0.5, 0.8) * kCycle;
+  for (double& phase : leaf->sway) phase = random->Uniform(0.0, 2 * std::numbers::pi);
+  const double drift_angle = random->Uniform(0.0, 2 * std::numbers::pi);
+  leaf->drift_dir = Eigen::Vector2d(std::cos(drift_angle), std::sin(drift_angle));
+  leaf->drift = random->Uniform(0.3, 0.6);
+  leaf->fall_speed = random->Uniform(0.7, 1.0);
+  leaf->flutter = random->Uniform(0.2, 0.4);
+  leaf->spin = random->Uniform(1.5, 3.0);
+  leaf->spin_axis =
+      Eigen::Vector3d(random->Uniform(-1, 1), random->Uniform(-1, 1), random->Uniform(-1, 1))
+          .normalized();
+}
+
+// Leaves, in pairs that share a stem point and a cycle phase; all the draws of one leaf before
+// the next's.
+std::vector<Leaf> Leaves(int num_leaves, const std::vector<Segment>& perches, Random* random) {
+  std::vector<Leaf> leaves(static_cast<size_t>(num_leaves));
+  for (int l = 0; l < num_leaves; ++l) {
+    PlaceLeaf(&leaves, l, perches, random);
+    DrawShapeAndMotion(&leaves[static_cast<size_t>(l)], random);
+  }
+  return leaves;
+}
+
+SceneObject LeafObject(const Leaf& leaf, uint32_t id, int cells,
+                       const std::vector<TriangleIndices>& triangles) {
+  SceneObject object;
+  object.id = id;
+  object.name = "leaf-" + std::to_string(object.id);
+  object.motion = Motion::kDeformable;
+  object.mesh_path = "leaves_leaf_" + std::to_string(object.id) + ".obj";
+  object.mesh.p_MV = LeafVertices(leaf, cells, 0.0);
+  object.mesh.triangles = triangles;
+  return object;
+}
+
+// The update at time t: every leaf's vertices (ids 1..num_leaves).
+FrameUpdate Frame(const std::vector<Leaf>& leaves, int cells,
+                  const std::vector<TriangleIndices>& triangles, double t) {
+  FrameUpdate frame;
+  frame.vertices.reserve(leaves.size());
+  for (size_t l = 0; l < leaves.size(); ++l) {
+    frame.vertices.push_back(internal::VertexUpdate(static_cast<uint32_t>(l + 1),
+                                                    LeafVertices(leaves[l], cells, t), triangles));
+  }
+  return frame;
 }
 
 }  // namespace
@@ -114,95 +215,21 @@ Scene PaperLeavesScene(uint64_t seed, int frames, int num_leaves, int leaf_cells
                        int min_tree_triangles) {
   leaf_cells = std::max(1, leaf_cells);
   num_leaves = std::max(0, num_leaves);
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * unit(rng); };
-
-  // The tree: the coarsest detail with enough triangles.
-  int k = 4;
-  while (TreeDetail(k).Triangles() < min_tree_triangles && k < 400) ++k;
-  const TreeDetail detail(k);
-  SceneObject tree;
-  tree.id = 0;
-  tree.name = "tree";
-  tree.motion = Motion::kStatic;
-  tree.mesh_path = "leaves_tree.obj";
-  AppendTube(&tree.mesh, {0, 0, 0}, {0, 0, 7.0}, 0.35, 0.18, detail.trunk_sides,
-             detail.trunk_segments);
+  Random random(seed);
+  // The draws, in the scene's order: the branches, then the leaves.
   std::vector<Segment> perches;  // where leaves hang: branches and twigs
-  for (int b = 0; b < kBranches; ++b) {
-    const double height = 2.2 + 4.4 * b / (kBranches - 1);
-    const double angle = 2.4 * b + uniform(-0.2, 0.2), elevation = uniform(0.25, 0.45);
-    const double length = 2.6 - 1.0 * b / (kBranches - 1);
-    const Eigen::Vector3d direction(std::cos(angle) * std::cos(elevation),
-                                    std::sin(angle) * std::cos(elevation), std::sin(elevation));
-    const Eigen::Vector3d start(0, 0, height), end = start + length * direction;
-    AppendTube(&tree.mesh, start, end, 0.09, 0.04, detail.branch_sides, detail.branch_segments);
-    perches.push_back({start + 0.3 * (end - start), end});
-    for (int w = 0; w < kTwigsPerBranch; ++w) {
-      const Eigen::Vector3d root = start + (w == 0 ? 0.5 : 0.85) * (end - start);
-      const double twig_angle = angle + (w == 0 ? 0.8 : -0.8);
-      const Eigen::Vector3d twig_direction =
-          Eigen::Vector3d(std::cos(twig_angle), std::sin(twig_angle), 0.6).normalized();
-      const Eigen::Vector3d tip = root + 0.9 * twig_direction;
-      AppendTube(&tree.mesh, root, tip, 0.035, 0.018, detail.twig_sides, detail.twig_segments);
-      perches.push_back({root + 0.2 * (tip - root), tip});
-    }
-  }
-
-  // Leaves, in pairs that share a stem point and a cycle phase.
-  std::vector<Leaf> leaves(static_cast<size_t>(num_leaves));
-  for (int l = 0; l < num_leaves; ++l) {
-    Leaf& leaf = leaves[static_cast<size_t>(l)];
-    const bool second = l % 2 == 1;
-    if (second) {
-      const Leaf& first = leaves[static_cast<size_t>(l - 1)];
-      leaf.p_WS = first.p_WS;
-      leaf.phase = first.phase;
-      leaf.yaw = first.yaw + uniform(1.2, 1.9);  // across the first leaf
-    } else {
-      const Segment& perch = perches[static_cast<size_t>(unit(rng) * perches.size())];
-      leaf.p_WS = perch.a + unit(rng) * (perch.b - perch.a);
-      leaf.phase = uniform(0.0, kCycle);
-      const Eigen::Vector3d out = perch.b - perch.a;
-      leaf.yaw = std::atan2(out.y(), out.x()) + uniform(-0.6, 0.6);
-    }
-    leaf.pitch = uniform(0.5, 1.2);
-    leaf.length = uniform(0.32, 0.42);
-    leaf.width = 0.55 * leaf.length;
-    leaf.hang = uniform(0.5, 0.8) * kCycle;
-    for (double& phase : leaf.sway) phase = uniform(0.0, 2 * std::numbers::pi);
-    const double drift_angle = uniform(0.0, 2 * std::numbers::pi);
-    leaf.drift_dir = Eigen::Vector2d(std::cos(drift_angle), std::sin(drift_angle));
-    leaf.drift = uniform(0.3, 0.6);
-    leaf.fall_speed = uniform(0.7, 1.0);
-    leaf.flutter = uniform(0.2, 0.4);
-    leaf.spin = uniform(1.5, 3.0);
-    leaf.spin_axis = Eigen::Vector3d(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)).normalized();
-  }
+  SceneObject tree = Tree(CoarsestDetail(min_tree_triangles), &random, &perches);
+  const std::vector<Leaf> leaves = Leaves(num_leaves, perches, &random);
 
   Scene scene;
   scene.objects.push_back(std::move(tree));
-  const std::vector<TriangleIndices> triangles = GridTriangles(leaf_cells);
+  const std::vector<TriangleIndices> triangles = internal::GridTriangles(leaf_cells);
   for (int l = 0; l < num_leaves; ++l) {
-    SceneObject object;
-    object.id = static_cast<uint32_t>(l + 1);
-    object.name = "leaf-" + std::to_string(object.id);
-    object.motion = Motion::kDeformable;
-    object.mesh_path = "leaves_leaf_" + std::to_string(object.id) + ".obj";
-    object.mesh.p_MV = LeafVertices(leaves[static_cast<size_t>(l)], leaf_cells, 0.0);
-    object.mesh.triangles = triangles;
-    scene.objects.push_back(std::move(object));
+    scene.objects.push_back(LeafObject(leaves[static_cast<size_t>(l)], static_cast<uint32_t>(l + 1),
+                                       leaf_cells, triangles));
   }
   for (int f = 1; f < frames; ++f) {
-    FrameUpdate frame;
-    frame.vertices.reserve(static_cast<size_t>(num_leaves));
-    for (int l = 0; l < num_leaves; ++l) {
-      frame.vertices.push_back(internal::VertexUpdate(
-          static_cast<uint32_t>(l + 1),
-          LeafVertices(leaves[static_cast<size_t>(l)], leaf_cells, kDt * f), triangles));
-    }
-    scene.frames.push_back(std::move(frame));
+    scene.frames.push_back(Frame(leaves, leaf_cells, triangles, kDt * f));
   }
   return scene;
 }
