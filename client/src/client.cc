@@ -8,10 +8,10 @@
 #include <optional>
 #include <thread>
 
-#include "client_access.h"
 #include "daemon_connection.h"
 #include "session_recorder.h"
 
+#include "far/client/internal/client_access.h"
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/lcm_bus.h"

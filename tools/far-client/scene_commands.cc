@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "commands.h"
 #include "object_listing.h"
 #include "progress.h"
 #include "result_json.h"
@@ -80,10 +81,10 @@ void PrintStepLine(int step, double ms, const StepResult& result) {
   for (const auto& [id, tris] : result.pcs_primitives) pcs_triangles += tris.size();
   std::printf(
       "step %3d  round trip %8.2f ms  pipeline %8.2f ms  pcs objects %4zu  pcs triangles %6zu  "
-      "object pairs %4lld  contacts %5zu  distance pairs %5zu\n",
+      "object pairs %4lld  contacts %5zu  distance pairs %5zu  method %s\n",
       step, ms, result.stats.total_ms, result.pcs_objects.size(), pcs_triangles,
       static_cast<long long>(result.stats.object_pairs), result.contacts.size(),
-      result.distance_pairs.size());
+      result.distance_pairs.size(), result.stats.method.c_str());
 }
 
 int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
@@ -122,9 +123,12 @@ int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
           std::printf("      %s\n", Describe(contact, objects).c_str());
       }
       // The certificate depends on the configuration and the scene's extent: shown when the
-      // configuration changes (under auto too), every step on request.
-      if (flags.certificate || result->stats.method != last_configuration)
+      // configuration changes (under auto too, after why auto chose it), every step on request.
+      if (flags.certificate || result->stats.method != last_configuration) {
+        if (!result->stats.method_reason.empty())
+          std::printf("%s\n", result->stats.method_reason.c_str());
         std::printf("%s", CertificateText(result->stats.certificate).c_str());
+      }
       last_configuration = result->stats.method;
     }
   }
