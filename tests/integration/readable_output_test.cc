@@ -166,7 +166,9 @@ TEST_F(ReadableOutputTest, PlayNamesTheMethodThatAnsweredAndWhyAutoChoseIt) {
             1)
       << chosen.out;
   for (const std::string& line : lines) {
-    if (line.rfind("step ", 0) == 0) EXPECT_NE(line.find("  method "), std::string::npos) << line;
+    if (line.rfind("step ", 0) == 0) {
+      EXPECT_NE(line.find("  method "), std::string::npos) << line;
+    }
   }
 }
 
