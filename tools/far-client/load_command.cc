@@ -183,7 +183,7 @@ void PrintTable(const LoadReport& report, double elapsed) {
   for (const auto& [method, steps] : report.steps_by_method) {
     methods += (methods.empty() ? "" : ", ") + method + " " + std::to_string(steps);
   }
-  std::printf("answered by: %s\n", methods.empty() ? "no step" : methods.c_str());
+  std::printf("steps by method: %s\n", methods.empty() ? "none answered" : methods.c_str());
 }
 
 int RunLoad(const client::ClientOptions& base, const LoadFlags& flags, const StepRequest& request) {
