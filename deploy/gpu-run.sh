@@ -264,9 +264,10 @@ main() {
     FAR_SCENE_ARGS="--kind demo --frames 3 --leaves 6" FAR_RESOLUTION=128
   fi
 
-  # FAR_CLIENT: the snapshot tests run far-client, from the bundle (not the build tree).
-  stage "gpu tests" 150 "${far_env[@]}" FAR_CLIENT="$bin/far-client" "$bin/far_gpu_test" \
-    "${tests_args[@]}"
+  stage "gpu tests" 150 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}"
+  # FAR_SNAPSHOT: the snapshot tests run far-snapshot, from the bundle (not the build tree).
+  stage "snapshot tests" 60 "${far_env[@]}" FAR_SNAPSHOT="$bin/far-snapshot" \
+    "$bin/far_snapshot_test" "${tests_args[@]}"
   stage "far-study" 200 "${far_env[@]}" "${study[@]}" "${study_small[@]}" \
     --csv study.csv --results study.md
   stage "culling benchmark" 120 "${far_env[@]}" "$bin/far_culling_benchmark" \

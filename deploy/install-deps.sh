@@ -18,7 +18,7 @@ packages=(
   # protocol and IPC. LCM's C library is built from Debian's source package (protocol/third_party/
   # lcm: patch, glib; fetched through apt below); lcm-gen is liblcm-bin's.
   liblcm-bin libglib2.0-dev patch libboost-dev libsodium-dev
-  # files (far-client snapshot writes PNG through libpng), command lines, logs
+  # files (far-snapshot writes PNG through libpng), command lines, logs
   nlohmann-json3-dev libpng-dev libcli11-dev libspdlog-dev
   # tests, benchmarks, plots
   libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox

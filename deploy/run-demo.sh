@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
-# The main job, from a fresh Debian 12 machine: installs what it needs, builds far-daemon and
-# far-client, starts the daemon on the embedded default (Mesa llvmpipe through EGL when there
+# The main job, from a fresh Debian 12 machine: installs what it needs, builds far-daemon,
+# far-client and far-snapshot, starts the daemon on the embedded default (Mesa llvmpipe through EGL when there
 # is no GPU) and runs a demo through it with several simulator clients at once:
 #   - two "tree with falling leaves" simulators (a static tree, deformable leaves sending new
 #     vertices every step, and a rigid vase that falls and breaks into fragments: objects
 #     removed and added), each in its own session; the first lists every step's contacts by
 #     object ("leaf-12 touches tree (16 triangle pairs)"), both say when the vase breaks;
 #   - a load client with three more sessions of rigid objects moving by poses.
+# Every step line names the method that answered it (and, under auto, why it was chosen when
+# the choice changes); the load client ends with the steps each method answered.
 # Each client's lines appear as they happen, prefixed with its name. Then two pictures (PNG)
 # of the scene, the step before the vase breaks and the step it breaks, with the potentially
-# colliding triangles yellow and the contact triangles red (far-client snapshot).
+# colliding triangles yellow and the contact triangles red (far-snapshot).
 # Everything LCM sends stays inside a private network namespace (deploy/netns-run.sh).
 #   bash deploy/run-demo.sh [--frames N] [--leaves N] [--resolution N] [--out DIR]
 set -euo pipefail
@@ -30,7 +32,7 @@ done
 
 bash deploy/install-deps.sh
 cmake --preset release >/dev/null
-cmake --build --preset release --target far-daemon far-client -j "$(nproc)"
+cmake --build --preset release --target far-daemon far-client far-snapshot -j "$(nproc)"
 mkdir -p "$out"
 
 export FAR_BIN=build/release FAR_FRAMES=$frames FAR_LEAVES=$leaves FAR_RESOLUTION=$resolution
@@ -43,7 +45,8 @@ exec deploy/netns-run.sh bash -c '
   "$FAR_BIN/server/far-daemon" --socket "$work/far.sock" --log-level info >"$work/daemon.log" 2>&1 &
   daemon=$!
   trap "kill $daemon 2>/dev/null || true; rm -rf $work" EXIT
-  far_client() { "$FAR_BIN/client/far-client" --socket "$work/far.sock" "$@"; }
+  far_client() { "$FAR_BIN/tools/far-client/far-client" --socket "$work/far.sock" "$@"; }
+  far_snapshot() { "$FAR_BIN/tools/far-snapshot/far-snapshot" "$@"; }
   far_client --connect-timeout 20s ping
   far_client make-scene "$work/demo/scene.json" --leaves "$FAR_LEAVES" --frames "$FAR_FRAMES"
 
@@ -63,9 +66,9 @@ exec deploy/netns-run.sh bash -c '
   # The step at which play said the vase broke, and the one before it.
   broke=$(sed -n "s/^frame *\([0-9]*\): vase breaks.*/\1/p" "$work/leaves-1.log" | head -n 1)
   if [ -n "$broke" ]; then
-    echo "== pictures of the scene before and after the vase breaks (step $((broke - 1)) and step $broke; far-client snapshot runs the step in process)"
-    far_client snapshot "$work/demo/scene.json" --frame $((broke - 1)) --png "$FAR_OUT/demo-before-break.png"
-    far_client snapshot "$work/demo/scene.json" --frame "$broke" --png "$FAR_OUT/demo-after-break.png"
+    echo "== pictures of the scene before and after the vase breaks (step $((broke - 1)) and step $broke; far-snapshot runs the step in process)"
+    far_snapshot "$work/demo/scene.json" --frame $((broke - 1)) --png "$FAR_OUT/demo-before-break.png"
+    far_snapshot "$work/demo/scene.json" --frame "$broke" --png "$FAR_OUT/demo-after-break.png"
   fi
 
   echo "== daemon status"

@@ -20,11 +20,14 @@ stage_timer_name=run-sanitizers
 # shellcheck source=deploy/stage-timer.sh
 source deploy/stage-timer.sh
 
-# Unit tests (the executables this tree built: the others show as <target>_NOT_BUILT).
-asan_unit_targets=(far_protocol_test far_server_test far_io_test far_model_test)
+# Unit tests (the executables this tree built: the others show as <target>_NOT_BUILT). The
+# tools' script tests (label unit) run far-client and far-snapshot on bad paths and command
+# lines: built here too, so that those error paths run under the sanitizers.
+asan_unit_targets=(far_protocol_test far_server_test far_io_test far_model_test far-client
+  far-snapshot)
 # Integration tests that send the daemon what a hostile or careless client would.
 asan_integration='^(BadInputTest|LimitsTest|LcmForgedDatagramTest)\.'
-tsan_unit_targets=(far_protocol_test far_server_test far_pairs_test)
+tsan_unit_targets=(far_protocol_test far_server_test far_pairs_test far-client far-snapshot)
 tsan_integration='^(SessionLifetimeTest|DispatchTest|BadInputTest|LimitsTest)\.'
 
 configure() {

@@ -15,7 +15,7 @@ if [[ $# -lt 2 ]]; then
 fi
 rounds=$1
 shift
-client=${FAR_CLIENT:-build/release/client/far-client}
+client=${FAR_CLIENT:-build/release/tools/far-client/far-client}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$client" make-scene --kind bunnies --subdivision 7 --frames 40 "$work/heavy/scene.json" >/dev/null

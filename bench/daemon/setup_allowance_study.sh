@@ -8,7 +8,7 @@
 set -euo pipefail
 rounds=${1:-3}
 build=${2:-build/release}
-client="$build/client/far-client"
+client="$build/tools/far-client/far-client"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # The large scene: two Stanford bunnies of 180,026 triangles each, one static, one moving

@@ -8,10 +8,10 @@
 #include <optional>
 #include <thread>
 
-#include "client_access.h"
 #include "daemon_connection.h"
 #include "session_recorder.h"
 
+#include "far/client/internal/client_access.h"
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/lcm_bus.h"
@@ -35,6 +35,15 @@ namespace wire = far_lcm;
 // A full update ring is waited on this long at most: the daemon drains it only at a step, so
 // a longer wait would only delay the error.
 constexpr std::chrono::seconds kRingWait{5};
+
+// A distance left at the default output (contacts) asks for distance pairs, as far-client's
+// --distance does: otherwise the caller gets an empty list and no error.
+StepRequest RequestToSend(StepRequest request) {
+  if (request.distance && request.output == Output::kContacts) {
+    request.output = Output::kDistancePairs;
+  }
+  return request;
+}
 
 }  // namespace
 
@@ -334,8 +343,9 @@ std::future<Result<StepResult>> Client::StepAsync(const StepRequest& request,
   }
   const auto timeout_ms = static_cast<int32_t>(
       std::min<int64_t>(c.options.timeout.count(), std::numeric_limits<int32_t>::max()));
-  auto message = protocol::MakeStepRequest(c.session_id, request_id, step_id,
-                                           c.updates->last_sequence(), request, timeout_ms);
+  auto message =
+      protocol::MakeStepRequest(c.session_id, request_id, step_id, c.updates->last_sequence(),
+                                RequestToSend(request), timeout_ms);
   // Recorded before it is sent, so that the request comes before its reply in the file.
   if (c.recorder) c.recorder->Request(message);
   auto bytes = protocol::EncodeSigned(message, c.key);

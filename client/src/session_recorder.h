@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "far/base/result.h"
+#include "far/client/client.h"
 #include "far/model/mesh.h"
 #include "far/model/pose.h"
 #include "far/protocol/convert.h"
@@ -64,5 +65,10 @@ class SessionRecorder {
   std::unique_ptr<protocol::LcmLogWriter> log_;  // null once a write failed
   std::string path_;
 };
+
+/// The recorder for a new session: options.record_path, else FAR_RECORD; null when neither
+/// names a file. Errors: those of SessionRecorder::Create.
+Result<std::unique_ptr<SessionRecorder>> StartRecording(const ClientOptions& options,
+                                                        int64_t session_id);
 
 }  // namespace far::client::internal

@@ -7,9 +7,6 @@ target_link_libraries(far_test_scenes PUBLIC far::pairs far::scenes PRIVATE far_
 far_add_test(far_gpu_test gpu far/gpu/gl_context_test.cc far/gpu/snapshot_test.cc
              far/pipeline/pipeline_culling_test.cc far/pipeline/certificate_test.cc)
 target_link_libraries(far_gpu_test PRIVATE far::pipeline far::io far_test_scenes far_hard_cases)
-# snapshot_test runs far-client snapshot (in process: GL, no daemon).
-target_compile_definitions(far_gpu_test PRIVATE FAR_CLIENT_PATH="$<TARGET_FILE:far-client>")
-add_dependencies(far_gpu_test far-client)
 
 
 # With no EGL driver at all (GLVND pointed at no vendor), far-daemon exits with one clear line

@@ -141,6 +141,40 @@ TEST_F(EndToEndTest, CollideWithDistanceGivesTheBruteForceDistancePairs) {
   }
 }
 
+// The library does what far-client --distance does: a distance with the output left at its
+// default asks for the distance pairs, not for contacts only and an empty list without a word.
+TEST_F(EndToEndTest, LibraryStepWithADistanceAndNoOutputGivesTheDistancePairs) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  const std::vector<SceneObject> objects = ContactSoup(3);
+  constexpr double kDistance = 0.05;
+  const std::vector<ContactPair> expected = ReferenceDistancePairs(objects, kDistance);
+  ASSERT_GT(expected.size(), ReferenceContacts(objects).size());
+  auto client = client::Client::Connect(TestClientOptions("distance"));
+  ASSERT_TRUE(client.ok()) << far::ToString(client.error());
+  ASSERT_TRUE((*client)->LoadScene(Scene{objects, {}}).ok());
+
+  // aabb: its exact stage looks for distance pairs only when the output asks for them (exact,
+  // the brute force, always does, and could not tell).
+  StepRequest request = SmallRequest(Method::kAabb);
+  request.distance = kDistance;
+  ASSERT_EQ(request.output, Output::kContacts);  // the default, as a library user leaves it
+  auto result = (*client)->Step(request);
+  ASSERT_TRUE(result.ok()) << far::ToString(result.error());
+  std::vector<ContactPair> pairs;
+  for (const DistancePair& d : result->distance_pairs) pairs.push_back(d.pair);
+  std::sort(pairs.begin(), pairs.end());
+  EXPECT_EQ(pairs, expected) << "got " << ToString(pairs) << "\nexpected " << ToString(expected);
+  EXPECT_EQ(result->contacts, ReferenceContacts(objects));
+
+  // Any other output is sent as given: the PCS only, no exact stage, no pairs.
+  request.output = Output::kPrimitivePcs;
+  auto pcs = (*client)->Step(request);
+  ASSERT_TRUE(pcs.ok()) << far::ToString(pcs.error());
+  EXPECT_TRUE(pcs->distance_pairs.empty());
+  EXPECT_TRUE(pcs->contacts.empty());
+  EXPECT_FALSE(pcs->pcs_primitives.empty());
+}
+
 TEST_F(EndToEndTest, PlayRunsEveryFrameOfAMadeScene) {
   ASSERT_NE(StartDaemon(), nullptr);
   TempDir dir;

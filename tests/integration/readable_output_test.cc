@@ -1,6 +1,10 @@
 // What far-client tells a person: play --contacts lists each step's contacts by object pair,
 // named as the scene names them, with the counts the daemon's contacts give; a frame that breaks
-// an object says so; load --seconds runs for the time it is given.
+// an object says so; each step names the method that answered; load --seconds runs for the time
+// it is given; status says whose sessions it lists, and "none".
+#include <unistd.h>
+
+#include <algorithm>
 #include <csignal>
 #include <map>
 #include <sstream>
@@ -10,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "far/client/client.h"
 #include "far/io/scene_io.h"
 
 namespace far::integration {
@@ -132,6 +137,68 @@ TEST_F(ReadableOutputTest, PlayPrintsTheCertificateOfItsAnswers) {
   ASSERT_EQ(every.exit_code, 0) << every.err;
   EXPECT_EQ(count(every.out, "certificate: not guaranteed: "), 3) << every.out;
   EXPECT_GE(count(every.out, "no offset (r 0)"), 3) << every.out;
+}
+
+// Every step line names the configuration that answered it; under auto, why auto chose it
+// comes with the certificate when the choice changes (deploy/run-demo.sh shows both).
+TEST_F(ReadableOutputTest, PlayNamesTheMethodThatAnsweredAndWhyAutoChoseIt) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  TempDir dir;
+  const auto path = dir.path() / "demo" / "scene.json";
+  ASSERT_EQ(RunFarClient({"make-scene", path.string(), "--leaves", "4", "--frames", "3"}).exit_code,
+            0);
+  const ProcessResult aabb = RunFarClient({"play", path.string(), "--method", "aabb"});
+  ASSERT_EQ(aabb.exit_code, 0) << aabb.err;
+  int steps = 0;
+  for (const std::string& line : Lines(aabb.out)) {
+    if (line.rfind("step ", 0) != 0) continue;
+    ++steps;
+    EXPECT_TRUE(line.ends_with("  method aabb")) << line;
+  }
+  EXPECT_EQ(steps, 3) << aabb.out;
+  EXPECT_EQ(aabb.out.find("auto: "), std::string::npos) << aabb.out;
+
+  const ProcessResult chosen = RunFarClient({"play", path.string(), "--resolution", "128"});
+  ASSERT_EQ(chosen.exit_code, 0) << chosen.err;
+  const std::vector<std::string> lines = Lines(chosen.out);
+  EXPECT_GE(std::count_if(lines.begin(), lines.end(),
+                          [](const std::string& l) { return l.rfind("auto: ", 0) == 0; }),
+            1)
+      << chosen.out;
+  for (const std::string& line : lines) {
+    if (line.rfind("step ", 0) == 0) {
+      EXPECT_NE(line.find("  method "), std::string::npos) << line;
+    }
+  }
+}
+
+// status ends on whose sessions it lists and "none" when there are none (not on a bare
+// "yours:"); an open session is listed under that line.
+TEST_F(ReadableOutputTest, StatusSaysNoneWithoutSessionsAndListsAnOpenOne) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  const std::string whose = getuid() == 0 ? "every user's" : "yours";
+  const auto sessions_line = [](const std::vector<std::string>& lines) {
+    return std::find_if(lines.begin(), lines.end(),
+                        [](const std::string& l) { return l.rfind("sessions: ", 0) == 0; });
+  };
+  const ProcessResult idle = RunFarClient({"status"});
+  ASSERT_EQ(idle.exit_code, 0) << idle.err;
+  const std::vector<std::string> idle_lines = Lines(idle.out);
+  const auto idle_at = sessions_line(idle_lines);
+  ASSERT_NE(idle_at, idle_lines.end()) << idle.out;
+  EXPECT_TRUE(idle_at->ends_with("; " + whose + ": none")) << *idle_at;
+  EXPECT_EQ(idle_at + 1, idle_lines.end()) << idle.out;
+
+  auto client = client::Client::Connect(TestClientOptions("status-lister"));
+  ASSERT_TRUE(client.ok()) << far::ToString(client.error());
+  const ProcessResult busy = RunFarClient({"status"});
+  ASSERT_EQ(busy.exit_code, 0) << busy.err;
+  const std::vector<std::string> busy_lines = Lines(busy.out);
+  const auto busy_at = sessions_line(busy_lines);
+  ASSERT_NE(busy_at, busy_lines.end()) << busy.out;
+  EXPECT_TRUE(busy_at->ends_with("; " + whose + ":")) << *busy_at;
+  ASSERT_NE(busy_at + 1, busy_lines.end()) << busy.out;
+  EXPECT_NE((busy_at + 1)->find("status-lister"), std::string::npos) << busy.out;
 }
 
 // Each line reaches a pipe when it is printed (deploy/run-demo.sh shows several clients' lines

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "far/base/limits.h"
 
@@ -64,6 +65,23 @@ std::string NamesOf(const NameTable<Enum, N>& table) {
   return names;
 }
 
+// fcl's collide has no distance query; every other method answers one.
+bool AnswersDistance(Method method) { return method != Method::kFcl; }
+
+// "auto, aabb, bvh, ... or exact": the methods that answer distance queries, as the table has
+// them.
+std::string DistanceMethodNames() {
+  std::vector<std::string_view> names;
+  for (const auto& [method, name] : kMethodNames) {
+    if (AnswersDistance(method)) names.push_back(name);
+  }
+  std::string text;
+  for (size_t i = 0; i < names.size(); ++i) {
+    text += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + std::string(names[i]);
+  }
+  return text;
+}
+
 }  // namespace
 
 std::string MethodNames() { return NamesOf(kMethodNames); }
@@ -94,9 +112,10 @@ Result<void> CheckStepRequest(const StepRequest& request) {
   if (request.output == Output::kDistancePairs && !request.distance) {
     return Invalid("output", "'distance' needs a distance D");
   }
-  if (request.method == Method::kFcl && request.distance) {
-    return Invalid("method",
-                   "'fcl' answers contacts only; distance queries need far, aabb or exact");
+  if (!AnswersDistance(request.method) && request.distance) {
+    return Invalid("method", "'" + std::string(ToString(request.method)) +
+                                 "' answers contacts only; distance queries need " +
+                                 DistanceMethodNames());
   }
   return {};
 }

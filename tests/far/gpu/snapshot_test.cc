@@ -1,22 +1,13 @@
-// Snapshots: RenderSnapshot draws marked triangles in their colours on llvmpipe (or a GPU), and
-// far-client snapshot writes a PNG of the requested size whose contact-red pixels exist exactly
-// when the scene has contacts, with the contacts listed by object name.
+// Snapshots: RenderSnapshot draws marked triangles in their colours on llvmpipe (or a GPU).
+// far-snapshot, the program, has its tests in tests/tools/far-snapshot.
 
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <array>
-#include <cstdio>
-#include <cstdlib>
-#include <filesystem>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "far/gpu/gl_context.h"
 #include "far/gpu/snapshot_renderer.h"
-#include "far/io/png_io.h"
-#include "far/io/scene_io.h"
 #include "far/scenes/scenes.h"
 
 namespace far {
@@ -84,97 +75,6 @@ TEST_F(SnapshotRendererTest, RejectsBadInput) {
       << mismatch.error().message;
   objects[0].mesh = nullptr;
   EXPECT_EQ(RenderSnapshot(objects).error().code, ErrorCode::kInvalidArgument);
-}
-
-// Runs far-client with `args`; returns its exit status and stdout + stderr. The build tree's
-// far-client, or $FAR_CLIENT where the test runs elsewhere (deploy/gpu-run.sh, from a bundle).
-std::pair<int, std::string> RunFarClient(const std::string& args) {
-  const char* client = std::getenv("FAR_CLIENT");
-  const std::string command =
-      std::string(client != nullptr ? client : FAR_CLIENT_PATH) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return {-1, "popen failed"};
-  std::string out;
-  std::array<char, 4096> buffer;
-  while (size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) out.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-// Two named spheres, `gap` apart along x (negative: they interpenetrate), as a scene file.
-std::filesystem::path WriteTwoBalls(const std::filesystem::path& dir, double gap) {
-  Scene scene;
-  for (uint32_t id : {1u, 2u}) {
-    SceneObject ball;
-    ball.id = id;
-    ball.name = id == 1 ? "ball-a" : "ball-b";
-    ball.motion = Motion::kRigid;
-    ball.mesh_path = "ball.obj";
-    ball.mesh = scenes::SphereMesh(Eigen::Vector3d::Zero(), 0.5, 8, 16);
-    ball.X_WO.translation = Eigen::Vector3d(id == 1 ? 0.0 : 1.0 + gap, 0, 0);
-    scene.objects.push_back(ball);
-  }
-  const std::filesystem::path path = dir / "balls.json";
-  EXPECT_TRUE(WriteScene(scene, path).ok());
-  return path;
-}
-
-class SnapshotCommandTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("far_snapshot_test_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-  std::filesystem::path dir_;
-};
-
-TEST_F(SnapshotCommandTest, PngHasTheSizeAndRedPixelsExactlyWhenThereAreContacts) {
-  for (const double gap : {-0.3, 1.0}) {
-    SCOPED_TRACE("gap " + std::to_string(gap));
-    const bool touching = gap < 0;
-    const std::filesystem::path scene = WriteTwoBalls(dir_, gap);
-    const std::filesystem::path png = dir_ / "balls.png";
-    const auto [status, out] =
-        RunFarClient("snapshot " + scene.string() + " --png " + png.string() +
-                     " --width 200 --height 150 --method exact");
-    ASSERT_EQ(status, 0) << out;
-    auto image = ReadPng(png);
-    ASSERT_TRUE(image.ok()) << ToString(image.error());
-    EXPECT_EQ(image->width, 200);
-    EXPECT_EQ(image->height, 150);
-    const size_t red = Count(image->rgb, IsContactRed);
-    if (touching) {
-      EXPECT_GT(red, 0u) << out;
-      // The contacts, by object name; both balls move, so the smaller id comes first.
-      EXPECT_NE(out.find("ball-a touches ball-b ("), std::string::npos) << out;
-    } else {
-      EXPECT_EQ(red, 0u) << out;
-      EXPECT_EQ(out.find("touches"), std::string::npos) << out;
-      EXPECT_NE(out.find(" 0 contact pairs"), std::string::npos) << out;
-    }
-    std::filesystem::remove(png);
-  }
-}
-
-TEST_F(SnapshotCommandTest, RefusesAFrameTheSceneDoesNotHave) {
-  const std::filesystem::path scene = WriteTwoBalls(dir_, 1.0);
-  const auto [status, out] = RunFarClient("snapshot " + scene.string() + " --png " +
-                                          (dir_ / "x.png").string() + " --frame 3");
-  EXPECT_EQ(status, 1) << out;
-  EXPECT_NE(out.find("--frame: step 3: the scene has steps 0..0"), std::string::npos) << out;
-  EXPECT_FALSE(std::filesystem::exists(dir_ / "x.png"));
-}
-
-// Snapshot runs its step in-process: a --timeout it took would bound nothing, so it has none.
-TEST_F(SnapshotCommandTest, HasNoTimeoutOption) {
-  const std::filesystem::path scene = WriteTwoBalls(dir_, 1.0);
-  const auto [status, out] = RunFarClient("snapshot " + scene.string() + " --png " +
-                                          (dir_ / "x.png").string() + " --timeout 1s");
-  EXPECT_NE(status, 0) << out;
-  EXPECT_NE(out.find("--timeout"), std::string::npos) << out;
-  EXPECT_FALSE(std::filesystem::exists(dir_ / "x.png"));
 }
 
 }  // namespace

@@ -53,6 +53,15 @@ TEST(CheckStepRequestTest, RejectsEachOutOfRangeField) {
   ExpectInvalid(request, "method: 'fcl' answers contacts only");
 }
 
+// The refusal names every method that does answer a distance, bvh included.
+TEST(CheckStepRequestTest, FclWithADistanceNamesEveryMethodThatAnswersDistances) {
+  StepRequest request;
+  request.method = Method::kFcl;
+  request.distance = 0.1;
+  ExpectInvalid(request,
+                "distance queries need auto, aabb, bvh, cullide, far, far-exact-offset or exact");
+}
+
 TEST(QuantileTest, InterpolatesBetweenRanks) {
   EXPECT_DOUBLE_EQ(Quantile({}, 0.5), 0);
   EXPECT_DOUBLE_EQ(Quantile({4, 1, 3, 2}, 0.5), 2.5);

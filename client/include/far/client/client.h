@@ -121,9 +121,13 @@ class Client {
 
   /// Runs one step of this session's scene and waits for its reply: up to options.timeout
   /// while the daemon is alive, calling `on_progress` (on the receiving thread) as the daemon
-  /// reports the step queued, started and at each stage.
+  /// reports the step queued, started and at each stage. A request with a distance D and the
+  /// default output (Output::kContacts) asks for Output::kDistancePairs: the reply holds every
+  /// triangle pair closer than D, and the contacts as well (far-client --distance does the
+  /// same); every other output is sent as given.
   Result<StepResult> Step(const StepRequest& request, const ProgressCallback& on_progress = {});
-  /// Sends a step and returns at once; the future holds the reply or the error.
+  /// Sends a step and returns at once; the future holds the reply or the error. The request
+  /// is completed as Step says.
   std::future<Result<StepResult>> StepAsync(const StepRequest& request,
                                             ProgressCallback on_progress = {});
 

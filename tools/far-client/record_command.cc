@@ -12,6 +12,7 @@
 #include <set>
 
 #include "cli_common.h"
+#include "commands.h"
 
 #include "far/protocol/recording.h"
 
@@ -103,6 +104,9 @@ int RunRecord(const GlobalFlags& global, const RecordFlags& flags) {
                           "record: no command to run (far-client record FILE play SCENE, or "
                           "far-client record FILE -- SIMULATOR ARGS...)"));
   }
+  // FILE must be writable before the command runs: inside it, the library could only say so
+  // after the command has connected (or failed to).
+  if (auto ok = CheckWritableFile("record", flags.file); !ok) return Fail(ok.error());
   // FILE is replaced; the library never overwrites, so remove it first.
   std::error_code removed;
   std::filesystem::remove(flags.file, removed);
@@ -113,7 +117,8 @@ int RunRecord(const GlobalFlags& global, const RecordFlags& flags) {
   const auto started = std::filesystem::file_time_type::clock::now();
   auto code = Run(argv, ChildEnvironment(flags.file));
   if (!code) return Fail(code.error());
-  if (!std::filesystem::exists(flags.file)) {
+  std::error_code missing;
+  if (!std::filesystem::exists(flags.file, missing)) {
     std::fprintf(stderr,
                  "far-client record: nothing was recorded to %s: '%s' opened no far session\n",
                  flags.file.c_str(), argv[0].c_str());

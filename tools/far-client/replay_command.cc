@@ -2,11 +2,12 @@
 // a new session and checks that every reply matches the recorded one (docs/record-replay.md).
 #include <cstdio>
 
-#include "../client_access.h"
 #include "cli_common.h"
+#include "commands.h"
 #include "replay_compare.h"
 #include "step_flags.h"
 
+#include "far/client/internal/client_access.h"
 #include "far/protocol/recording.h"
 
 namespace far::cli {
@@ -100,9 +101,9 @@ int PrintVerdict(const protocol::RecordingIndex& index, const Tally& tally) {
   return 0;
 }
 
-// The session for the replay: the global daemon flags, --timeout, never recorded itself.
-Result<std::unique_ptr<client::Client>> OpenReplaySession(const GlobalFlags& global,
-                                                          const ReplayFlags& flags) {
+// The options of the replay's session: the global daemon flags, --timeout, never recorded
+// itself.
+Result<client::ClientOptions> ReplayOptions(const GlobalFlags& global, const ReplayFlags& flags) {
   auto options = global.Options();
   if (!options) return options.error();
   auto timeout = ParseDuration("--timeout", flags.timeout);
@@ -110,15 +111,18 @@ Result<std::unique_ptr<client::Client>> OpenReplaySession(const GlobalFlags& glo
   options->timeout = *timeout;
   options->client_name = "far-client replay";
   options->record_path = std::string();
-  return client::Client::Connect(*options);
+  return options;
 }
 
 int RunReplay(const GlobalFlags& global, const ReplayFlags& flags) {
+  // The flags first: a bad one is said before any file is read.
+  auto options = ReplayOptions(global, flags);
+  if (!options) return Error2(options.error());
   auto log = protocol::OpenRecording(flags.file);
   if (!log) return Error2(log.error());
   auto index = protocol::IndexRecording(**log);
   if (!index) return Error2(index.error());
-  auto session = OpenReplaySession(global, flags);
+  auto session = client::Client::Connect(*options);
   if (!session) return Error2(session.error());
   std::string renderer;  // "" when the daemon does not say: PCS differences are then allowed
   if (auto options = global.Options(); options) {
@@ -175,7 +179,7 @@ Command AddReplayCommand(CLI::App& app, const GlobalFlags& global) {
   command.app->add_option("file", flags->file, "a far recording (.farrec)")->required();
   command.app
       ->add_option("--timeout", flags->timeout,
-                   "wait this long for each step's reply (500ms, 60s, 2m)")
+                   "wait this long for each step's reply (500ms, 60s, 2min: a unit is required)")
       ->capture_default_str();
   command.app->add_flag("--strict", flags->strict,
                         "fail on any difference, the PCS and object pairs included, whatever "

@@ -4,9 +4,11 @@
 #include <atomic>
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <thread>
 
 #include "cli_common.h"
+#include "commands.h"
 #include "step_flags.h"
 #include <nlohmann/json.hpp>
 
@@ -22,6 +24,7 @@ using nlohmann::json;
 // Per-client results of a load run.
 struct LoadStats {
   std::vector<double> latency_ms;
+  std::map<std::string, int> steps_by_method;  // the configuration that answered (auto varies)
   int errors = 0;
   std::string first_error;
 };
@@ -107,6 +110,7 @@ void RunOneClient(LoadRun& run, int i, LoadStats& mine) {
       continue;
     }
     backoff = std::chrono::milliseconds(0);
+    ++mine.steps_by_method[result->stats.method];
     mine.latency_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
 }
@@ -116,6 +120,7 @@ struct LoadReport {
   json per_client = json::array();
   json overall;
   std::vector<double> all;  // every step's latency
+  std::map<std::string, int> steps_by_method;
   int errors = 0;
   double fairness = 0;
 };
@@ -127,6 +132,7 @@ LoadReport Summarize(const std::vector<LoadStats>& stats, double elapsed) {
     const LoadStats& s = stats[i];
     report.all.insert(report.all.end(), s.latency_ms.begin(), s.latency_ms.end());
     report.errors += s.errors;
+    for (const auto& [method, steps] : s.steps_by_method) report.steps_by_method[method] += steps;
     min_steps = std::min(min_steps, s.latency_ms.size());
     max_steps = std::max(max_steps, s.latency_ms.size());
     report.per_client.push_back({{"client", i},
@@ -141,12 +147,17 @@ LoadReport Summarize(const std::vector<LoadStats>& stats, double elapsed) {
   const std::vector<double>& all = report.all;
   report.fairness =
       min_steps > 0 ? static_cast<double>(max_steps) / static_cast<double>(min_steps) : 0.0;
-  report.overall = {
-      {"clients", stats.size()},       {"seconds", elapsed},
-      {"steps", all.size()},           {"steps_per_s", all.size() / elapsed},
-      {"p50_ms", Quantile(all, 0.5)},  {"p90_ms", Quantile(all, 0.9)},
-      {"p99_ms", Quantile(all, 0.99)}, {"max_ms", Quantile(all, 1.0)},
-      {"errors", report.errors},       {"fairness_max_over_min_steps", report.fairness}};
+  report.overall = {{"clients", stats.size()},
+                    {"seconds", elapsed},
+                    {"steps", all.size()},
+                    {"steps_per_s", all.size() / elapsed},
+                    {"p50_ms", Quantile(all, 0.5)},
+                    {"p90_ms", Quantile(all, 0.9)},
+                    {"p99_ms", Quantile(all, 0.99)},
+                    {"max_ms", Quantile(all, 1.0)},
+                    {"errors", report.errors},
+                    {"fairness_max_over_min_steps", report.fairness},
+                    {"steps_by_method", report.steps_by_method}};
   return report;
 }
 
@@ -168,6 +179,11 @@ void PrintTable(const LoadReport& report, double elapsed) {
       "errors %d; fairness (max/min steps per client) %.2f\n",
       all.size(), elapsed, all.size() / elapsed, Quantile(all, 0.5), Quantile(all, 0.9),
       Quantile(all, 0.99), Quantile(all, 1.0), report.errors, report.fairness);
+  std::string methods;
+  for (const auto& [method, steps] : report.steps_by_method) {
+    methods += (methods.empty() ? "" : ", ") + method + " " + std::to_string(steps);
+  }
+  std::printf("steps by method: %s\n", methods.empty() ? "none answered" : methods.c_str());
 }
 
 int RunLoad(const client::ClientOptions& base, const LoadFlags& flags, const StepRequest& request) {
@@ -209,7 +225,8 @@ Command AddLoadCommand(CLI::App& app, const GlobalFlags& global) {
                          "Run N concurrent clients, each with its own session and scene; "
                          "prints throughput and latency percentiles per client and overall");
   CLI::App* load = command.app;
-  load->add_option("--clients", flags->clients, "concurrent clients (threads)")
+  load->add_option("--clients", flags->clients, "concurrent clients (threads), 1..1024")
+      ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   CLI::Option* steps =
       load->add_option("--steps", flags->steps,

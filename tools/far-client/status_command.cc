@@ -1,7 +1,10 @@
 // far-client ping and status: is a daemon there, and what is it doing.
+#include <unistd.h>
+
 #include <iostream>
 
 #include "cli_common.h"
+#include "commands.h"
 #include <nlohmann/json.hpp>
 
 namespace far::cli {
@@ -63,8 +66,11 @@ void PrintText(const client::DaemonStatus& status) {
   for (const auto& [kind, count] : status.errors_by_kind) {
     std::printf("errors %-20s %lld\n", kind.c_str(), static_cast<long long>(count));
   }
-  std::printf("sessions: %d open of %d (at most %d per user); yours:\n", status.sessions_open,
-              status.max_sessions, status.max_sessions_per_user);
+  // The daemon lists the asking user's sessions, and every session to root.
+  const char* whose = getuid() == 0 ? "every user's" : "yours";
+  std::printf("sessions: %d open of %d (at most %d per user); %s:%s\n", status.sessions_open,
+              status.max_sessions, status.max_sessions_per_user, whose,
+              status.sessions.empty() ? " none" : "");
   for (const auto& s : status.sessions) {
     std::printf(
         "  session %lld  uid %d  %-16s steps %-8lld objects %-6d triangles %-9lld p50 %.3f ms  "

@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "commands.h"
 #include "object_listing.h"
 #include "progress.h"
 #include "result_json.h"
@@ -80,10 +81,43 @@ void PrintStepLine(int step, double ms, const StepResult& result) {
   for (const auto& [id, tris] : result.pcs_primitives) pcs_triangles += tris.size();
   std::printf(
       "step %3d  round trip %8.2f ms  pipeline %8.2f ms  pcs objects %4zu  pcs triangles %6zu  "
-      "object pairs %4lld  contacts %5zu  distance pairs %5zu\n",
+      "object pairs %4lld  contacts %5zu  distance pairs %5zu  method %s\n",
       step, ms, result.stats.total_ms, result.pcs_objects.size(), pcs_triangles,
       static_cast<long long>(result.stats.object_pairs), result.contacts.size(),
-      result.distance_pairs.size());
+      result.distance_pairs.size(), result.stats.method.c_str());
+}
+
+// What play's text output remembers from step to step, so that the certificate and auto's
+// reason are printed when they change.
+struct PlayTextState {
+  std::string configuration;  // the method that answered the last step
+  bool calibrating = false;   // auto was trying candidates
+};
+
+// One step as text: the frame's removals and additions, the stats line (ending with the method
+// that answered), the contacts by object pair (--contacts), then why auto chose the method and
+// the certificate, when they change (every step with --certificate).
+void PrintStepText(int step, double ms, const StepResult& result,
+                   const std::vector<std::string>& events, const SceneFlags& flags,
+                   const SceneObjects& objects, PlayTextState& shown) {
+  for (const std::string& event : events) std::printf("frame %3d: %s\n", step, event.c_str());
+  PrintStepLine(step, ms, result);
+  if (flags.contacts) {
+    for (const ObjectContact& contact : GroupByObjectPair(result.contacts, objects))
+      std::printf("      %s\n", Describe(contact, objects).c_str());
+  }
+  const StepStats& stats = result.stats;
+  const bool changed = stats.method != shown.configuration;
+  // auto's reason also when its calibration ends: "auto: calibrating: trying bvh" gives way to
+  // "auto: bvh is the fastest measured (...)" with the same method.
+  const bool calibrating = stats.method_reason.starts_with("auto: calibrating");
+  if (!stats.method_reason.empty() &&
+      (flags.certificate || changed || calibrating != shown.calibrating)) {
+    std::printf("%s\n", stats.method_reason.c_str());
+  }
+  // The certificate depends on the configuration and the scene's extent.
+  if (flags.certificate || changed) std::printf("%s", CertificateText(stats.certificate).c_str());
+  shown = {stats.method, calibrating};
 }
 
 int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
@@ -95,7 +129,7 @@ int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
   client::Client& client = *session->second;
   const int total = flags.steps > 0 ? flags.steps : static_cast<int>(scene.frames.size()) + 1;
   SceneObjects objects(scene.objects);
-  std::string last_configuration;
+  PlayTextState shown;
   for (int step = 0; step < total; ++step) {
     // Step 0 is the scene as loaded; frame k is applied before step k + 1.
     const FrameUpdate* frame = step > 0 && static_cast<size_t>(step - 1) < scene.frames.size()
@@ -115,17 +149,7 @@ int RunPlay(const GlobalFlags& global, const SceneFlags& flags) {
     if (flags.as_json) {
       PrintStepJson(step, ms, *result, frame, flags.contacts ? &objects : nullptr);
     } else {
-      for (const std::string& event : events) std::printf("frame %3d: %s\n", step, event.c_str());
-      PrintStepLine(step, ms, *result);
-      if (flags.contacts) {
-        for (const ObjectContact& contact : GroupByObjectPair(result->contacts, objects))
-          std::printf("      %s\n", Describe(contact, objects).c_str());
-      }
-      // The certificate depends on the configuration and the scene's extent: shown when the
-      // configuration changes (under auto too), every step on request.
-      if (flags.certificate || result->stats.method != last_configuration)
-        std::printf("%s", CertificateText(result->stats.certificate).c_str());
-      last_configuration = result->stats.method;
+      PrintStepText(step, ms, *result, events, flags, objects, shown);
     }
   }
   return 0;

@@ -2,6 +2,7 @@
 #include <filesystem>
 
 #include "cli_common.h"
+#include "commands.h"
 
 #include "far/io/mesh_io.h"
 #include "far/io/scene_io.h"
@@ -79,15 +80,29 @@ far::Result<far::Mesh> ReadBunny(const std::string& mesh) {
                         "no bunny mesh: tried " + places + "; pass one with --mesh PATH");
 }
 
+// Makes the scene file's folder and checks that the file can be written, before the scene is
+// generated (seconds for the large kinds).
+Result<void> PrepareOutput(const std::string& out) {
+  std::error_code ec;
+  const std::filesystem::path folder = std::filesystem::absolute(out, ec).parent_path();
+  if (!ec) std::filesystem::create_directories(folder, ec);
+  if (ec) {
+    return MakeError(ErrorCode::kIoError,
+                     out + ": cannot make its folder " + folder.string() + ": " + ec.message());
+  }
+  return CheckWritableFile("", out);
+}
+
 int MakeScene(const MakeSceneFlags& flags) {
   const auto given = [&](const char* option) { return flags.command->count(option) > 0; };
   const bool leaf_kind = flags.kind == "demo" || flags.kind == "leaves";
   for (const char* option : {"--leaves", "--cells"}) {
     if (!leaf_kind && given(option)) {
       std::fprintf(stderr, "far-client: %s applies to --kind demo or leaves only\n", option);
-      return 1;
+      return kExitFailure;
     }
   }
+  if (auto ok = PrepareOutput(flags.out); !ok) return Fail(ok.error());
   const auto t0 = Clock::now();
   far::Scene scene;
   if (flags.kind == "demo") {
@@ -109,7 +124,6 @@ int MakeScene(const MakeSceneFlags& flags) {
   const double generated_s = std::chrono::duration<double>(Clock::now() - t0).count();
   int64_t triangles = 0;
   for (const far::SceneObject& object : scene.objects) triangles += object.mesh.num_triangles();
-  std::filesystem::create_directories(std::filesystem::absolute(flags.out).parent_path());
   if (auto ok = far::WriteScene(scene, flags.out); !ok) return Fail(ok.error());
   std::printf(
       "wrote %s (%s): %zu objects and %lld triangles at frame 0, %zu frames (%zu "

@@ -1,7 +1,9 @@
-// far-client snapshot: a picture of one step of a scene, its PCS and contact triangles
-// coloured, written as PNG. The step runs in this process through far::Pipeline on a GL context
-// of its own (README.md, "Pictures", says why not through the daemon), and the picture is drawn
-// with that same context (far::RenderSnapshot).
+// far-snapshot: a picture of one step of a scene, its PCS and contact triangles coloured,
+// written as PNG. The step runs in this process through far::Pipeline on a GL context of its
+// own (README.md, "Pictures", says why not through the daemon), and the picture is drawn with
+// that same context (far::RenderSnapshot). Its own program, so that far-client links no GL.
+// Usage: far-snapshot --help.
+#include <cstdio>
 #include <map>
 #include <memory>
 
@@ -91,6 +93,8 @@ int RunSnapshot(const SnapshotFlags& flags, GlPlatform platform) {
   if (!objects) {
     return Fail(MakeError(objects.error().code, "--frame: " + objects.error().message));
   }
+  // A PNG that cannot be written is said before the step and the drawing, not after.
+  if (auto ok = CheckWritableFile("--png", flags.png); !ok) return Fail(ok.error());
   auto context = GlContext::Create(platform);
   if (!context) return Fail(context.error());
   auto result = RunStep(*objects, *request);
@@ -112,43 +116,46 @@ int RunSnapshot(const SnapshotFlags& flags, GlPlatform platform) {
   return 0;
 }
 
-}  // namespace
-
-Command AddSnapshotCommand(CLI::App& app) {
-  auto flags = std::make_shared<SnapshotFlags>();
-  Command command;
-  command.app = app.add_subcommand(
-      "snapshot",
-      "Draw one step of a scene as a PNG picture: objects grey, PCS triangles yellow, contact\n"
-      "triangles red. Runs the step in this process (far::Pipeline on its own headless GL\n"
-      "context, as the daemon would), no daemon needed; prints the contacts by object pair");
-  CLI::App* snapshot = command.app;
-  snapshot->add_option("scene", flags->scene, "far-scene/1 JSON file")
+// The flags of far-snapshot, added to `app`.
+void AddFlags(CLI::App& app, SnapshotFlags& flags) {
+  app.add_option("scene", flags.scene, "far-scene/1 JSON file")
       ->required()
       ->check(CLI::ExistingFile);
-  snapshot->add_option("--png", flags->png, "PNG file to write")->required();
-  snapshot
-      ->add_option("--frame", flags->frame,
-                   "the scene at this step, as play numbers them (0: as loaded; k: after "
-                   "frames[0..k-1])")
+  app.add_option("--png", flags.png, "PNG file to write")->required();
+  app.add_option("--frame", flags.frame,
+                 "the scene at this step, as far-client play numbers them (0: as loaded; k: "
+                 "after frames[0..k-1])")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  snapshot->add_option("--width", flags->width, "picture width in pixels (16..8192)")
+  app.add_option("--width", flags.width, "picture width in pixels (16..8192)")
       ->capture_default_str();
-  snapshot->add_option("--height", flags->height, "picture height in pixels (16..8192)")
+  app.add_option("--height", flags.height, "picture height in pixels (16..8192)")
       ->capture_default_str();
-  snapshot
-      ->add_option("--gl-platform", flags->gl_platform, "EGL platform: auto, device or surfaceless")
-      ->check(CLI::IsMember({"auto", "device", "surfaceless"}))
+  app.add_option("--gl-platform", flags.gl_platform, "EGL platform: " + GlPlatformNames())
+      ->check([](const std::string& name) {
+        return ParseGlPlatform(name) ? std::string()
+                                     : "unknown platform '" + name + "' (" + GlPlatformNames() + ")";
+      })
       ->capture_default_str();
-  flags->step.Add(snapshot);
-  command.run = [flags] {
-    const GlPlatform platform = flags->gl_platform == "device"        ? GlPlatform::kDevice
-                                : flags->gl_platform == "surfaceless" ? GlPlatform::kSurfaceless
-                                                                      : GlPlatform::kAuto;
-    return RunSnapshot(*flags, platform);
-  };
-  return command;
+  flags.step.Add(&app);
 }
 
+}  // namespace
 }  // namespace far::cli
+
+int main(int argc, char** argv) {
+  far::cli::SetProgramName("far-snapshot");
+  return far::cli::RunGuarded([&] {
+    CLI::App app{
+        "far-snapshot: draw one step of a scene as a PNG picture: objects grey, PCS triangles\n"
+        "yellow, contact triangles red. Runs the step in this process (far::Pipeline on its own\n"
+        "headless GL context, as the daemon would), no daemon needed; prints the contacts by\n"
+        "object pair",
+        "far-snapshot"};
+    far::cli::SnapshotFlags flags;
+    far::cli::AddFlags(app, flags);
+    if (auto done = far::cli::ParseCommandLine(app, std::vector<std::string>(argv, argv + argc)))
+      return *done;
+    return far::cli::RunSnapshot(flags, *far::ParseGlPlatform(flags.gl_platform));
+  });
+}

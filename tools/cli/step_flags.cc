@@ -10,7 +10,7 @@ void StepFlags::AddTimeout(CLI::App* command) {
   command
       ->add_option("--timeout", timeout,
                    "wait this long for each step's reply while the daemon works on it (500ms, "
-                   "60s, 2m); a daemon that stops ends the wait at once")
+                   "60s, 2min: a unit is required); a daemon that stops ends the wait at once")
       ->capture_default_str();
 }
 

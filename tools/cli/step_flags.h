@@ -1,5 +1,6 @@
 #pragma once
-// The step options shared by collide, play and load (--method, --resolution, --distance, ...).
+// The step options shared by far-client collide, play and load and by far-snapshot (--method,
+// --resolution, --distance, ...).
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -19,7 +20,7 @@ struct StepFlags {
 
   /// Adds the options of the request to `command`.
   void Add(CLI::App* command);
-  /// Adds --timeout, for the commands whose steps run in a daemon (not snapshot's).
+  /// Adds --timeout, for the commands whose steps run in a daemon (not far-snapshot's).
   void AddTimeout(CLI::App* command);
   /// The request the options describe, or an error naming the bad option.
   Result<StepRequest> Request() const;
