@@ -24,7 +24,8 @@ install(FILES ${PROJECT_BINARY_DIR}/systemd/far-daemon.service
         DESTINATION /lib/systemd/system COMPONENT service EXCLUDE_FROM_ALL)
 install(FILES ${PROJECT_SOURCE_DIR}/deploy/debian/daemon.json
         DESTINATION /etc/far COMPONENT service EXCLUDE_FROM_ALL)
-install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION share/doc/far)
+install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/deploy/debian/copyright
+        DESTINATION share/doc/far)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION share/doc/far FILES_MATCHING PATTERN "*.md")
 
 set(CPACK_GENERATOR DEB)

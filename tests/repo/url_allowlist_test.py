@@ -10,8 +10,9 @@ directory but .git/ and build*/) and checks each URL with a scheme (`name://...`
 
 - LCM's transport URLs (udpm, mpudpm, memq, tcpq) and file:// name no host to fetch from;
 - http(s) links are allowed only to documentation: papers (ALLOWED_HOSTS' "papers"), source
-  repositories and their project pages ("source"), and the original site of a data set the
-  repository ships ("data"); and never to a download (a path ending in an archive or package
+  repositories and their project pages ("source"), the original site of a data set the
+  repository ships ("data") and the specification of a file format the repository follows
+  ("specifications"); and never to a download (a path ending in an archive or package
   file, a GitHub archive/release/raw path), whatever the host;
 - any other scheme (ftp, git, ssh, rsync, ...) fails: documentation links are web pages.
 
@@ -55,6 +56,10 @@ ALLOWED_HOSTS = {
     },
     "data": {
         "graphics.stanford.edu": ["/data/"],  # the Stanford 3D Scanning Repository (bunny)
+    },
+    "specifications": {
+        # The machine-readable copyright format, which deploy/debian/copyright's Format names.
+        "www.debian.org": ["/doc/packaging-manuals/copyright-format/"],
     },
 }
 
@@ -105,7 +110,7 @@ def judge(scheme, rest):
             if any(path.startswith(prefix) for prefix in hosts[host]):
                 return None
             return f"host {host} is allowed ({category}) only under {hosts[host]}"
-    return f"host {host} is not a paper, source repository or data set origin"
+    return f"host {host} is not a paper, source repository, data set origin or specification"
 
 
 def main():
