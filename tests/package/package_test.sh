@@ -43,8 +43,10 @@ deb=$work/cpack/far_${version}_$(dpkg --print-architecture).deb
 [ "$(dpkg-deb -f "$deb" Package)" = far ] || fail "package name is not far"
 [ "$(dpkg-deb -f "$deb" Version)" = "$version" ] || fail "version is not $version"
 depends=$(dpkg-deb -f "$deb" Depends)
-for needed in adduser libegl1 libc6 libstdc++6 libepoxy0 libsodium; do
-  grep -q "$needed" <<<"$depends" || fail "Depends lacks $needed (shlibdeps?): $depends"
+# shlibdeps' libraries, and what libepoxy and libglvnd load at run time (cmake/Packaging.cmake).
+for needed in adduser libegl1 libc6 libstdc++6 libepoxy0 libsodium "libopengl0 | libgl1" \
+  libegl-mesa0 libgl1-mesa-dri; do
+  grep -qF "$needed" <<<"$depends" || fail "Depends lacks $needed: $depends"
 done
 dpkg-deb -e "$deb" "$work/control"
 [ "$(cat "$work/control/conffiles")" = /etc/far/daemon.json ] || fail "conffiles is not /etc/far/daemon.json"
