@@ -61,7 +61,7 @@ set(CPACK_DEBIAN_PACKAGE_SECTION science)
 #    for AMD, Intel and NVIDIA's open driver: libgl1-mesa-dri).
 # Depends, not Recommends: without Mesa's driver the daemon cannot make a context at all on
 # a machine without a GPU (nor on an AMD or Intel one), and apt --no-install-recommends is the
-# norm in containers. The cost: Mesa's drivers and LLVM (about 120 MB installed) also on a
+# norm in containers. The cost: Mesa's drivers with LLVM (about 200 MB installed) also on a
 # host with NVIDIA's driver, which brings its own EGL vendor. adduser runs in postinst.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS
