@@ -25,7 +25,7 @@ packages=(
   # private network namespaces for the LCM (udpm) tests
   iproute2 util-linux
   # the .deb (cpack): dpkg-shlibdeps for its dependencies, file for CPack to find the binaries;
-  # debootstrap for the minimal Debian 12 root the package is installed on (label package-root)
+  # debootstrap for the minimal Debian 12 root the package is installed on (tests/package/)
   dpkg-dev file debootstrap
 )
 

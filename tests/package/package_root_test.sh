@@ -45,13 +45,15 @@ fi
 work=$(mktemp -d "${TMPDIR:-/tmp}/far-package-root.XXXXXX")
 root=$work/root
 unmount_all() {
-  # Deepest first; what is left would make rm -rf reach outside the scratch directory.
-  findmnt -rn -o TARGET | grep -F "$root/" | sort -r | while read -r target; do
-    umount -l "$target" || true
+  # What this script mounts, and what debootstrap mounts if it was stopped half way.
+  local target
+  for target in "$root/dev/shm" "$root/dev/pts" "$root/proc" "$root/sys"; do
+    if mountpoint -q "$target" 2>/dev/null; then umount -l "$target" || true; fi
   done
 }
 cleanup() {
   unmount_all
+  # Never remove through a mount left in place (--one-file-system as well).
   if findmnt -rn -o TARGET | grep -qF "$root/"; then
     echo "package root test: left $work in place: something is still mounted under it" >&2
   else
@@ -59,6 +61,7 @@ cleanup() {
   fi
 }
 trap cleanup EXIT
+trap 'exit 143' TERM INT
 now() { date +%s; }
 started=$(now)
 
