@@ -18,6 +18,7 @@
 # Nothing is cached. Skips (exit 77) only when it cannot run: not real root, no debootstrap, or
 # no bookworm mirror configured or reachable. Prints how long each step took.
 # Usage: package_root_test.sh <build dir> <source dir> <project version>
+# shellcheck disable=SC2016  # dpkg-query -f '${Field}' formats are literal on purpose
 set -euo pipefail
 build_dir=$1
 source_dir=$2
