@@ -24,7 +24,8 @@ install(FILES ${PROJECT_BINARY_DIR}/systemd/far-daemon.service
         DESTINATION /lib/systemd/system COMPONENT service EXCLUDE_FROM_ALL)
 install(FILES ${PROJECT_SOURCE_DIR}/deploy/debian/daemon.json
         DESTINATION /etc/far COMPONENT service EXCLUDE_FROM_ALL)
-install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION share/doc/far)
+install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/deploy/debian/copyright
+        DESTINATION share/doc/far)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION share/doc/far FILES_MATCHING PATTERN "*.md")
 
 set(CPACK_GENERATOR DEB)
@@ -49,12 +50,22 @@ set(CPACK_INSTALL_CMAKE_PROJECTS
 set(CPACK_STRIP_FILES ON)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
-# Library dependencies come from dpkg-shlibdeps (dpkg-dev); EGL is opened by libepoxy at run
-# time, so shlibdeps cannot see it, and adduser runs in postinst. Mesa's EGL driver and
-# llvmpipe are what `auto` falls back to on a machine without a GPU.
+# Linked libraries come from dpkg-shlibdeps (dpkg-dev). What is loaded at run time, which
+# shlibdeps cannot see, is declared here (measured with LD_DEBUG=libs on a collide; the test
+# installs the package on a minimal Debian 12 with these alone, tests/package/):
+#  - libepoxy dlopens libEGL.so.1 (libegl1) and, for GL's core entry points, libGL.so.1 or
+#    else libOpenGL.so.0 (libgl1 | libopengl0; without either it aborts: "Couldn't open
+#    libGL.so.1 or libOpenGL.so.0"). libopengl0 first: it brings no GLX or X11;
+#  - libglvnd's libEGL loads the vendor Mesa (libEGL_mesa.so.0: libegl-mesa0), which loads its
+#    DRI driver (swrast_dri.so, llvmpipe, on a machine without a GPU; radeonsi, iris, nouveau
+#    for AMD, Intel and NVIDIA's open driver: libgl1-mesa-dri).
+# Depends, not Recommends: without Mesa's driver the daemon cannot make a context at all on
+# a machine without a GPU (nor on an AMD or Intel one), and apt --no-install-recommends is the
+# norm in containers. The cost: Mesa's drivers with LLVM (about 200 MB installed) also on a
+# host with NVIDIA's driver, which brings its own EGL vendor. adduser runs in postinst.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser, libegl1")
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libegl-mesa0, libgl1-mesa-dri")
+set(CPACK_DEBIAN_PACKAGE_DEPENDS
+    "adduser, libegl1, libopengl0 | libgl1, libegl-mesa0, libgl1-mesa-dri")
 # What a find_package(far) user project needs (cmake/farConfig.cmake.in): the client component,
 # then the core component's libraries.
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS

@@ -24,8 +24,9 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
   # private network namespaces for the LCM (udpm) tests
   iproute2 util-linux
-  # the .deb (cpack): dpkg-shlibdeps for its dependencies, file for CPack to find the binaries
-  dpkg-dev file
+  # the .deb (cpack): dpkg-shlibdeps for its dependencies, file for CPack to find the binaries;
+  # debootstrap for the minimal Debian 12 root the package is installed on (tests/package/)
+  dpkg-dev file debootstrap
 )
 
 missing=()

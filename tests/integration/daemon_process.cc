@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -247,9 +248,44 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_in,
   return result;
 }
 
+namespace {
+
+// A copy of `executable` that any user may run, in a fresh directory of `dir` (mode 0755), or
+// an error naming the folder on the way that others cannot enter.
+Result<std::string> CopyForAnyUser(const std::string& executable, const TempDir& dir) {
+  for (std::filesystem::path p = dir.path().parent_path();; p = p.parent_path()) {
+    struct stat st {};
+    if (stat(p.c_str(), &st) != 0 || (st.st_mode & S_IXOTH) == 0) {
+      char mode[8];
+      std::snprintf(mode, sizeof(mode), "%04o", static_cast<unsigned>(st.st_mode & 07777));
+      return MakeError(ErrorCode::kUnavailable, "another user cannot enter " + p.string() +
+                                                    " (mode " + mode +
+                                                    "); set TMPDIR to a folder others may enter");
+    }
+    if (p == p.parent_path()) break;
+  }
+  std::error_code error;
+  const auto copy = dir.path() / std::filesystem::path(executable).filename();
+  if (chmod(dir.path().c_str(), 0755) != 0 ||
+      !std::filesystem::copy_file(executable, copy, error) || chmod(copy.c_str(), 0755) != 0) {
+    return MakeError(ErrorCode::kUnavailable, "copying " + executable + " to " + copy.string() +
+                                                  " failed: " + error.message());
+  }
+  return copy.string();
+}
+
+}  // namespace
+
 Result<std::unique_ptr<ChildProcess>> ChildProcess::Spawn(const std::vector<std::string>& argv_in,
                                                           std::optional<uid_t> user) {
   std::vector<std::string> args = argv_in;
+  std::unique_ptr<TempDir> executable_dir;
+  if (user) {
+    executable_dir = std::make_unique<TempDir>();
+    auto copy = CopyForAnyUser(args.at(0), *executable_dir);
+    if (!copy) return copy.error();
+    args[0] = *copy;
+  }
   std::vector<char*> argv = CArgs(args);
   int out[2];
   if (pipe2(out, O_CLOEXEC) != 0) return MakeError(ErrorCode::kUnavailable, "pipe failed");
@@ -262,6 +298,8 @@ Result<std::unique_ptr<ChildProcess>> ChildProcess::Spawn(const std::vector<std:
                  setresuid(*user, *user, *user) != 0)) {
       _exit(kCannotSwitchUser);
     }
+    // The test's working directory may be one the other user cannot enter.
+    if (user && chdir("/") != 0) _exit(kCannotSwitchUser);
     ExecChild(argv);
   }
   close(out[1]);
@@ -272,6 +310,7 @@ Result<std::unique_ptr<ChildProcess>> ChildProcess::Spawn(const std::vector<std:
   std::unique_ptr<ChildProcess> child(new ChildProcess());
   child->pid_ = pid;
   child->out_ = out[0];
+  child->executable_dir_ = std::move(executable_dir);
   return child;
 }
 

@@ -99,7 +99,10 @@ class ChildProcess {
  public:
   /// Forks and execs `argv` (argv[0] a path); with `user`, as that uid (and gid, with no
   /// supplementary groups: only root may), the child exiting with kCannotSwitchUser when it
-  /// cannot switch. Errors: kUnavailable.
+  /// cannot switch. The other user may not reach argv[0] (a clone under a 0700 /root), so it
+  /// runs a copy of it in a directory of its own under the temp directory (mode 0755, removed
+  /// with *this*), from `/`. Errors: kUnavailable (also when that user cannot enter the temp
+  /// directory: the message names the folder in the way).
   static Result<std::unique_ptr<ChildProcess>> Spawn(const std::vector<std::string>& argv,
                                                      std::optional<uid_t> user = std::nullopt);
   static constexpr int kCannotSwitchUser = 77;
@@ -118,6 +121,7 @@ class ChildProcess {
   int out_ = -1;
   std::string buffer_;
   std::optional<int> exit_code_;
+  std::unique_ptr<TempDir> executable_dir_;  // the copy another user runs; outlives the child
 };
 
 /// The path of this test binary (/proc/self/exe).

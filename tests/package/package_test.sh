@@ -43,8 +43,10 @@ deb=$work/cpack/far_${version}_$(dpkg --print-architecture).deb
 [ "$(dpkg-deb -f "$deb" Package)" = far ] || fail "package name is not far"
 [ "$(dpkg-deb -f "$deb" Version)" = "$version" ] || fail "version is not $version"
 depends=$(dpkg-deb -f "$deb" Depends)
-for needed in adduser libegl1 libc6 libstdc++6 libepoxy0 libsodium; do
-  grep -q "$needed" <<<"$depends" || fail "Depends lacks $needed (shlibdeps?): $depends"
+# shlibdeps' libraries, and what libepoxy and libglvnd load at run time (cmake/Packaging.cmake).
+for needed in adduser libegl1 libc6 libstdc++6 libepoxy0 libsodium "libopengl0 | libgl1" \
+  libegl-mesa0 libgl1-mesa-dri; do
+  grep -qF "$needed" <<<"$depends" || fail "Depends lacks $needed: $depends"
 done
 dpkg-deb -e "$deb" "$work/control"
 [ "$(cat "$work/control/conffiles")" = /etc/far/daemon.json ] || fail "conffiles is not /etc/far/daemon.json"
@@ -62,11 +64,30 @@ for file in usr/bin/far-daemon usr/bin/far-client usr/lib/libfar_client.a usr/li
   usr/include/far/model/version.h usr/lib/cmake/far/farConfig.cmake \
   usr/lib/cmake/far/farConfigVersion.cmake usr/lib/cmake/far/farClientTargets.cmake \
   lib/systemd/system/far-daemon.service lib/systemd/system/far-daemon@.service etc/far/daemon.json \
-  usr/share/far/data/bunny.obj usr/share/doc/far/daemon.md; do
+  usr/share/far/data/bunny.obj usr/share/doc/far/daemon.md usr/share/doc/far/copyright \
+  usr/share/doc/far/lcm/NOTICE usr/share/doc/far/lcm/COPYING \
+  usr/share/doc/far/lcm/lcm-1.3.1-receive-bounds.patch \
+  usr/share/doc/far/lcm/lcm_1.3.1+repack1.orig.tar.gz; do
   [ -f "$root/$file" ] || fail "the package has no /$file"
 done
 cmp -s "$root/usr/share/far/data/bunny.obj" "$source_dir/bench/data/bunny.obj" ||
   fail "the packaged bunny differs from bench/data/bunny.obj"
+# Licenses: far's copyright in Debian's machine-readable format, and for the statically linked
+# LCM (LGPL) its license, its source as used (the pinned tarball and far's patch) and the notice
+# naming the revision of far the binaries came from.
+copyright=$root/usr/share/doc/far/copyright
+head -1 "$copyright" | grep -q '^Format: .*copyright-format/1.0/$' || fail "copyright: no DEP-5 Format line"
+for field in "^Files: \*$" "^License: BSD-3-Clause$" "^License: LGPL-2.1\+$" "^License: MPL-2.0$"; do
+  grep -qE "$field" "$copyright" || fail "copyright lacks /$field/"
+done
+cmp -s "$root/usr/share/doc/far/lcm/lcm-1.3.1-receive-bounds.patch" \
+  "$source_dir/protocol/third_party/lcm/lcm-1.3.1-receive-bounds.patch" ||
+  fail "the packaged LCM patch differs from protocol/third_party/lcm/"
+echo "abf293e54aff3d073cb4f9d4d5a261eab0e5ffea02e13fd601715c11612b85e8  $root/usr/share/doc/far/lcm/lcm_1.3.1+repack1.orig.tar.gz" |
+  sha256sum -c --status || fail "the packaged LCM tarball is not Debian's lcm_1.3.1+repack1.orig.tar.gz"
+grep -q "GNU LESSER GENERAL PUBLIC LICENSE" "$root/usr/share/doc/far/lcm/COPYING" || fail "lcm/COPYING is not the LGPL"
+grep -qE "^  (git commit [0-9a-f]{40}( with local changes)?|not a git checkout: .*)$" "$root/usr/share/doc/far/lcm/NOTICE" ||
+  fail "lcm/NOTICE names no revision of far"
 if grep -rlF -e "$build_dir" -e "$source_dir" "$root/usr/lib/cmake/far"; then
   fail "the CMake package names paths of the build machine (above)"
 fi
