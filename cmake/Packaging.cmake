@@ -33,13 +33,14 @@ set(CPACK_PACKAGE_NAME far)
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
 set(CPACK_PACKAGE_CONTACT "far maintainers <maintainers@users.noreply.h-seed-ea2a4ecd.example>")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY
-    "GPU collision culling (FAR) as a service: far-daemon, far-client, far::client")
+    "GPU collision culling (FAR) as a service: far-daemon, far-client, far-snapshot, far::client")
 set(CPACK_PACKAGE_DESCRIPTION
     "far-daemon serves simulators the potentially colliding set, exact contacts and distance \
 pairs of their scenes, computed with Fast and Reliable Collision Culling on a headless OpenGL \
 context (a GPU, else Mesa's llvmpipe). The package holds the daemon and its systemd units \
-(far-daemon.service, far-daemon@.service), the far-client command line, and the static client \
-library with its headers and CMake package (find_package(far COMPONENTS client)).")
+(far-daemon.service, far-daemon@.service), the far-client command line (no GL), far-snapshot \
+(one step drawn to a PNG, in process), and the static client library with its headers and CMake \
+package (find_package(far COMPONENTS client)).")
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 # The prefix when CPACK_SET_DESTDIR is on (else CMAKE_INSTALL_PREFIX, /usr/local).
 set(CPACK_INSTALL_PREFIX /usr)

@@ -11,7 +11,8 @@
 #      otherwise);
 #   5. the packaged far-daemon, started with the packaged config, serves the packaged
 #      far-client (ping, make-scene, collide, play) and a simulator built against the packaged
-#      CMake package (find_package(far), far::client).
+#      CMake package (find_package(far), far::client); far-snapshot draws a PNG, and the
+#      packaged far-client loads no GL, EGL or FCL.
 # Steps 1-2 and 5 never skip. Run it inside deploy/netns-run.sh: LCM multicast on a private
 # loopback. Usage: package_test.sh <build dir> <source dir> <project version>
 set -euo pipefail
@@ -59,7 +60,8 @@ done
 step "dpkg-deb -x"
 root=$work/root
 dpkg-deb -x "$deb" "$root"
-for file in usr/bin/far-daemon usr/bin/far-client usr/lib/libfar_client.a usr/lib/libfar_protocol.a \
+for file in usr/bin/far-daemon usr/bin/far-client usr/bin/far-snapshot usr/lib/libfar_client.a \
+  usr/lib/libfar_protocol.a \
   usr/lib/libfar_lcm.a usr/lib/libfar_model.a usr/include/far/client/client.h \
   usr/include/far/model/version.h usr/lib/cmake/far/farConfig.cmake \
   usr/lib/cmake/far/farConfigVersion.cmake usr/lib/cmake/far/farClientTargets.cmake \
@@ -147,6 +149,18 @@ check '^\{"contacts":\[\],.*"object_pairs":\[\[' \
 played=$(client play "$work/scene/scene.json" --resolution 128 --contacts)
 check "frame   1: vase breaks into 4 fragments" "$played"
 check "vase-fragment-[0-9] touches tree \([0-9]+ triangle pairs\)" "$played"
+
+step "packaged far-snapshot, and a far-client without GL"
+snapshot_out=$("$root/usr/bin/far-snapshot" "$work/scene/scene.json" --frame 1 --resolution 128 \
+  --width 64 --height 48 --png "$work/snap.png") || fail "far-snapshot failed: $snapshot_out"
+check "^wrote $work/snap.png \(64x48\)" "$snapshot_out"
+[ "$(head -c 8 "$work/snap.png" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] ||
+  fail "far-snapshot wrote no PNG"
+if ldd "$root/usr/bin/far-client" | grep -E '(libEGL|libGL|libOpenGL|libGLdispatch|libepoxy|libfcl)'; then
+  fail "the packaged far-client loads GL, EGL or FCL (above)"
+fi
+moved=$(client snapshot x.json --png x.png 2>&1) && fail "far-client snapshot succeeded"
+check "far-snapshot" "$moved"
 
 step "a simulator built against the packaged CMake package"
 cmake -S "$source_dir/client/examples/simulator" -B "$work/simulator" -G Ninja \
