@@ -1,5 +1,5 @@
 // RenderSnapshot: a shaded picture of a scene with its PCS and contact triangles coloured,
-// drawn into a multisampled framebuffer of its own and read back. Used by far-client snapshot.
+// drawn into a multisampled framebuffer of its own and read back. Used by far-snapshot.
 
 #include "far/gpu/snapshot_renderer.h"
 

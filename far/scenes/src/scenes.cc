@@ -177,7 +177,7 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
   Scene scene;
   scene.objects = LeavesScene(seed, num_leaves, leaf_cells, 0.0);
   // The same tree cut into short pieces along its tubes, so that the triangles a contact marks
-  // (far-client snapshot, play --contacts) are near the contact, not a whole trunk's length.
+  // (far-snapshot, far-client play --contacts) are near the contact, not a whole trunk's length.
   scene.objects[0].mesh = TreeMesh(0.3);
   const uint32_t vase_id = static_cast<uint32_t>(num_leaves + 1);
   SceneObject vase;

@@ -1,6 +1,6 @@
 #pragma once
 
-// A picture of a scene for people (far-client snapshot): every object drawn with Lambert
+// A picture of a scene for people (far-snapshot): every object drawn with Lambert
 // shading from a camera fitted to the scene's bounds, each triangle coloured by what a step
 // found for it. GL stays private, as everywhere in far::gpu.
 

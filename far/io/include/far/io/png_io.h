@@ -1,6 +1,6 @@
 #pragma once
 
-// PNG files of 8-bit RGB pictures (far-client snapshot), through libpng.
+// PNG files of 8-bit RGB pictures (far-snapshot), through libpng.
 
 #include <cstdint>
 #include <filesystem>
