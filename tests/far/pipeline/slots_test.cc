@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "test_scenes.h"
+#include "cpu_pipeline.h"
 #include <gtest/gtest.h>
 
 #include "far/pipeline/pipeline.h"
@@ -14,14 +15,7 @@
 namespace far {
 namespace {
 
-std::unique_ptr<Pipeline> CpuPipeline() {
-  PipelineOptions options;
-  options.use_gl = false;
-  options.num_threads = 2;
-  auto pipeline = Pipeline::Create(options);
-  EXPECT_TRUE(pipeline.ok());
-  return pipeline.ok() ? std::move(*pipeline) : nullptr;
-}
+using testing::CpuPipeline;
 
 void Add(Pipeline& pipeline, const SceneObject& object) {
   ASSERT_TRUE(pipeline.AddObject(object.id, object.mesh, object.motion, object.X_WO).ok());

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "cpu_pipeline.h"
 #include <gtest/gtest.h>
 
 #include "far/base/limits.h"
@@ -14,14 +15,7 @@
 namespace far {
 namespace {
 
-std::unique_ptr<Pipeline> CpuPipeline() {
-  PipelineOptions options;
-  options.use_gl = false;
-  options.num_threads = 2;
-  auto pipeline = Pipeline::Create(options);
-  EXPECT_TRUE(pipeline.ok());
-  return pipeline.ok() ? std::move(*pipeline) : nullptr;
-}
+using testing::CpuPipeline;
 
 void ExpectRefused(const Result<void>& result, const std::string& field) {
   ASSERT_FALSE(result.ok());
