@@ -15,8 +15,9 @@
 #      /dev/dri, so this is a machine without a GPU.
 # Everything runs in a private mount namespace: /proc and /dev/shm mounted in the root vanish
 # with it whatever happens; the trap unmounts them too and removes the scratch directory.
-# Nothing is cached. Skips (exit 77) only when it cannot run: not real root, no debootstrap, or
-# no bookworm mirror configured or reachable. Prints how long each step took.
+# Nothing is cached. Skips (exit 77) only when it cannot run: not real root, no debootstrap, no
+# private mount namespace (inside a chroot), or no bookworm mirror configured or reachable.
+# Prints how long each step took.
 # Usage: package_root_test.sh <build dir> <source dir> <project version>
 # shellcheck disable=SC2016  # dpkg-query -f '${Field}' formats are literal on purpose
 set -euo pipefail
@@ -38,8 +39,11 @@ if [ "$(id -u)" -ne 0 ] || ! awk 'NR == 1 && $1 == 0 && $2 == 0 { ok = 1 } END {
   skip "needs real root (debootstrap, chroot, mounts); run ctest as root"
 fi
 command -v debootstrap >/dev/null || skip "debootstrap is not installed (apt-get install debootstrap; deploy/install-deps.sh lists it)"
-# A private mount namespace for everything below (see the header).
+# A private mount namespace for everything below (see the header). Inside a chroot whose root is
+# no mount point the kernel refuses to make / private, and mounts made here would reach the host.
 if [ "${FAR_PACKAGE_ROOT_NS:-}" != 1 ]; then
+  unshare -m --propagation private true 2>/dev/null ||
+    skip "cannot make a private mount namespace: $(unshare -m --propagation private true 2>&1) (a chroot whose / is no mount point?)"
   FAR_PACKAGE_ROOT_NS=1 exec unshare -m --propagation private bash "$0" "$@"
 fi
 
