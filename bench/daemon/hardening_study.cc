@@ -463,8 +463,8 @@ void StudyTriangleShares(const Settings& settings, const std::string& self) {
 
 // (f) Four uids take 16 sessions each; root then opens 10.
 void StudySlotShares(const Settings& settings, const std::string& self) {
-  // Rings of 64 KiB: 64 sessions take about 1 GiB of shared memory instead of 5 GiB.
-  auto daemon = StartDaemon(settings, {"--ring-bytes", "65536"});
+  // Update rings of 256 KiB: 64 sessions take about 1 GiB of shared memory instead of 5 GiB.
+  auto daemon = StartDaemon(settings, {"--ring-bytes", "262144"});
   std::vector<std::unique_ptr<HeldSessions>> hogs;
   for (uid_t uid = 1001; uid <= 1004; ++uid)
     hogs.push_back(HeldSessions::Start(self, daemon->socket_path(), uid, 16, 0));
@@ -475,7 +475,8 @@ void StudySlotShares(const Settings& settings, const std::string& self) {
   for (auto& hog : hogs) hog->Finish();
   std::printf("## (f) Session slots: four users\n\n");
   std::printf(
-      "Daemon defaults (64 sessions, 16 per user) but rings of 64 KiB (--ring-bytes 65536). "
+      "Daemon defaults (64 sessions, 16 per user) but update rings of 256 KiB (--ring-bytes "
+      "262144: 64 sessions in 1 GiB of this shared machine's memory). "
       "uids 1001-1004 (child processes, one after the other) open 16 sessions each and keep "
       "them idle; then root makes 10 opens and, with one more, steps the healthy client for "
       "%.0f s. Last, each uid steps each of its sessions once.\n\n",

@@ -170,11 +170,14 @@ Result<std::vector<SharedSceneBudget::Victim>> SharedSceneBudget::PlanReclaim(
       if (victim == nullptr || h.touched < victim->second.touched) victim = &entry;
     }
     if (victim == nullptr) return MakeError(ErrorCode::kInternal, "budget: no holder to close");
+    const std::string size =
+        kind == BudgetKind::kSessions
+            ? std::string()
+            : " (" + FormatAmount(kind, victim->second.held[kind]) + " " + ToString(kind) + ")";
     const std::string why =
         "session closed to make room for " + UserName(user) + ", which is within its share: " +
         ShareClause(over_user, held[over_user][kind], share, totals_[kind], users, kind) +
-        ", and of its sessions this one (" + FormatAmount(kind, victim->second.held[kind]) + " " +
-        ToString(kind) + ") had gone longest without a step";
+        ", and of its sessions this one" + size + " had gone longest without a step";
     victims.push_back({victim->first, MakeError(ErrorCode::kLimitExceeded, why)});
     taken.insert(victim->first);
     for (BudgetKind k : kKinds) {
