@@ -6,7 +6,10 @@
 //   (b) the same healthy client while this process floods LCM with garbage and forged step
 //       requests; the daemon's rejected-message counter and log growth;
 //   (c) one user opening sessions as fast as it can, and a second user's opens meanwhile;
-//   (d) the daemon's resident size before, with and after 4 sessions of the largest scene.
+//   (d) the daemon's resident size before, with and after 4 sessions of the largest scene;
+//   (e) one uid (1001) holding 4 idle sessions of 2M degenerate triangles, and what root's
+//       sessions then get (issue 41);
+//   (f) four uids (1001-1004) holding 16 sessions each, and root's opens meanwhile (issue 41).
 // Run inside a network namespace (it re-runs itself through deploy/netns-run.sh otherwise):
 //   deploy/netns-run.sh build/release/bench/daemon/far_hardening_study [--seconds 6]
 #include <sys/utsname.h>
@@ -21,6 +24,7 @@
 #include <future>
 #include <thread>
 
+#include "fair_shares.h"
 #include "garbage_flood.h"
 #include "healthy_client.h"
 #include "large_scene.h"
@@ -400,6 +404,91 @@ void StudyMemory(const Settings& settings, const Scene& scene) {
               (after - baseline) / 1024.0);
 }
 
+// A root session of the healthy client: its steps for `seconds` (the first one applies its
+// scene, and with it asks the triangle budget for its 1,024 triangles).
+std::string RootSteps(const StudyDaemon& daemon, const std::string& name, double seconds) {
+  auto healthy = HealthyClient::Open(daemon, name, 60s);
+  if (!healthy) return "open refused: " + far::ToString(healthy.error());
+  const LatencySample sample = (*healthy)->StepFor(seconds);
+  char text[96];
+  std::snprintf(text, sizeof(text), "%zu steps served, %d failed", sample.ms.size(), sample.errors);
+  return text + (sample.errors ? "; the first: " + sample.first_error : std::string());
+}
+
+void PrintHeldRow(const std::string& who, const HeldReport& r) {
+  if (!r.not_run.empty()) {
+    std::printf("| %s | not run: %s | | |\n", who.c_str(), r.not_run.c_str());
+    return;
+  }
+  std::printf("| %s | %d opened, %d refused, %s triangles in %.2f s%s | %d of %d%s |\n",
+              who.c_str(), r.opened, r.refused, Millions(r.triangles).c_str(), r.seconds,
+              r.refusal.empty() ? "" : ("; first refusal: " + r.refusal).c_str(), r.alive_after,
+              r.opened, r.closed_because.empty() ? "" : ("; " + r.closed_because).c_str());
+}
+
+// (e) One uid fills the triangle budget with idle sessions; root then steps.
+void StudyTriangleShares(const Settings& settings, const std::string& self) {
+  auto daemon = StartDaemon(settings);
+  auto hog = HeldSessions::Start(self, daemon->socket_path(), 1001, 4, 2'000'000);
+  const std::string collide = RootSteps(*daemon, "root-collide", 0.5);
+  const std::string load = RootSteps(*daemon, "root-load", settings.seconds);
+  hog->Finish();
+  std::printf("## (e) Triangle budget: one user's idle sessions\n\n");
+  std::printf(
+      "Daemon defaults (8M triangles in all, 2M per session). uid 1001 (a child process) opens 4 "
+      "sessions, uploads one object of 2,000,000 degenerate triangles (one vertex, every "
+      "triangle (0,0,0)) into each, steps each once (aabb, object PCS) and leaves them idle; "
+      "then root opens a session of the healthy client (1,024 triangles) and steps it for "
+      "0.5 s (collide), then another for %.0f s (load). Last, uid 1001 steps each of its "
+      "sessions once.\n\n",
+      settings.seconds);
+  std::printf("| who | what | result |\n| --- | --- | --- |\n");
+  const HeldReport& r = hog->report();
+  if (!r.not_run.empty()) {
+    std::printf("| uid 1001 | not run: %s | |\n", r.not_run.c_str());
+  } else {
+    std::printf(
+        "| uid 1001 | 4 sessions of 2M degenerate triangles | %d opened, %s triangles "
+        "held after %.2f s%s |\n",
+        r.opened, Millions(r.triangles).c_str(), r.seconds,
+        r.refusal.empty() ? "" : ("; refused: " + r.refusal).c_str());
+  }
+  std::printf("| root | collide: a new session, 0.5 s of steps | %s |\n", collide.c_str());
+  std::printf("| root | load: a new session, %.0f s of steps | %s |\n", settings.seconds,
+              load.c_str());
+  std::printf("| uid 1001 | its sessions, stepped once at the end | %d of %d still work%s |\n\n",
+              r.alive_after, r.opened,
+              r.closed_because.empty() ? "" : ("; " + r.closed_because).c_str());
+}
+
+// (f) Four uids take 16 sessions each; root then opens 10.
+void StudySlotShares(const Settings& settings, const std::string& self) {
+  // Update rings of 256 KiB: 64 sessions take about 1 GiB of shared memory instead of 5 GiB.
+  auto daemon = StartDaemon(settings, {"--ring-bytes", "262144"});
+  std::vector<std::unique_ptr<HeldSessions>> hogs;
+  for (uid_t uid = 1001; uid <= 1004; ++uid)
+    hogs.push_back(HeldSessions::Start(self, daemon->socket_path(), uid, 16, 0));
+  std::vector<std::unique_ptr<client::Client>> held;
+  const OpenReport root = OpenAsFastAsPossible(*daemon, 10, &held);
+  const std::string steps =
+      held.empty() ? "no session" : RootSteps(*daemon, "root-steps", settings.seconds);
+  for (auto& hog : hogs) hog->Finish();
+  std::printf("## (f) Session slots: four users\n\n");
+  std::printf(
+      "Daemon defaults (64 sessions, 16 per user) but update rings of 256 KiB (--ring-bytes "
+      "262144: 64 sessions in 1 GiB of this shared machine's memory). "
+      "uids 1001-1004 (child processes, one after the other) open 16 sessions each and keep "
+      "them idle; then root makes 10 opens and, with one more, steps the healthy client for "
+      "%.0f s. Last, each uid steps each of its sessions once.\n\n",
+      settings.seconds);
+  std::printf("| who | opens | sessions that still work at the end |\n| --- | --- | --- |\n");
+  for (auto& hog : hogs) PrintHeldRow("uid " + std::to_string(hog->uid()), hog->report());
+  std::printf("| root | %d opened, %d refused in %.2f s%s; then %s | |\n\n", root.opened,
+              root.refused, root.seconds,
+              root.refusal.empty() ? "" : ("; first refusal: " + root.refusal).c_str(),
+              steps.c_str());
+}
+
 }  // namespace
 }  // namespace far::study
 
@@ -409,6 +498,8 @@ int main(int argc, char** argv) {
   if (argc == 4 && std::strcmp(argv[1], kOtherUserFlag) == 0)
     return OtherUserMain(argv[2], std::atoi(argv[3]));
   Settings settings;
+  if (argc == 5 && std::strcmp(argv[1], kHoldAsUserFlag) == 0)
+    return HoldAsUserMain(argv[2], std::atoi(argv[3]), std::atoll(argv[4]));
   CLI::App app{"far_hardening_study: issue 10's hardening, measured (bench/RESULTS.md)"};
   app.add_option("--seconds", settings.seconds, "length of one phase of (a) and (b)")
       ->capture_default_str();
@@ -420,7 +511,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hog-attempts", settings.hog_attempts, "opens of the first user in (c)")
       ->capture_default_str();
-  app.add_option("--parts", settings.parts, "which parts to run (letters of abcd)")
+  app.add_option("--parts", settings.parts, "which parts to run (letters of abcdef)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")
       ->capture_default_str()
@@ -450,5 +541,8 @@ int main(int argc, char** argv) {
   if (runs('b')) StudyGarbageFlood(settings);
   if (runs('c')) StudySlots(settings, std::filesystem::read_symlink("/proc/self/exe").string());
   if (runs('d')) StudyMemory(settings, scene);
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  if (runs('e')) StudyTriangleShares(settings, self);
+  if (runs('f')) StudySlotShares(settings, self);
   return 0;
 }

@@ -1,6 +1,7 @@
 #include "daemon.h"
 
 #include <chrono>
+#include <cstdio>
 #include <mutex>
 #include <thread>
 
@@ -26,8 +27,8 @@ struct Daemon::Impl {
   std::unique_ptr<protocol::LcmBus> bus;
   std::unique_ptr<protocol::LocalListener> listener;
   DaemonStats stats;
-  SessionRegistry sessions{config};
-  SharedSceneBudget budget{config.max_vertices_total, config.max_triangles_total};
+  SharedSceneBudget budget{BudgetTotalsOf(config)};
+  SessionRegistry sessions{config, budget};
   SetupAllowance setup_allowance{config.setup_allowance_ms};
   std::unique_ptr<Replier> replier;
   std::unique_ptr<MessageHandlers> handlers;
@@ -44,7 +45,10 @@ struct Daemon::Impl {
   }
   void ServeMessages(const std::atomic<bool>* stop_flag);
   void CloseSession(int64_t id, const std::string& reason);
+  void EndSession(int64_t id, const Error& why);
+  void ExpireIdleSessions();
   void CloseEverySession();
+  Clock::time_point next_idle_check;
 };
 
 Daemon::Daemon(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -64,6 +68,7 @@ Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, Daemo
       std::make_unique<MessageHandlers>(impl->config, impl->sessions, *impl->replier, impl->stats);
   impl->handlers->Subscribe(*impl->bus, std::move(hooks.before_message));
   Impl* raw = impl.get();
+  impl->budget.OnReclaim([raw](int64_t id, const Error& why) { raw->EndSession(id, why); });
   impl->workers = std::make_unique<WorkerContext>(WorkerContext{
       impl->config, *impl->replier, impl->stats, impl->budget, impl->setup_allowance, true,
       [raw](int64_t id, const std::string& reason) { raw->CloseSession(id, reason); }});
@@ -73,11 +78,35 @@ Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, Daemo
 // The daemon ends a session: its client is told (sealed, so it trusts it), then the worker
 // ends and the socket server closes the connection.
 void Daemon::Impl::CloseSession(int64_t id, const std::string& reason) {
-  auto session = sessions.Close(id);
+  EndSession(id, MakeError(ErrorCode::kUnavailable, "session closed: " + reason));
+}
+
+void Daemon::Impl::EndSession(int64_t id, const Error& why) {
+  auto session = sessions.Find(id);
   if (!session) return;
-  replier->SessionError(*session, -1,
-                        MakeError(ErrorCode::kUnavailable, "session closed: " + reason), true);
-  spdlog::info("event=session_close session={} reason=\"{}\"", id, reason);
+  // Told before the session closes: the connection closes only after, so the client hears why
+  // before it sees its end of the connection go.
+  replier->SessionError(*session, -1, why, true);
+  if (!sessions.Close(id)) return;
+  spdlog::info("event=session_close session={} uid={} reason=\"{}\"", id, session->uid,
+               why.message);
+}
+
+// Closes the sessions that have not stepped for session_idle_timeout_s (checked 4 times a
+// second, on the LCM thread: whether or not their connections stay open).
+void Daemon::Impl::ExpireIdleSessions() {
+  const auto now = Clock::now();
+  if (config.session_idle_timeout_s <= 0 || now < next_idle_check) return;
+  next_idle_check = now + std::chrono::milliseconds(250);
+  const auto timeout = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(config.session_idle_timeout_s));
+  for (int64_t id : sessions.IdleSessions(now, timeout)) {
+    char seconds[32];
+    std::snprintf(seconds, sizeof(seconds), "%g", config.session_idle_timeout_s);
+    EndSession(id, MakeError(ErrorCode::kUnavailable,
+                             std::string("session expired after ") + seconds +
+                                 " s without steps (far-daemon's session_idle_timeout_s)"));
+  }
 }
 
 void Daemon::Impl::CloseEverySession() {
@@ -92,6 +121,7 @@ void Daemon::Impl::CloseEverySession() {
 // The LCM thread: handles step requests until stopped.
 void Daemon::Impl::ServeMessages(const std::atomic<bool>* stop_flag) {
   while (!Stopping(stop_flag)) {
+    ExpireIdleSessions();
     const bool handled = bus->Handle(std::chrono::milliseconds(100));
     // (a signal that stops the daemon also interrupts LCM's wait: not an error)
     if (!handled && !Stopping(stop_flag)) {

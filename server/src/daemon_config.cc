@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "far/base/limits.h"
+#include "far/protocol/ring_layout.h"
 
 namespace far::server {
 namespace {
@@ -77,6 +78,8 @@ Result<void> ReadKey(const std::string& key, const nlohmann::json& value, Daemon
   if (key == "max_vertices_per_session") return set(config.max_vertices_per_session);
   if (key == "max_triangles_total") return set(config.max_triangles_total);
   if (key == "max_vertices_total") return set(config.max_vertices_total);
+  if (key == "max_segment_bytes_total") return set(config.max_segment_bytes_total);
+  if (key == "session_idle_timeout_s") return set(config.session_idle_timeout_s);
   if (key == "ring_bytes") return set(config.ring_bytes);
   if (key == "reply_bytes") return set(config.reply_bytes);
   if (key == "max_resolution") return set(config.max_resolution);
@@ -146,6 +149,11 @@ Result<void> ValidateDaemonConfig(const DaemonConfig& config) {
         {"max_reply_pairs", config.max_reply_pairs}}) {
     if (value < 1) return Invalid(key, "must be >= 1");
   }
+  if (config.max_segment_bytes_total < 0)
+    return Invalid("max_segment_bytes_total", "must be >= 0 (0: by max_sessions)");
+  if (!(config.session_idle_timeout_s == 0 ||
+        (config.session_idle_timeout_s >= 1 && config.session_idle_timeout_s <= 604'800)))
+    return Invalid("session_idle_timeout_s", "must be 0 (never) or in [1, 604800]");
   const auto power_of_two = [](uint64_t v) { return v != 0 && (v & (v - 1)) == 0; };
   for (const auto& [key, value] :
        {std::pair{"ring_bytes", config.ring_bytes}, {"reply_bytes", config.reply_bytes}}) {
@@ -177,6 +185,20 @@ SceneLimits SceneLimitsOf(const DaemonConfig& config) {
   limits.max_triangles = config.max_triangles_per_session;
   limits.max_vertices = config.max_vertices_per_session;
   return limits;
+}
+
+BudgetAmounts BudgetTotalsOf(const DaemonConfig& config) {
+  BudgetAmounts totals;
+  totals[BudgetKind::kSessions] = config.max_sessions;
+  const uint64_t segment =
+      protocol::MakeSegmentLayout(config.ring_bytes, config.reply_bytes).segment_size;
+  totals[BudgetKind::kSegmentBytes] =
+      config.max_segment_bytes_total > 0
+          ? config.max_segment_bytes_total
+          : static_cast<int64_t>(segment) * std::max(1, config.max_sessions);
+  totals[BudgetKind::kVertices] = config.max_vertices_total;
+  totals[BudgetKind::kTriangles] = config.max_triangles_total;
+  return totals;
 }
 
 protocol::RingLimits RingLimitsOf(const DaemonConfig& config) {

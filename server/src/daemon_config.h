@@ -7,6 +7,7 @@
 
 #include "far/base/result.h"
 #include "far/gpu/gl_platform.h"
+#include "far/model/scene_budget.h"
 #include "far/model/scene_model.h"
 #include "far/protocol/channels.h"
 #include "far/protocol/ring_records.h"
@@ -32,9 +33,15 @@ struct DaemonConfig {
   int64_t max_vertices_per_session = 6'000'000;
   int64_t max_triangles_total = 8'000'000;  ///< all sessions together
   int64_t max_vertices_total = 16'000'000;  ///< all sessions together
-  uint64_t ring_bytes = 64ull << 20;        ///< update ring per session (power of two): the most a
-                                            ///< client may ask for
-  uint64_t reply_bytes = 16ull << 20;       ///< reply ring per session (power of two): the same
+  /// Shared-memory bytes of all sessions' segments together; 0: as much as max_sessions
+  /// sessions with the largest rings take (BudgetTotalsOf).
+  int64_t max_segment_bytes_total = 0;
+  /// A session that has not stepped for this long (no step queued, running or ended) is
+  /// closed and its client told why; 0: never.
+  double session_idle_timeout_s = 600;
+  uint64_t ring_bytes = 64ull << 20;   ///< update ring per session (power of two): the most a
+                                       ///< client may ask for
+  uint64_t reply_bytes = 16ull << 20;  ///< reply ring per session (power of two): the same
   // Steps.
   int max_resolution = 4096;              ///< larger requests are refused
   double max_requests_per_second = 2000;  ///< per session, sent while one waits; sustained
@@ -68,6 +75,10 @@ std::string SocketPathOf(const DaemonConfig& config);
 /// A session's scene budgets (max_objects_per_session, max_triangles_per_session,
 /// max_vertices_per_session).
 SceneLimits SceneLimitsOf(const DaemonConfig& config);
+
+/// The daemon-wide budgets its users share (far/model/scene_budget.h): max_sessions,
+/// max_segment_bytes_total (or its default), max_vertices_total, max_triangles_total.
+BudgetAmounts BudgetTotalsOf(const DaemonConfig& config);
 
 /// What one record of a session's update ring may carry (a record never exceeds the session's
 /// budgets, nor 2^30 elements).

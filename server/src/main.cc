@@ -62,7 +62,8 @@ struct CommandLine {
     app.add_option("--gl-platform", gl_platform,
                    "auto (default: a GPU, else Mesa's software renderer), device (a GPU only: "
                    "fails without one) or surfaceless");
-    Add("--max-sessions", &DaemonConfig::max_sessions, "session limit");
+    Add("--max-sessions", &DaemonConfig::max_sessions,
+        "sessions of all users together, shared fairly by them");
     Add("--max-triangles", &DaemonConfig::max_triangles_per_session, "triangles per session");
     Add("--max-vertices", &DaemonConfig::max_vertices_per_session, "vertices per session");
     Add("--max-objects", &DaemonConfig::max_objects_per_session, "objects per session");
@@ -77,9 +78,13 @@ struct CommandLine {
     Add("--max-opens-per-second", &DaemonConfig::max_opens_per_second_per_user,
         "sessions one user may open per second, sustained (bursts of as many)");
     Add("--max-triangles-total", &DaemonConfig::max_triangles_total,
-        "triangles of all sessions together");
+        "triangles of all sessions together, shared fairly by their users (docs/daemon.md)");
     Add("--max-vertices-total", &DaemonConfig::max_vertices_total,
-        "vertices of all sessions together");
+        "vertices of all sessions together, shared fairly by their users");
+    Add("--max-segment-bytes-total", &DaemonConfig::max_segment_bytes_total,
+        "shared-memory bytes of all sessions' segments together (0: max_sessions full ones)");
+    Add("--session-idle-timeout", &DaemonConfig::session_idle_timeout_s,
+        "seconds without a step after which a session is closed (0: never)");
     Add("--max-reply-pairs", &DaemonConfig::max_reply_pairs,
         "contact and distance pairs in one reply");
     Add("--step-deadline-ms", &DaemonConfig::step_deadline_ms,

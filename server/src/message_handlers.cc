@@ -116,6 +116,7 @@ void MessageHandlers::Queue(Session& session, protocol::StepCommand command) {
       replier_.StepStatus(session, job, "queued", static_cast<int32_t>(session.queue.size()),
                           std::nullopt);
       session.queue.push_back(std::move(job));
+      session.last_active = now.time_since_epoch().count();  // not idle (IdleSessions)
       session.wake.notify_one();
       return;
     }

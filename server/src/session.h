@@ -64,6 +64,10 @@ struct Session {
   std::atomic<bool> worker_done{false};
   std::atomic<int64_t> next_reply_id{1};  ///< daemon -> client sequence (sealed_t.request_id)
   std::atomic<int64_t> steps{0};
+  /// Idle expiry (session_idle_timeout_s): when a step of it was last queued, started or ended
+  /// (at first, when it opened), and whether its worker is running one now.
+  std::atomic<Clock::rep> last_active{0};
+  std::atomic<bool> stepping{false};
   std::atomic<uint64_t> applied_sequence{0};
   std::atomic<int> num_objects{0};
   std::atomic<int64_t> num_triangles{0};

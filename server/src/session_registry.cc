@@ -6,15 +6,15 @@
 #include <string>
 
 #include "far/protocol/channels.h"
+#include "far/protocol/ring_layout.h"
 
 namespace far::server {
 namespace {
 
-// The segment of a new session, with the ring sizes its client asked for: smaller than the
-// daemon's are fine, larger ones are refused.
-Result<std::unique_ptr<protocol::ShmSegment>> MakeSegment(const DaemonConfig& config,
-                                                          const protocol::OpenSessionParams& params,
-                                                          int64_t session_id) {
+// The ring sizes of a new session's segment, as its client asked: smaller than the daemon's
+// are fine, larger ones are refused.
+Result<protocol::SegmentOptions> SegmentOptionsFor(const DaemonConfig& config,
+                                                   const protocol::OpenSessionParams& params) {
   protocol::SegmentOptions options;
   options.update_ring_bytes =
       params.update_ring_bytes ? params.update_ring_bytes : config.ring_bytes;
@@ -26,22 +26,43 @@ Result<std::unique_ptr<protocol::ShmSegment>> MakeSegment(const DaemonConfig& co
                          std::to_string(config.ring_bytes) + "/" +
                          std::to_string(config.reply_bytes) + " bytes");
   }
-  return protocol::ShmSegment::Create(static_cast<uint64_t>(session_id), options);
+  return options;
+}
+
+// A new session's state around its segment: its channels, its rings' ends, its request rate.
+std::shared_ptr<Session> NewSession(const DaemonConfig& config, int64_t id,
+                                    const protocol::PeerCredentials& peer,
+                                    const std::string& client_name,
+                                    std::unique_ptr<protocol::ShmSegment> segment) {
+  auto session = std::make_shared<Session>();
+  session->id = id;
+  session->uid = peer.uid;
+  session->pid = peer.pid;
+  session->segment = std::move(segment);
+  session->client_name = client_name;
+  session->key = session->segment->session_key();
+  const std::string prefix = protocol::ChannelPrefix(config.name);
+  session->request_channel = protocol::SessionRequestChannel(prefix, id);
+  session->reply_channel = protocol::SessionReplyChannel(prefix, id);
+  session->updates = std::make_unique<protocol::UpdateReader>(session->segment->update_ring(),
+                                                              RingLimitsOf(config));
+  session->replies = std::make_unique<protocol::RingWriter>(session->segment->reply_ring());
+  session->request_rate = RateLimiter(config.max_requests_per_second,
+                                      std::max(8.0, config.max_requests_per_second / 20));
+  session->last_active = Clock::now().time_since_epoch().count();
+  return session;
 }
 
 }  // namespace
 
 Result<std::shared_ptr<Session>> SessionRegistry::Open(const protocol::OpenSessionParams& params,
                                                        const protocol::PeerCredentials& peer) {
+  auto options = SegmentOptionsFor(config_, params);
+  if (!options) return options.error();
   int64_t id = 0;
   {
     std::lock_guard lock(mutex_);
     if (stopping_) return MakeError(ErrorCode::kUnavailable, "the daemon is shutting down");
-    if (static_cast<int>(sessions_.size()) >= config_.max_sessions) {
-      return MakeError(
-          ErrorCode::kLimitExceeded,
-          "max_sessions: " + std::to_string(config_.max_sessions) + " sessions are open");
-    }
     const auto mine = std::count_if(sessions_.begin(), sessions_.end(), [&](const auto& entry) {
       return entry.second->uid == peer.uid;
     });
@@ -52,25 +73,27 @@ Result<std::shared_ptr<Session>> SessionRegistry::Open(const protocol::OpenSessi
     }
     id = next_session_id_++;
   }
-  auto segment = MakeSegment(config_, params, id);
-  if (!segment) return segment.error();
-  auto session = std::make_shared<Session>();
-  session->id = id;
-  session->uid = peer.uid;
-  session->pid = peer.pid;
-  session->segment = std::move(*segment);
-  session->client_name = params.client_name;
-  session->key = session->segment->session_key();
-  const std::string prefix = protocol::ChannelPrefix(config_.name);
-  session->request_channel = protocol::SessionRequestChannel(prefix, id);
-  session->reply_channel = protocol::SessionReplyChannel(prefix, id);
-  session->updates = std::make_unique<protocol::UpdateReader>(session->segment->update_ring(),
-                                                              RingLimitsOf(config_));
-  session->replies = std::make_unique<protocol::RingWriter>(session->segment->reply_ring());
-  session->request_rate = RateLimiter(config_.max_requests_per_second,
-                                      std::max(8.0, config_.max_requests_per_second / 20));
+  // The user's share of the sessions and of their segments' bytes, before the segment takes
+  // its memory. Not under mutex_: making room closes other sessions, which takes it.
+  const uint64_t segment_bytes =
+      protocol::MakeSegmentLayout(options->update_ring_bytes, options->reply_ring_bytes)
+          .segment_size;
+  if (auto admitted =
+          budget_.Admit(id, peer.uid, BudgetAmounts::Session(static_cast<int64_t>(segment_bytes)));
+      !admitted) {
+    return admitted.error();
+  }
+  auto segment = protocol::ShmSegment::Create(static_cast<uint64_t>(id), *options);
+  if (!segment) {
+    budget_.Leave(id);
+    return segment.error();
+  }
+  auto session = NewSession(config_, id, peer, params.client_name, std::move(*segment));
   std::lock_guard lock(mutex_);
-  if (stopping_) return MakeError(ErrorCode::kUnavailable, "the daemon is shutting down");
+  if (stopping_) {
+    budget_.Leave(id);
+    return MakeError(ErrorCode::kUnavailable, "the daemon is shutting down");
+  }
   sessions_[id] = session;
   return session;
 }
@@ -145,6 +168,8 @@ int SessionRegistry::ReapWorkers(bool wait) {
   }
   for (auto& session : ended) {
     if (session->worker.joinable()) session->worker.join();
+    // (its worker left the budget as it ended; one that never started leaves it here)
+    budget_.Leave(session->id);
   }
   const int joined = static_cast<int>(ended.size());
   if (joined > 0) {
@@ -154,6 +179,17 @@ int SessionRegistry::ReapWorkers(bool wait) {
     malloc_trim(0);
   }
   return joined;
+}
+
+std::vector<int64_t> SessionRegistry::IdleSessions(Clock::time_point now,
+                                                   Clock::duration timeout) const {
+  std::vector<int64_t> idle;
+  std::lock_guard lock(mutex_);
+  for (const auto& [id, session] : sessions_) {
+    const Clock::time_point active{Clock::duration(session->last_active.load())};
+    if (!session->stepping && now - active >= timeout) idle.push_back(id);
+  }
+  return idle;
 }
 
 }  // namespace far::server

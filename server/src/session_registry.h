@@ -13,6 +13,7 @@
 #include "session.h"
 
 #include "far/base/result.h"
+#include "far/model/scene_budget.h"
 #include "far/protocol/local_socket.h"
 #include "far/protocol/message_validate.h"
 
@@ -24,13 +25,18 @@ namespace far::server {
 /// and ends; ReapWorkers joins the ended threads. Thread-safe.
 class SessionRegistry {
  public:
-  explicit SessionRegistry(const DaemonConfig& config) : config_(config) {}
+  /// Sessions are admitted into `budget` (which must outlive this) as holders of their user,
+  /// by the session's id, and leave it when their workers have ended.
+  SessionRegistry(const DaemonConfig& config, SharedSceneBudget& budget)
+      : config_(config), budget_(budget) {}
 
-  /// Opens a session for a client of user `peer.uid`: checks the session limits (all users,
-  /// and this user's), the ring sizes it asked for, then creates its segment (with a fresh
-  /// key) and registers it. Its worker is not started yet (the caller does, once the client
-  /// has the segment). Errors: kUnavailable (shutting down, no memory for the segment),
-  /// kLimitExceeded (max_sessions, max_sessions_per_user, ring sizes).
+  /// Opens a session for a client of user `peer.uid`: checks this user's session limit and
+  /// the ring sizes it asked for, admits the session and its segment's bytes into the shared
+  /// budget (its user's fair share of max_sessions and max_segment_bytes_total: this may close
+  /// sessions of users above their share, scene_budget.h), then creates its segment (with a
+  /// fresh key) and registers it. Its worker is not started yet (the caller does, once the
+  /// client has the segment). Errors: kUnavailable (shutting down, no memory for the segment),
+  /// kLimitExceeded (the user's share, max_sessions_per_user, ring sizes).
   Result<std::shared_ptr<Session>> Open(const protocol::OpenSessionParams& params,
                                         const protocol::PeerCredentials& peer);
 
@@ -47,11 +53,15 @@ class SessionRegistry {
   std::vector<std::shared_ptr<Session>> CloseAll();
 
   /// Joins the worker threads of closed sessions that have ended (all of them, waiting, when
-  /// `wait`). Returns how many were joined.
+  /// `wait`), and gives back what they held in the shared budget. Returns how many were joined.
   int ReapWorkers(bool wait = false);
+
+  /// The open sessions that have had no step queued, running or ending for `timeout` by `now`.
+  std::vector<int64_t> IdleSessions(Clock::time_point now, Clock::duration timeout) const;
 
  private:
   const DaemonConfig& config_;
+  SharedSceneBudget& budget_;
   mutable std::mutex mutex_;
   std::map<int64_t, std::shared_ptr<Session>> sessions_;
   std::vector<std::shared_ptr<Session>> closed_;  // workers not yet joined

@@ -48,6 +48,7 @@ class SessionWorker {
     if (clockid_t clock; pthread_getcpuclockid(pthread_self(), &clock) == 0) worker_clock_ = clock;
     StepJob job;
     while (NextJob(&job)) {
+      MarkActive(true);
       try {
         RunStep(job);
       } catch (const std::exception& e) {
@@ -56,16 +57,26 @@ class SessionWorker {
             *session_, job.command,
             MakeError(ErrorCode::kInternal, std::string("step failed: ") + e.what()));
       }
+      MarkActive(false);
     }
     // The pipeline's GL objects and context belong to this thread: free them here.
     session_->pipeline.reset();
     session_->updates.reset();
     session_->replies.reset();
     session_->segment.reset();
+    context_.budget.Leave(session_->id);  // its memory is gone: so is its share of the budget
     session_->worker_done = true;
   }
 
  private:
+  // A step starts or ends: the session is not idle (session_idle_timeout_s), and it is the
+  // last of its user's sessions that the shared budget closes to make room.
+  void MarkActive(bool stepping) {
+    session_->stepping = stepping;
+    session_->last_active = Clock::now().time_since_epoch().count();
+    context_.budget.Touch(session_->id);
+  }
+
   // Waits for the next queued step; false once the session is closing.
   bool NextJob(StepJob* job) {
     std::unique_lock lock(session_->mutex);
@@ -85,6 +96,7 @@ class SessionWorker {
     options.num_threads = context_.config.exact_threads;
     options.scene_limits = SceneLimitsOf(context_.config);
     options.shared_budget = &context_.budget;
+    options.budget_holder = session_->id;
     auto pipeline = Pipeline::Create(options);
     if (!pipeline && options.use_gl) {
       // No GL context for this session (the driver's limit?): the CPU methods still work.

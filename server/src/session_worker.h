@@ -19,7 +19,7 @@ struct WorkerContext {
   const DaemonConfig& config;
   Replier& replier;
   DaemonStats& stats;
-  SharedSceneBudget& budget;        ///< all sessions' vertices and triangles
+  SharedSceneBudget& budget;        ///< the budgets users share (SessionRegistry's)
   SetupAllowance& setup_allowance;  ///< per user, one-off work that does not make a step heavy
   bool use_gl = true;               ///< the daemon made a GL context at start-up
   /// Ends a session from its worker (the segment became unreadable), telling its client.

@@ -135,6 +135,7 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
   (*session)->segment->CloseFd();
   if (!sent) {
     sessions_.Close((*session)->id);
+    (*session)->worker_done = true;  // none will start: reaped (and its budget given back) now
     spdlog::warn("event=open_failed uid={} reason=\"{}\"", uid, sent.error().message);
     return;
   }

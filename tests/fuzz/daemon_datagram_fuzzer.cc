@@ -133,7 +133,8 @@ struct DaemonUnderTest {
   server::DaemonConfig config = FuzzConfig();
   std::unique_ptr<protocol::LcmBus> bus;
   server::DaemonStats stats;
-  server::SessionRegistry sessions{config};
+  SharedSceneBudget budget{server::BudgetTotalsOf(config)};
+  server::SessionRegistry sessions{config, budget};
   std::unique_ptr<server::Replier> replier;
   std::unique_ptr<server::MessageHandlers> handlers;
   std::map<std::string, std::pair<int64_t, ClientView>> clients;  // by reply channel

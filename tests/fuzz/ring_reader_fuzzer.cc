@@ -68,12 +68,13 @@ struct DaemonSide {
   protocol::UpdateReader updates;
   protocol::RingWriter replies;
   SharedSceneBudget budget{config.max_vertices_total, config.max_triangles_total};
+  bool admitted = budget.Admit(1, 0, {}).ok();  // the session's holder
   SceneModel scene;
 
   DaemonSide(const protocol::RingRegion& update, const protocol::RingRegion& reply)
       : updates(update, server::RingLimitsOf(config)),
         replies(reply),
-        scene(server::SceneLimitsOf(config), &budget) {}
+        scene(server::SceneLimitsOf(config), &budget, 1) {}
 
   void Drain(uint64_t up_to) {
     const bool was_corrupt = updates.corrupt();

@@ -88,7 +88,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (!update) return 0;
   CheckRewrite(*update, record.size(), limits);
   SharedSceneBudget budget(config.max_vertices_total, config.max_triangles_total);
-  SceneModel scene(server::SceneLimitsOf(config), &budget);
+  FAR_FUZZ_CHECK(budget.Admit(1, 0, {}));  // the session's holder
+  SceneModel scene(server::SceneLimitsOf(config), &budget, 1);
   const Mesh mesh = Tetrahedron();
   const SceneUpdate setup[] = {AddObject{1, mesh, Motion::kStatic, Pose{}},
                                AddObject{2, mesh, Motion::kRigid, Pose{}},

@@ -120,8 +120,8 @@ class DaemonUnderTest {
   const server::DaemonConfig config_ = FuzzConfig(dir_ + "/far.sock");
   const std::unique_ptr<protocol::LcmBus> bus_ = MakeBus(config_.lcm_url);
   server::DaemonStats stats_;
-  server::SessionRegistry sessions_{config_};
-  SharedSceneBudget budget_{config_.max_vertices_total, config_.max_triangles_total};
+  SharedSceneBudget budget_{server::BudgetTotalsOf(config_)};
+  server::SessionRegistry sessions_{config_, budget_};
   server::SetupAllowance setup_allowance_{config_.setup_allowance_ms};
   server::Replier replier_{*bus_, stats_};
   server::WorkerContext workers_{config_,

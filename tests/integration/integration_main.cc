@@ -5,6 +5,7 @@
 // multi-threaded test process must not go on to use LCM or malloc-heavy code), and
 // `--far-simulator` is a well-behaved simulator (below), and
 // `--far-other-user <socket>` is a well-behaved client that user_limits_test.cc runs as another
+// uid, and `--far-hold ...` one that holds sessions, which fair_shares_test.cc runs as another
 // uid (other_user_client.h).
 #include <signal.h>
 #include <unistd.h>
@@ -148,6 +149,10 @@ int main(int argc, char** argv) {
   }
   if (argc == 3 && std::strcmp(argv[1], "--far-other-user") == 0) {
     return far::integration::OtherUserClientMain(argv[2]);
+  }
+  if (argc == 6 && std::strcmp(argv[1], "--far-hold") == 0) {
+    return far::integration::HoldingClientMain(argv[2], std::atoi(argv[3]), std::atoll(argv[4]),
+                                               argv[5]);
   }
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

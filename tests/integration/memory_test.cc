@@ -2,6 +2,8 @@
 // budget (max_triangles_total, max_vertices_total) refuses what one session would add while
 // others hold it, a reply is capped (max_reply_pairs), and steps do not make the daemon grow.
 // Resident sizes are the daemon's VmRSS (/proc/<pid>/status).
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <thread>
@@ -107,15 +109,19 @@ TEST_F(MemoryTest, TheDaemonWideBudgetRefusesAnUploadUntilTheSessionHoldingItClo
   auto refused = late->Step(SmallRequest());
   ASSERT_FALSE(refused.ok());
   EXPECT_EQ(refused.error().code, ErrorCode::kLimitExceeded);
-  EXPECT_NE(refused.error().message.find("memory budget: 300 more triangles would make 1100 in "
-                                         "all sessions, over the 1000 this daemon allows"),
+  EXPECT_NE(refused.error().message.find(
+                "max_triangles_total: user " + std::to_string(geteuid()) +
+                " holds 800 of its share of 1000 triangles (1000 shared by 1 user); 300 more "
+                "would pass its share, and 200 are free"),
             std::string::npos)
       << refused.error().message;
   // 600 more vertices: 1041 in all sessions.
   ASSERT_TRUE(late->AddObject(2, TriangleRow(200), Motion::kRigid).ok());  // 600 v, 200 t
   refused = late->Step(SmallRequest());
   ASSERT_FALSE(refused.ok());
-  EXPECT_NE(refused.error().message.find("memory budget: 600 more vertices would make 1041"),
+  EXPECT_NE(refused.error().message.find("holds 441 of its share of 1000 vertices (1000 shared "
+                                         "by 1 user); 600 more would pass its share, and 559 "
+                                         "are free"),
             std::string::npos)
       << refused.error().message;
   EXPECT_TRUE(holder->Step(SmallRequest()).ok()) << "the holder is not disturbed";

@@ -27,6 +27,7 @@ add_executable(far_integration_test
   integration/record_replay_test.cc
   integration/other_user_client.cc
   integration/user_limits_test.cc
+  integration/fair_shares_test.cc
   integration/memory_test.cc
   integration/cpu_priority_test.cc)
 target_link_libraries(far_integration_test PRIVATE far::client far::protocol far::scenes far::io

@@ -54,6 +54,31 @@ TEST(DaemonConfigTest, RejectsUnknownKeysWrongTypesAndRanges) {
   EXPECT_EQ(LoadDaemonConfig("/nonexistent/far.json").error().code, ErrorCode::kIoError);
 }
 
+TEST(DaemonConfigTest, ReadsTheSharedBudgetsAndTheIdleTimeout) {
+  auto config = ParseDaemonConfig(
+      R"({"session_idle_timeout_s": 30, "max_segment_bytes_total": 1073741824,
+      "max_sessions": 8, "max_triangles_total": 1000, "max_vertices_total": 3000})",
+      "inline.json");
+  ASSERT_TRUE(config.ok()) << ToString(config.error());
+  EXPECT_EQ(config->session_idle_timeout_s, 30);
+  const BudgetAmounts totals = BudgetTotalsOf(*config);
+  EXPECT_EQ(totals[BudgetKind::kSessions], 8);
+  EXPECT_EQ(totals[BudgetKind::kSegmentBytes], int64_t{1} << 30);
+  EXPECT_EQ(totals[BudgetKind::kTriangles], 1000);
+  EXPECT_EQ(totals[BudgetKind::kVertices], 3000);
+  // By default: as many bytes as max_sessions segments of the largest rings (and a header page).
+  const DaemonConfig defaults;
+  EXPECT_EQ(BudgetTotalsOf(defaults)[BudgetKind::kSegmentBytes], 64 * ((int64_t{80} << 20) + 4096));
+  EXPECT_EQ(defaults.session_idle_timeout_s, 600);
+  for (const char* bad : {R"({"session_idle_timeout_s": 0.5})", R"({"session_idle_timeout_s": -1})",
+                          R"({"max_segment_bytes_total": -1})"}) {
+    auto refused = ParseDaemonConfig(bad, "inline.json");
+    ASSERT_FALSE(refused.ok()) << bad;
+    EXPECT_EQ(refused.error().code, ErrorCode::kInvalidArgument);
+  }
+  EXPECT_TRUE(ParseDaemonConfig(R"({"session_idle_timeout_s": 0})", "inline.json").ok());
+}
+
 TEST(DaemonConfigTest, ParsesTextInMemoryWithTheGivenName) {
   auto config = ParseDaemonConfig(R"({"max_sessions": 5})", "inline.json");
   ASSERT_TRUE(config.ok()) << ToString(config.error());

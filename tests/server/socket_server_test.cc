@@ -47,7 +47,7 @@ class SocketServerTest : public ::testing::Test {
     auto bus = protocol::LcmBus::Create(config_.lcm_url);
     EXPECT_TRUE(bus.ok());
     bus_ = std::move(*bus);
-    sessions_ = std::make_unique<SessionRegistry>(config_);
+    sessions_ = std::make_unique<SessionRegistry>(config_, budget_);
     replier_ = std::make_unique<Replier>(*bus_, stats_);
     // Aggregates, brace-initialized (clang does not build them from parentheses).
     workers_.reset(
@@ -92,8 +92,8 @@ class SocketServerTest : public ::testing::Test {
   DaemonConfig config_;
   std::unique_ptr<protocol::LcmBus> bus_;
   DaemonStats stats_;
+  SharedSceneBudget budget_{BudgetTotalsOf(config_)};  // (totals as config_ has them so far)
   std::unique_ptr<SessionRegistry> sessions_;
-  SharedSceneBudget budget_{config_.max_vertices_total, config_.max_triangles_total};
   SetupAllowance setup_allowance_{config_.setup_allowance_ms};
   std::unique_ptr<Replier> replier_;
   std::unique_ptr<WorkerContext> workers_;

@@ -172,15 +172,14 @@ Result<void> SceneModel::Batch::Commit() {
   const int64_t grow_vertices = vertices_ - model_->vertices_;
   const int64_t grow_triangles = triangles_ - model_->triangles_;
   if (model_->shared_ != nullptr && (grow_vertices > 0 || grow_triangles > 0)) {
-    if (auto ok = model_->shared_->Reserve(std::max<int64_t>(grow_vertices, 0),
+    const auto more = BudgetAmounts::Scene(std::max<int64_t>(grow_vertices, 0),
                                            std::max<int64_t>(grow_triangles, 0));
-        !ok) {
-      return ok;
-    }
+    if (auto ok = model_->shared_->Reserve(model_->holder_, more); !ok) return ok;
   }
   if (model_->shared_ != nullptr && (grow_vertices < 0 || grow_triangles < 0)) {
-    model_->shared_->Release(std::max<int64_t>(-grow_vertices, 0),
-                             std::max<int64_t>(-grow_triangles, 0));
+    model_->shared_->Release(model_->holder_,
+                             BudgetAmounts::Scene(std::max<int64_t>(-grow_vertices, 0),
+                                                  std::max<int64_t>(-grow_triangles, 0)));
   }
   for (const auto& [id, object] : changed_) {
     if (object) {
@@ -196,7 +195,7 @@ Result<void> SceneModel::Batch::Commit() {
 }
 
 SceneModel::~SceneModel() {
-  if (shared_ != nullptr) shared_->Release(vertices_, triangles_);
+  if (shared_ != nullptr) shared_->Release(holder_, BudgetAmounts::Scene(vertices_, triangles_));
 }
 
 Result<void> SceneModel::Apply(std::span<const SceneUpdate> updates,

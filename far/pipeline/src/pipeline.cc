@@ -25,7 +25,7 @@ struct Pipeline::Impl {
   explicit Impl(const PipelineOptions& o)
       : options(o),
         pool(o.num_threads),
-        model(o.scene_limits, o.shared_budget),
+        model(o.scene_limits, o.shared_budget, o.budget_holder),
         world(pool, o.use_gl) {}
 
   Result<void> Apply(std::vector<SceneUpdate> updates,

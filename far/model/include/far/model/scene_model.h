@@ -66,8 +66,8 @@ class SceneModel {
     /// The object as the batch leaves it; nullptr when not alive.
     const Object* Find(uint32_t id) const;
     /// Applies every update checked so far to the model, after reserving what the scene grows
-    /// by from the model's shared budget. Errors: kLimitExceeded (the shared budget is spent;
-    /// nothing changed).
+    /// by from the model's shared budget. Errors: kLimitExceeded (the shared budget refused it,
+    /// naming its rule: SharedSceneBudget; nothing changed).
     Result<void> Commit();
 
    private:
@@ -81,9 +81,10 @@ class SceneModel {
   };
 
   /// A model within `limits`, drawing its totals from `shared` too when given (which must
-  /// outlive it).
-  explicit SceneModel(SceneLimits limits = {}, SharedSceneBudget* shared = nullptr)
-      : limits_(limits), shared_(shared) {}
+  /// outlive it), as its holder `holder` (admitted there before the model grows).
+  explicit SceneModel(SceneLimits limits = {}, SharedSceneBudget* shared = nullptr,
+                      int64_t holder = 0)
+      : limits_(limits), shared_(shared), holder_(holder) {}
   /// Gives its totals back to the shared budget.
   ~SceneModel();
   SceneModel(const SceneModel&) = delete;
@@ -108,6 +109,7 @@ class SceneModel {
  private:
   SceneLimits limits_;
   SharedSceneBudget* shared_ = nullptr;
+  int64_t holder_ = 0;
   std::map<uint32_t, Object> objects_;
   int64_t triangles_ = 0;
   int64_t vertices_ = 0;

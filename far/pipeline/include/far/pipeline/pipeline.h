@@ -36,6 +36,8 @@ struct PipelineOptions {
   SceneLimits scene_limits;
   /// A budget shared with other pipelines (a daemon's sessions), or null; must outlive this.
   SharedSceneBudget* shared_budget = nullptr;
+  /// This scene's holder in `shared_budget` (a daemon session's id, admitted there already).
+  int64_t budget_holder = 0;
 };
 
 /// The FAR step pipeline: one scene, its GPU resources and a CPU pool. One call runs one step.
