@@ -7,6 +7,9 @@
 //       requests; the daemon's rejected-message counter and log growth;
 //   (c) one user opening sessions as fast as it can, and a second user's opens meanwhile;
 //   (d) the daemon's resident size before, with and after 4 sessions of the largest scene.
+// And issue 41's memory attacks (memory_attacks.h; not in the default --parts):
+//   (e) sessions opened and closed with their segments' descriptors kept (hoarding);
+//   (f) a client killed while its step runs; (g) a flood of 60 KB datagrams.
 // Run inside a network namespace (it re-runs itself through deploy/netns-run.sh otherwise):
 //   deploy/netns-run.sh build/release/bench/daemon/far_hardening_study [--seconds 6]
 #include <sys/utsname.h>
@@ -24,6 +27,7 @@
 #include "garbage_flood.h"
 #include "healthy_client.h"
 #include "large_scene.h"
+#include "memory_attacks.h"
 #include "slot_exhaustion.h"
 #include "study_daemon.h"
 #include <CLI/CLI.hpp>
@@ -42,6 +46,9 @@ struct Settings {
   double flood_rate = 50'000;
   int hog_attempts = 100;
   std::string parts = "abcd";
+  int hoard_sessions = 40;            // (e)
+  KilledClientSetup killed;           // (f)
+  int64_t flood_bytes = 60'000;       // (g): bytes per datagram
   std::string heavy_method = "aabb";  // the heaviest legal: exact refuses over 2^30 pairs
   // Contacts among the triangles within this distance of a partner object's box: a wider
   // search, so that each heavy step runs until its deadline (0: plain contacts).
@@ -400,6 +407,23 @@ void StudyMemory(const Settings& settings, const Scene& scene) {
               (after - baseline) / 1024.0);
 }
 
+// (e), (f), (g): issue 41's memory attacks, each against a daemon of its own.
+template <typename Runs>
+void StudyMemoryAttacks(const Settings& settings, Runs runs) {
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  if (runs('e')) {
+    PrintHoarding(HoardSegments(*StartDaemon(settings), settings.hoard_sessions),
+                  settings.hoard_sessions);
+  }
+  if (runs('f')) {
+    PrintKilledClient(KillClientMidStep(*StartDaemon(settings), self, settings.killed),
+                      settings.killed);
+  }
+  if (runs('g'))
+    PrintLargeFlood(
+        FloodLargeDatagrams(*StartDaemon(settings), settings.flood_bytes, settings.seconds, 3));
+}
+
 }  // namespace
 }  // namespace far::study
 
@@ -408,6 +432,8 @@ int main(int argc, char** argv) {
   EnterNetworkNamespace(argc, argv, FAR_NETNS_RUN_PATH);
   if (argc == 4 && std::strcmp(argv[1], kOtherUserFlag) == 0)
     return OtherUserMain(argv[2], std::atoi(argv[3]));
+  if (argc >= 2 && std::strcmp(argv[1], kKilledClientFlag) == 0)
+    return KilledClientMain(argc, argv);
   Settings settings;
   CLI::App app{"far_hardening_study: issue 10's hardening, measured (bench/RESULTS.md)"};
   app.add_option("--seconds", settings.seconds, "length of one phase of (a) and (b)")
@@ -420,7 +446,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hog-attempts", settings.hog_attempts, "opens of the first user in (c)")
       ->capture_default_str();
-  app.add_option("--parts", settings.parts, "which parts to run (letters of abcd)")
+  app.add_option("--parts", settings.parts,
+                 "which parts to run (letters of abcdefg; e, f, g: issue 41's memory attacks)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")
       ->capture_default_str()
@@ -434,6 +461,24 @@ int main(int argc, char** argv) {
   app.add_option("--healthy-rate", settings.healthy_rate,
                  "the healthy client's steps per second in (a) and (b), as a simulator's fixed "
                  "rate (0: back to back)")
+      ->capture_default_str();
+  app.add_option("--hoard-sessions", settings.hoard_sessions, "sessions opened and left in (e)")
+      ->capture_default_str();
+  app.add_option("--killed-triangles", settings.killed.triangles,
+                 "the scene of the client killed mid-step in (f)")
+      ->capture_default_str();
+  app.add_option("--killed-neighbour", settings.killed.neighbour_triangles,
+                 "the scene of another client stepping beside it in (f) (0: none)")
+      ->capture_default_str();
+  app.add_option("--killed-method", settings.killed.method, "their steps' method in (f)")
+      ->capture_default_str();
+  app.add_option("--killed-resolution", settings.killed.resolution,
+                 "their steps' resolution in (f)")
+      ->capture_default_str();
+  app.add_option("--killed-after", settings.killed.kill_after_s,
+                 "seconds the client's step runs before (f)'s kill")
+      ->capture_default_str();
+  app.add_option("--flood-bytes", settings.flood_bytes, "bytes per datagram in (g)")
       ->capture_default_str();
   app.add_option("--daemon", settings.daemon, "far-daemon to start")->capture_default_str();
   app.add_option("--daemon-arg", settings.daemon_args,
@@ -450,5 +495,6 @@ int main(int argc, char** argv) {
   if (runs('b')) StudyGarbageFlood(settings);
   if (runs('c')) StudySlots(settings, std::filesystem::read_symlink("/proc/self/exe").string());
   if (runs('d')) StudyMemory(settings, scene);
+  StudyMemoryAttacks(settings, runs);
   return 0;
 }
