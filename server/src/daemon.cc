@@ -25,7 +25,8 @@ namespace {
 
 // Says where the daemon stands with the kernel's OOM killer (/proc/self/oom_score_adj, -1000 to
 // 1000, lower is spared longer). Only a privileged parent can lower it (the service unit's
-// OOMScoreAdjust=-500); the daemon itself could only raise it (docs/daemon.md, "Memory").
+// OOMScoreAdjust=-500); the daemon itself could only raise it (docs/daemon.md, "Memory and the OOM
+// killer").
 void LogOomScoreAdj() {
   std::ifstream file("/proc/self/oom_score_adj");
   int adj = 0;
