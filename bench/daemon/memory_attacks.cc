@@ -213,13 +213,11 @@ void WatchSegment(const StudyDaemon& daemon, double watch_s, KilledClientReport*
     if (report->freed_after_s < 0 && (!now.mapped || now.allocated == 0)) report->freed_after_s = t;
     if (!now.mapped) {
       report->unmapped_after_s = t;
+      report->rss_after = daemon.ResidentKiB();
       break;
     }
     std::this_thread::sleep_for(10ms);
   }
-  const auto settle = Clock::now();
-  report->rss_after = daemon.SettledResidentKiB();
-  report->settled_after_s = report->unmapped_after_s + SecondsSince(settle);
 }
 
 }  // namespace
@@ -376,11 +374,12 @@ void PrintKilledClient(const KilledClientReport& r, const KilledClientSetup& set
   std::printf("| what | value |\n| --- | --: |\n");
   std::printf("| segment memory at the kill | %.1f MiB |\n", r.allocated_at_kill / 1048576.0);
   std::printf("| segment memory gone after | **%.2f s** |\n", r.freed_after_s);
-  std::printf("| segment unmapped after (its worker ended) | %.2f s |\n", r.unmapped_after_s);
   std::printf(
-      "| daemon VmRSS at the kill / settled | %.1f / %.1f MiB (settled %.1f s after the "
-      "kill) |\n\n",
-      MiB(r.rss_at_kill), MiB(r.rss_after), r.settled_after_s);
+      "| segment unmapped after (its worker ended: its step stopped, its scene freed) | "
+      "%.2f s |\n",
+      r.unmapped_after_s);
+  std::printf("| daemon VmRSS at the kill / as its worker ended | %.1f / %.1f MiB |\n\n",
+              MiB(r.rss_at_kill), MiB(r.rss_after));
 }
 
 void PrintLargeFlood(const BigFloodReport& r) {

@@ -64,8 +64,7 @@ struct KilledClientReport {
   double freed_after_s = -1;     ///< until the segment's memory was gone (allocated 0 or unmapped)
   double unmapped_after_s = -1;  ///< until the daemon unmapped the segment
   int64_t allocated_at_kill = -1;          ///< the segment's allocated bytes when the client died
-  int64_t rss_at_kill = 0, rss_after = 0;  ///< daemon VmRSS at the kill and once settled, KiB
-  double settled_after_s = -1;             ///< until VmRSS stopped falling
+  int64_t rss_at_kill = 0, rss_after = 0;  ///< daemon VmRSS at the kill and as it unmapped, KiB
   std::string error;
 };
 
