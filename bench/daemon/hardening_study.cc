@@ -10,6 +10,9 @@
 //   (e) one uid (1001) holding 4 idle sessions of 2M degenerate triangles, and what root's
 //       sessions then get (issue 41);
 //   (f) four uids (1001-1004) holding 16 sessions each, and root's opens meanwhile (issue 41).
+// And issue 41's memory attacks (memory_attacks.h; not in the default --parts):
+//   (h) sessions opened and closed with their segments' descriptors kept (hoarding);
+//   (i) a client killed while its step runs; (j) a flood of 60 KB datagrams.
 // Run inside a network namespace (it re-runs itself through deploy/netns-run.sh otherwise):
 //   deploy/netns-run.sh build/release/bench/daemon/far_hardening_study [--seconds 6]
 #include <sys/utsname.h>
@@ -28,6 +31,7 @@
 #include "garbage_flood.h"
 #include "healthy_client.h"
 #include "large_scene.h"
+#include "memory_attacks.h"
 #include "slot_exhaustion.h"
 #include "study_daemon.h"
 #include <CLI/CLI.hpp>
@@ -46,6 +50,9 @@ struct Settings {
   double flood_rate = 50'000;
   int hog_attempts = 100;
   std::string parts = "abcd";
+  int hoard_sessions = 40;            // (e)
+  KilledClientSetup killed;           // (f)
+  int64_t flood_bytes = 60'000;       // (g): bytes per datagram
   std::string heavy_method = "aabb";  // the heaviest legal: exact refuses over 2^30 pairs
   // Contacts among the triangles within this distance of a partner object's box: a wider
   // search, so that each heavy step runs until its deadline (0: plain contacts).
@@ -489,6 +496,23 @@ void StudySlotShares(const Settings& settings, const std::string& self) {
               steps.c_str());
 }
 
+// (h), (i), (j): issue 41's memory attacks, each against a daemon of its own.
+template <typename Runs>
+void StudyMemoryAttacks(const Settings& settings, Runs runs) {
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  if (runs('h')) {
+    PrintHoarding(HoardSegments(*StartDaemon(settings), settings.hoard_sessions),
+                  settings.hoard_sessions);
+  }
+  if (runs('i')) {
+    PrintKilledClient(KillClientMidStep(*StartDaemon(settings), self, settings.killed),
+                      settings.killed);
+  }
+  if (runs('j'))
+    PrintLargeFlood(
+        FloodLargeDatagrams(*StartDaemon(settings), settings.flood_bytes, settings.seconds, 3));
+}
+
 }  // namespace
 }  // namespace far::study
 
@@ -497,6 +521,8 @@ int main(int argc, char** argv) {
   EnterNetworkNamespace(argc, argv, FAR_NETNS_RUN_PATH);
   if (argc == 4 && std::strcmp(argv[1], kOtherUserFlag) == 0)
     return OtherUserMain(argv[2], std::atoi(argv[3]));
+  if (argc >= 2 && std::strcmp(argv[1], kKilledClientFlag) == 0)
+    return KilledClientMain(argc, argv);
   Settings settings;
   if (argc == 5 && std::strcmp(argv[1], kHoldAsUserFlag) == 0)
     return HoldAsUserMain(argv[2], std::atoi(argv[3]), std::atoll(argv[4]));
@@ -511,7 +537,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hog-attempts", settings.hog_attempts, "opens of the first user in (c)")
       ->capture_default_str();
-  app.add_option("--parts", settings.parts, "which parts to run (letters of abcdef)")
+  app.add_option("--parts", settings.parts,
+                 "which parts to run (letters of abcdefhij; e, f: issue 41's fair shares; h, i, "
+                 "j: its memory attacks)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")
       ->capture_default_str()
@@ -525,6 +553,24 @@ int main(int argc, char** argv) {
   app.add_option("--healthy-rate", settings.healthy_rate,
                  "the healthy client's steps per second in (a) and (b), as a simulator's fixed "
                  "rate (0: back to back)")
+      ->capture_default_str();
+  app.add_option("--hoard-sessions", settings.hoard_sessions, "sessions opened and left in (e)")
+      ->capture_default_str();
+  app.add_option("--killed-triangles", settings.killed.triangles,
+                 "the scene of the client killed mid-step in (f)")
+      ->capture_default_str();
+  app.add_option("--killed-neighbour", settings.killed.neighbour_triangles,
+                 "the scene of another client stepping beside it in (f) (0: none)")
+      ->capture_default_str();
+  app.add_option("--killed-method", settings.killed.method, "their steps' method in (f)")
+      ->capture_default_str();
+  app.add_option("--killed-resolution", settings.killed.resolution,
+                 "their steps' resolution in (f)")
+      ->capture_default_str();
+  app.add_option("--killed-after", settings.killed.kill_after_s,
+                 "seconds the client's step runs before (f)'s kill")
+      ->capture_default_str();
+  app.add_option("--flood-bytes", settings.flood_bytes, "bytes per datagram in (g)")
       ->capture_default_str();
   app.add_option("--daemon", settings.daemon, "far-daemon to start")->capture_default_str();
   app.add_option("--daemon-arg", settings.daemon_args,
@@ -544,5 +590,6 @@ int main(int argc, char** argv) {
   const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
   if (runs('e')) StudyTriangleShares(settings, self);
   if (runs('f')) StudySlotShares(settings, self);
+  StudyMemoryAttacks(settings, runs);
   return 0;
 }

@@ -240,13 +240,25 @@ Result<std::unique_ptr<ShmSegment>> ShmSegment::Open(int fd, uint64_t session_id
 }
 
 ShmSegment::~ShmSegment() {
+  // The daemon's: what its last accesses touched again goes too, before the mapping does.
+  if (fd_ >= 0) (void)Release();
   if (mapping_ != nullptr) munmap(mapping_->base, mapping_->size);
-  CloseFd();
+  if (fd_ >= 0) close(fd_);
 }
 
-void ShmSegment::CloseFd() {
-  if (fd_ >= 0) close(fd_);
-  fd_ = -1;
+Result<void> ShmSegment::Release() {
+  if (fd_ < 0) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "segment: " + name_ + " is the client's mapping; only the daemon releases it");
+  }
+  // F_SEAL_WRITE would forbid the punch; the daemon sealed the file with F_SEAL_SEAL, so no one
+  // can have added it.
+  if (fallocate(fd_, FALLOC_FL_PUNCH_HOLE | FALLOC_FL_KEEP_SIZE, 0,
+                static_cast<off_t>(layout_.segment_size)) != 0) {
+    return MakeError(ErrorCode::kUnavailable,
+                     "segment: releasing " + name_ + " failed: " + ErrnoText(errno));
+  }
+  return {};
 }
 
 bool ShmSegment::faulted() const { return mapping_ != nullptr && mapping_->faulted != 0; }

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <mutex>
 #include <thread>
 
@@ -21,6 +22,27 @@
 #include "far/protocol/local_socket.h"
 
 namespace far::server {
+namespace {
+
+// Says where the daemon stands with the kernel's OOM killer (/proc/self/oom_score_adj, -1000 to
+// 1000, lower is spared longer). Only a privileged parent can lower it (the service unit's
+// OOMScoreAdjust=-500); the daemon itself could only raise it (docs/daemon.md, "Memory and the OOM
+// killer").
+void LogOomScoreAdj() {
+  std::ifstream file("/proc/self/oom_score_adj");
+  int adj = 0;
+  if (!(file >> adj)) return;
+  if (adj < 0) {
+    spdlog::info("event=oom_score_adj value={}", adj);
+  } else {
+    spdlog::info(
+        "event=oom_score_adj value={} message=\"the OOM killer may choose far-daemon when others "
+        "fill the memory; its service unit sets OOMScoreAdjust=-500\"",
+        adj);
+  }
+}
+
+}  // namespace
 
 struct Daemon::Impl {
   DaemonConfig config;
@@ -133,6 +155,7 @@ void Daemon::Impl::ServeMessages(const std::atomic<bool>* stop_flag) {
 
 Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   Impl& d = *impl_;
+  LogOomScoreAdj();
   // GL must work before anyone is served: each session makes its own context later.
   std::string device;
   {

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <string>
 
+#include <spdlog/spdlog.h>
+
 #include "far/protocol/channels.h"
 #include "far/protocol/ring_layout.h"
 
@@ -117,8 +119,17 @@ size_t SessionRegistry::size() const {
 }
 
 namespace {
-// Tells a session's worker to end: the running step stops, the queue is dropped.
+// Tells a session's worker to end: the running step stops, the queue is dropped. The segment's
+// memory goes now, not when the worker ends (which may first finish a GL view, or wait for
+// another session's): a client that kept the segment's descriptor holds an empty file, and a
+// killed client's segment is freed at once. The worker still owns the segment object and frees
+// it as it ends; it cannot have ended yet, since it ends only once `closing` is set below.
 void EndSession(Session& session) {
+  if (session.segment != nullptr) {
+    if (auto released = session.segment->Release(); !released)
+      spdlog::warn("event=segment_not_released session={} reason=\"{}\"", session.id,
+                   released.error().message);
+  }
   session.cancel = true;
   {
     std::lock_guard lock(session.mutex);

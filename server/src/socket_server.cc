@@ -130,9 +130,10 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
   if (!session) return refuse(session.error());
   SetAccepted(reply, **session, config_);
   auto out = protocol::EncodeMessage(reply);
+  // The daemon keeps its own descriptor: it releases the segment's memory when the session
+  // ends, whatever the client keeps (ShmSegment::Release).
   Result<void> sent =
       out ? pending.connection.Send(*out, (*session)->segment->fd()) : Result<void>(out.error());
-  (*session)->segment->CloseFd();
   if (!sent) {
     sessions_.Close((*session)->id);
     (*session)->worker_done = true;  // none will start: reaped (and its budget given back) now

@@ -9,10 +9,13 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <span>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "daemon_fixture.h"
@@ -24,6 +27,7 @@
 
 #include "far/client/client.h"
 #include "far/protocol/channels.h"
+#include "far/protocol/lcm_bus.h"
 
 namespace far::integration {
 namespace {
@@ -280,6 +284,47 @@ TEST_F(LcmReassemblyTest, WrapAroundFragmentPairIsDropped) {
   for (const Received& message : listener_->Snapshot()) {
     ADD_FAILURE() << "a " << message.bytes.size() << "-byte message was delivered";
   }
+}
+
+// A subscriber whose handler is behind (here: not running at all) while a burst of large
+// datagrams arrives. Upstream's receive ring grew without bound (up to the subscription's queue
+// capacity, 1000 datagrams of 60 KB: 60 MB) and never shrank; far's patch caps it at 4 MiB
+// (with the fuller rings it replaced, about 14 MiB: ~230 datagrams of 60 KB) and drops the rest,
+// and the subscriber receives again once it has caught up.
+TEST(LcmReceiveRingTest, ASubscriberThatFallsBehindKeepsABoundedNumberOfLargeDatagrams) {
+  const std::string channel = "FAR_TEST_RING";
+  auto subscriber = protocol::LcmBus::Create(TestLcmUrl());
+  auto publisher = protocol::LcmBus::Create(TestLcmUrl());
+  ASSERT_TRUE(subscriber.ok() && publisher.ok());
+  int received = 0;
+  (*subscriber)->Subscribe(channel, [&](std::string_view, std::span<const uint8_t> bytes) {
+    if (bytes.size() == 60'000) ++received;
+  });
+  const Bytes payload = Pattern(60'000, 7);
+  constexpr int kBurst = 1000;
+  // Paced, so that the kernel's socket buffer (a few such datagrams at net.core.rmem_max's
+  // default) does not overflow first: what is dropped is dropped by LCM's receive ring.
+  for (int i = 0; i < kBurst; ++i) {
+    ASSERT_TRUE((*publisher)->Publish(channel, payload));
+    std::this_thread::sleep_for(std::chrono::microseconds(300));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // all through the receive thread
+  // Handle everything that was kept (one message per call) until nothing comes for 200 ms.
+  for (int before = -1; received != before;) {
+    before = received;
+    (*subscriber)->Handle(std::chrono::milliseconds(200));
+  }
+  std::printf("%d of %d datagrams of 60 KB kept for a subscriber that was behind\n", received,
+              kBurst);
+  EXPECT_GE(received, 60) << "the receive ring holds at least 4 MiB";
+  EXPECT_LE(received, 300) << "the receive ring held " << received << " x 60 KB";
+  // Caught up: the next datagrams arrive again.
+  received = 0;
+  for (int i = 0; i < 10; ++i) ASSERT_TRUE((*publisher)->Publish(channel, payload));
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (received < 10 && std::chrono::steady_clock::now() < deadline)
+    (*subscriber)->Handle(std::chrono::milliseconds(100));
+  EXPECT_EQ(received, 10);
 }
 
 // ---- against the daemon and its clients --------------------------------------------------------

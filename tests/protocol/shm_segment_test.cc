@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstring>
 
 #include <gtest/gtest.h>
@@ -156,20 +157,89 @@ TEST(ShmSegmentTest, OpenChecksSessionAndHeader) {
                   "segment: magic 0x1122334455667788 is not FARRING");
 }
 
-TEST(ShmSegmentTest, TheDaemonCanCloseItsDescriptorAndKeepItsMapping) {
-  auto daemon = CreateOrDie(3);
-  ASSERT_TRUE(daemon);
-  auto client = OpenCopy(*daemon, 3);
-  ASSERT_TRUE(client);
-  daemon->CloseFd();
-  EXPECT_EQ(daemon->fd(), -1);
-  UpdateWriter writer((*client)->update_ring());
-  UpdateReader reader(daemon->update_ring(), RingLimits{});
+// The memory a descriptor's file holds: its allocated blocks, in bytes.
+int64_t AllocatedBytes(int fd) {
+  struct stat info {};
+  EXPECT_EQ(fstat(fd, &info), 0);
+  return static_cast<int64_t>(info.st_blocks) * 512;
+}
+
+// A segment of 1 MiB rings, its client's mapping, and a copy of the descriptor the client kept.
+struct KeptSegment {
+  std::unique_ptr<ShmSegment> daemon, client;
+  int kept = -1;
+  ~KeptSegment() {
+    if (kept >= 0) close(kept);
+  }
+};
+
+void MakeKept(KeptSegment& s, uint64_t session_id) {
+  s.daemon = CreateOrDie(session_id, {1 << 20, 1 << 20});
+  ASSERT_TRUE(s.daemon);
+  s.kept = dup(s.daemon->fd());
+  auto client = OpenCopy(*s.daemon, session_id);
+  ASSERT_TRUE(client) << client.error().message;
+  s.client = std::move(*client);
+}
+
+TEST(ShmSegmentTest, ReleaseFreesTheMemoryThatTheClientsDescriptorAndMappingHold) {
+  KeptSegment s;
+  MakeKept(s, 3);
+  ASSERT_TRUE(s.client);
+  const auto size = static_cast<int64_t>(s.daemon->layout().segment_size);
+  UpdateWriter writer(s.client->update_ring());
   ASSERT_TRUE(writer.AddObject(1, Triangle(), Motion::kRigid, {}));
-  auto updates = reader.Drain(1);
+  EXPECT_GE(AllocatedBytes(s.kept), size) << "allocated whole when made";
+
+  ASSERT_TRUE(s.daemon->Release());
+  EXPECT_EQ(AllocatedBytes(s.kept), 0) << "the kept descriptor still holds memory";
+  // Both mappings stay valid and read zeros: the rings are empty, nothing faulted.
+  UpdateReader reader(s.daemon->update_ring(), RingLimits{});
+  auto updates = reader.Drain(0);
   ASSERT_TRUE(updates) << updates.error().message;
-  EXPECT_EQ(updates->size(), 1u);
-  EXPECT_FALSE(daemon->faulted());
+  EXPECT_TRUE(updates->empty());
+  EXPECT_FALSE(s.daemon->faulted());
+  EXPECT_FALSE(s.client->faulted());
+  EXPECT_TRUE(s.daemon->Release()) << "idempotent";
+}
+
+TEST(ShmSegmentTest, DestroyingTheDaemonsSegmentFreesItsMemoryWhileTheClientKeepsItsOwn) {
+  KeptSegment s;
+  MakeKept(s, 4);
+  ASSERT_TRUE(s.client);
+  ASSERT_GT(AllocatedBytes(s.kept), 0);
+  s.daemon.reset();
+  EXPECT_EQ(AllocatedBytes(s.kept), 0);
+  // What the client touches afterwards is its own memory again, and it still works.
+  UpdateWriter writer(s.client->update_ring());
+  ASSERT_TRUE(writer.AddObject(1, Triangle(), Motion::kRigid, {}));
+  EXPECT_GT(AllocatedBytes(s.kept), 0);
+  EXPECT_LT(AllocatedBytes(s.kept), 64 << 10);
+}
+
+TEST(ShmSegmentTest, TheClientCannotSealTheSegmentAgainstRelease) {
+  KeptSegment s;
+  MakeKept(s, 5);
+  ASSERT_TRUE(s.client);
+  // F_SEAL_FUTURE_WRITE (or F_SEAL_WRITE) would make the punch fail; F_SEAL_SEAL forbids both.
+  for (const int seal : {F_SEAL_WRITE, F_SEAL_FUTURE_WRITE}) {
+    EXPECT_NE(fcntl(s.kept, F_ADD_SEALS, seal), 0);
+    EXPECT_EQ(errno, EPERM);
+  }
+  ASSERT_TRUE(s.daemon->Release());
+  EXPECT_EQ(AllocatedBytes(s.kept), 0);
+}
+
+TEST(ShmSegmentTest, OnlyTheDaemonReleasesTheSegment) {
+  KeptSegment s;
+  MakeKept(s, 6);
+  ASSERT_TRUE(s.client);
+  auto released = s.client->Release();
+  ASSERT_FALSE(released);
+  EXPECT_EQ(released.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(released.error().message.find("only the daemon releases it"), std::string::npos)
+      << released.error().message;
+  EXPECT_GT(AllocatedBytes(s.kept), 0);
 }
 
 }  // namespace

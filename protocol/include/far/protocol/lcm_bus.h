@@ -40,7 +40,9 @@ class LcmBus {
   /// it silently drops what does not fit: the daemon's one subscription for every session's
   /// request channel would lose a well-behaved session's step request after a burst of 30
   /// messages from another session (tests/integration: BurstFromOneSession...). Memory bound:
-  /// this many received messages (each at most one ~64 KiB datagram unless fragmented).
+  /// this many received messages, and at most 4 MiB of single-datagram ones in far's LCM
+  /// (its receive ring; about 14 MiB with the rings it replaced while they drain), given back
+  /// once they are handled (docs/protocol.md, "What the patched receive path guarantees").
   static constexpr int kQueueCapacity = 1000;
 
   /// Calls `handler` for every message on channels matching the regular expression `channel`

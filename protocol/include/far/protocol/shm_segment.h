@@ -5,8 +5,14 @@
 // daemon's local socket (SCM_RIGHTS). It has no name: no other process can open it, whatever
 // its user, and nothing is left in /dev/shm when either side dies. Its pages are allocated
 // when it is made (fallocate), so a full memory budget is an error at open, never a SIGBUS
-// later; and it is sealed against resizing (F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL), so the
-// client cannot truncate it under the daemon.
+// later; and it is sealed against resizing and further seals (F_SEAL_SHRINK | F_SEAL_GROW |
+// F_SEAL_SEAL), so the client can neither truncate it under the daemon nor seal it against the
+// daemon's Release.
+//
+// Its memory lives no longer than the session: the daemon keeps its descriptor and Release()s
+// the memory when the session ends, whatever descriptors or mappings the client still holds
+// (a client that kept the descriptor of a closed session holds an empty file: a page it
+// touches again is its own, charged to it like any memory it allocates).
 //
 // The daemon never trusts the segment's contents: it keeps the layout and the session key
 // privately and reads only the client-owned ring indices (checked on every load) and records
@@ -60,11 +66,18 @@ class ShmSegment {
 
   /// A name for logs: "far-session-<id>" (the segment itself has none).
   const std::string& name() const { return name_; }
-  /// The daemon's descriptor of the segment, to send to the client; -1 once closed (and always
-  /// on the client).
+  /// The daemon's descriptor of the segment, to send to the client; -1 on the client (which
+  /// closes its own once mapped).
   int fd() const { return fd_; }
-  /// Closes the daemon's descriptor (the mapping stays valid).
-  void CloseFd();
+  /// Daemon: frees the segment's memory now (a hole punched over the whole file), whoever
+  /// still holds a descriptor or a mapping of it: the client, a copy it kept after the session
+  /// closed. Both sides' mappings stay valid and read zeros; a page touched afterwards is a new
+  /// page, charged to the process that touches it. The session ends with it (the rings hold
+  /// nothing any more). Idempotent; the destructor calls it. Thread safety: any thread, also
+  /// while another thread reads or writes the rings (under the SIGBUS guard, as always).
+  /// Errors: kInvalidArgument (the client's mapping: it has no descriptor), kUnavailable
+  /// (fallocate failed; errno's text).
+  Result<void> Release();
   uint64_t session_id() const { return session_id_; }
   /// The MAC key of the session's LCM messages (private copy).
   const SessionKey& session_key() const { return key_; }
