@@ -327,7 +327,7 @@ double MiB(int64_t kib) { return kib / 1024.0; }
 }  // namespace
 
 void PrintHoarding(const HoardReport& r, int sessions) {
-  std::printf("## (e) Hoarding: sessions closed, their segments' descriptors kept\n\n");
+  std::printf("## (h) Hoarding: sessions closed, their segments' descriptors kept\n\n");
   std::printf(
       "One client (this process) opens %d sessions one after another on the daemon's socket, "
       "keeps each segment's descriptor and closes the connection (the session ends); busy or "
@@ -354,7 +354,7 @@ void PrintHoarding(const HoardReport& r, int sessions) {
 }
 
 void PrintKilledClient(const KilledClientReport& r, const KilledClientSetup& setup) {
-  std::printf("## (f) A client killed while its step runs\n\n");
+  std::printf("## (i) A client killed while its step runs\n\n");
   if (setup.neighbour_triangles > 0) {
     std::printf(
         "A first client (a child process) uploads ScalingScene of about %lld triangles and "
@@ -383,7 +383,7 @@ void PrintKilledClient(const KilledClientReport& r, const KilledClientSetup& set
 }
 
 void PrintLargeFlood(const BigFloodReport& r) {
-  std::printf("## (g) A flood of large datagrams\n\n");
+  std::printf("## (j) A flood of large datagrams\n\n");
   std::printf(
       "One thread of this process publishes %lld-byte datagrams of random bytes on the "
       "daemon's session request channels 1-100 (all of them subscribed: each is received, "

@@ -2,11 +2,11 @@
 
 // Issue 41's memory attacks on a far-daemon, measured for bench/RESULTS.md (parts h, i and j of
 // far_hardening_study):
-//   (e) hoarding: a client opens sessions one after another, keeps each segment's descriptor
+//   (h) hoarding: a client opens sessions one after another, keeps each segment's descriptor
 //       and closes the session; what the kept descriptors, the daemon and the system hold;
-//   (f) a client killed while its step runs: how long the daemon keeps its segment (mapped,
+//   (i) a client killed while its step runs: how long the daemon keeps its segment (mapped,
 //       and its memory allocated) and its resident size;
-//   (g) a flood of large (60 KB) datagrams on the daemon's request channels: the daemon's
+//   (j) a flood of large (60 KB) datagrams on the daemon's request channels: the daemon's
 //       resident size before, at the end of the flood, and once it has drained it.
 
 #include <sys/types.h>
@@ -52,7 +52,7 @@ struct HoardReport {
   std::string error;           ///< why it stopped early ("" when it did not)
 };
 
-/// (e) Opens `sessions` sessions by hand on the daemon's socket (the protocol, not far::Client,
+/// (h) Opens `sessions` sessions by hand on the daemon's socket (the protocol, not far::Client,
 /// which closes the descriptor), keeps each segment's descriptor and closes the connection;
 /// measures once the daemon shows no session, then closes the descriptors.
 HoardReport HoardSegments(const StudyDaemon& daemon, int sessions);
@@ -68,7 +68,7 @@ struct KilledClientReport {
   std::string error;
 };
 
-/// (f) Runs `self` in kKilledClientFlag mode: it opens a session, uploads a scene of about
+/// (i) Runs `self` in kKilledClientFlag mode: it opens a session, uploads a scene of about
 /// `triangles` triangles and steps it with `method` at `resolution`; `kill_after_s` after the
 /// step was sent, it is killed with SIGKILL. When `neighbour_triangles` > 0, another client
 /// (not killed) steps a scene of that size the same way first, so that the killed client's
@@ -98,13 +98,13 @@ struct BigFloodReport {
   std::string error;
 };
 
-/// (g) Publishes `bytes`-byte datagrams of random bytes on the daemon's session request
+/// (j) Publishes `bytes`-byte datagrams of random bytes on the daemon's session request
 /// channels (as fast as one thread can, for `seconds`), then waits `settle_s` for the daemon to
 /// drain them.
 BigFloodReport FloodLargeDatagrams(const StudyDaemon& daemon, int64_t bytes, double seconds,
                                    double settle_s);
 
-/// The markdown sections of (e), (f) and (g) for bench/RESULTS.md.
+/// The markdown sections of (h), (i) and (j) for bench/RESULTS.md.
 void PrintHoarding(const HoardReport& report, int sessions);
 void PrintKilledClient(const KilledClientReport& report, const KilledClientSetup& setup);
 void PrintLargeFlood(const BigFloodReport& report);
