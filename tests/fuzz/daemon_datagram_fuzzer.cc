@@ -152,7 +152,6 @@ struct DaemonUnderTest {
       params.client_name = "fuzz";
       auto session = sessions.Open(params, protocol::PeerCredentials{1, 1000, 1000});
       FAR_FUZZ_CHECK(session);
-      (*session)->segment->CloseFd();
       clients[(*session)->reply_channel] = {(*session)->id, ClientView{(*session)->key, 0}};
     }
     // Everything on the bus; the harness never sends on a name with "REPLY".

@@ -42,7 +42,6 @@ protocol::ShmSegment& Segment() {
   static const std::unique_ptr<protocol::ShmSegment> segment = [] {
     auto created = protocol::ShmSegment::Create(1, {kCapacity, kCapacity});
     FAR_FUZZ_CHECK(created);
-    (*created)->CloseFd();  // the daemon closes its descriptor once the client has it
     return std::move(*created);
   }();
   return *segment;
