@@ -6,7 +6,8 @@
 //   (b) the same healthy client while this process floods LCM with garbage and forged step
 //       requests; the daemon's rejected-message counter and log growth;
 //   (c) one user opening sessions as fast as it can, and a second user's opens meanwhile;
-//   (d) the daemon's resident size before, with and after 4 sessions of the largest scene.
+//   (d) the daemon's resident size before, with and after 4 sessions of the largest scene;
+//   (e) issue 41: what a client's floods add to the daemon's log (a step flood, an open flood).
 // Run inside a network namespace (it re-runs itself through deploy/netns-run.sh otherwise):
 //   deploy/netns-run.sh build/release/bench/daemon/far_hardening_study [--seconds 6]
 #include <sys/utsname.h>
@@ -24,6 +25,7 @@
 #include "garbage_flood.h"
 #include "healthy_client.h"
 #include "large_scene.h"
+#include "log_flood.h"
 #include "slot_exhaustion.h"
 #include "study_daemon.h"
 #include <CLI/CLI.hpp>
@@ -41,7 +43,8 @@ struct Settings {
   int64_t triangles = 1'990'000;  // the heavy scene (the default max_triangles_per_session: 2M)
   double flood_rate = 50'000;
   int hog_attempts = 100;
-  std::string parts = "abcd";
+  std::string parts = "abcde";
+  double log_flood_seconds = 20;      // each flood of (e)
   std::string heavy_method = "aabb";  // the heaviest legal: exact refuses over 2^30 pairs
   // Contacts among the triangles within this distance of a partner object's box: a wider
   // search, so that each heavy step runs until its deadline (0: plain contacts).
@@ -400,6 +403,44 @@ void StudyMemory(const Settings& settings, const Scene& scene) {
               (after - baseline) / 1024.0);
 }
 
+void PrintLogRow(const char* flood, const LogFloodReport& sent, const LogGrowth& growth) {
+  if (!sent.error.empty()) {
+    std::printf("| %s | not run: %s | | | | | |\n", flood, sent.error.c_str());
+    return;
+  }
+  const double s = std::max(1e-9, sent.seconds);
+  std::printf("| %s | %.1f s | %lld (%lld refused) | %lld | %lld B | %.0f B/s | %s |\n", flood,
+              sent.seconds, static_cast<long long>(sent.sent), static_cast<long long>(sent.refused),
+              static_cast<long long>(growth.lines), static_cast<long long>(growth.bytes),
+              growth.bytes / s, growth.Events().c_str());
+}
+
+// (e) One client floods the daemon with what gets a log line, one flood at a time, each
+// against a daemon of its own; the log's growth over the flood and the second after it.
+void StudyLogFloods(const Settings& settings) {
+  std::printf("## (e) The daemon's log during a client's floods\n\n");
+  std::printf(
+      "Each flood runs %.0f s against a far-daemon of its own (--log-level info), from one "
+      "client of uid %d. Step flood: one session of one 16-triangle object sends step requests "
+      "(aabb) back to back without waiting for the answers (those past the session's queue or "
+      "request rate are refused busy). Open flood: sessions opened back to back, each one that "
+      "opens closed at once (those past the open rate are refused busy). Log growth: from the "
+      "flood's start to 1 s after its end.\n\n",
+      settings.log_flood_seconds, static_cast<int>(geteuid()));
+  std::printf("| flood | time | sent | log lines | log growth | per second | lines by event |\n");
+  std::printf("| --- | --: | --: | --: | --: | --: | --- |\n");
+  using Flood = LogFloodReport (*)(const StudyDaemon&, double);
+  for (const auto& [name, flood] :
+       {std::pair<const char*, Flood>{"step flood", &StepFlood}, {"open flood", &OpenFlood}}) {
+    auto daemon = StartDaemon(settings);
+    const int64_t before = daemon->LogBytes();
+    const LogFloodReport sent = flood(*daemon, settings.log_flood_seconds);
+    std::this_thread::sleep_for(1s);
+    PrintLogRow(name, sent, LogGrowthSince(*daemon, before));
+  }
+  std::printf("\n");
+}
+
 }  // namespace
 }  // namespace far::study
 
@@ -420,7 +461,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hog-attempts", settings.hog_attempts, "opens of the first user in (c)")
       ->capture_default_str();
-  app.add_option("--parts", settings.parts, "which parts to run (letters of abcd)")
+  app.add_option("--log-flood-seconds", settings.log_flood_seconds, "length of each flood of (e)")
+      ->capture_default_str();
+  app.add_option("--parts", settings.parts, "which parts to run (letters of abcde)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")
       ->capture_default_str()
@@ -450,5 +493,6 @@ int main(int argc, char** argv) {
   if (runs('b')) StudyGarbageFlood(settings);
   if (runs('c')) StudySlots(settings, std::filesystem::read_symlink("/proc/self/exe").string());
   if (runs('d')) StudyMemory(settings, scene);
+  if (runs('e')) StudyLogFloods(settings);
   return 0;
 }

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "daemon_stats.h"
+#include "log_limiter.h"
 #include "message_handlers.h"
 #include "replier.h"
 #include "session_registry.h"
@@ -77,7 +78,8 @@ void Daemon::Impl::CloseSession(int64_t id, const std::string& reason) {
   if (!session) return;
   replier->SessionError(*session, -1,
                         MakeError(ErrorCode::kUnavailable, "session closed: " + reason), true);
-  spdlog::info("event=session_close session={} reason=\"{}\"", id, reason);
+  LogForClient(spdlog::level::info, session->uid, "session_close",
+               "event=session_close session={} reason=\"{}\"", id, reason);
 }
 
 void Daemon::Impl::CloseEverySession() {
@@ -93,9 +95,12 @@ void Daemon::Impl::CloseEverySession() {
 void Daemon::Impl::ServeMessages(const std::atomic<bool>* stop_flag) {
   while (!Stopping(stop_flag)) {
     const bool handled = bus->Handle(std::chrono::milliseconds(100));
+    // The summaries of floods that stopped (at most once a second).
+    ClientLogLimiter().Flush();
     // (a signal that stops the daemon also interrupts LCM's wait: not an error)
     if (!handled && !Stopping(stop_flag)) {
-      spdlog::error("event=lcm_error lcm_url={}", config.lcm_url);
+      LogForClient(spdlog::level::err, LogLimiter::kNoUser, "lcm_error",
+                   "event=lcm_error lcm_url={}", config.lcm_url);
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
   }
@@ -140,6 +145,7 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   socket_thread.join();
   spdlog::info("event=daemon_stopping sessions={}", d.sessions.size());
   d.CloseEverySession();
+  ClientLogLimiter().Flush(LogLimiter::Clock::now(), /*all=*/true);
   spdlog::info("event=daemon_stopped steps_total={}", d.stats.steps_total());
   return {};
 }

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <string>
 
-#include <spdlog/spdlog.h>
+#include "log_limiter.h"
 
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
@@ -107,7 +107,8 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
   auto refuse = [&](const Error& error) {
     SetRefusal(reply, error);
     stats_.CountError(reply.status_name);
-    spdlog::warn("event=open_refused uid={} reason=\"{}\"", uid, ToString(error));
+    LogForClient(spdlog::level::warn, uid, "open_refused",
+                 "event=open_refused uid={} reason=\"{}\"", uid, ToString(error));
     if (auto out = protocol::EncodeMessage(reply)) (void)pending.connection.Send(*out);
   };
   auto [rate, inserted] =
@@ -135,12 +136,14 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
   (*session)->segment->CloseFd();
   if (!sent) {
     sessions_.Close((*session)->id);
-    spdlog::warn("event=open_failed uid={} reason=\"{}\"", uid, sent.error().message);
+    LogForClient(spdlog::level::warn, uid, "open_failed", "event=open_failed uid={} reason=\"{}\"",
+                 uid, sent.error().message);
     return;
   }
   // Said before the worker starts: from then on the segment is the worker's, which frees it as
   // soon as the session closes, and another thread may close it (a shutdown, a faulted ring).
-  spdlog::info("event=session_open session={} uid={} pid={} client=\"{}\" segment={}",
+  LogForClient(spdlog::level::info, uid, "session_open",
+               "event=session_open session={} uid={} pid={} client=\"{}\" segment={}",
                (*session)->id, uid, pending.peer.pid, (*session)->client_name,
                (*session)->segment->name());
   connections_.emplace((*session)->id, std::move(pending.connection));
@@ -194,9 +197,11 @@ void SocketServer::Run(const std::atomic<bool>& stop) {
       // A client sends nothing after its open: anything readable is its end of the session.
       (void)it->second.Receive(protocol::kMaxControlMessageBytes, std::chrono::milliseconds(0));
       if (it->second.PeerClosed() || (fds[first + k].revents & (POLLHUP | POLLERR | POLLRDHUP))) {
-        if (sessions_.Close(ids[k]))
-          spdlog::info("event=session_close session={} reason=\"the client closed its connection\"",
+        if (auto closed = sessions_.Close(ids[k])) {
+          LogForClient(spdlog::level::info, closed->uid, "session_close",
+                       "event=session_close session={} reason=\"the client closed its connection\"",
                        ids[k]);
+        }
         connections_.erase(it);
       }
     }
