@@ -259,18 +259,32 @@ Result<std::unique_ptr<LocalListener>> LocalListener::Listen(const std::string& 
     return MakeError(ErrorCode::kUnavailable, "listen failed: " + ErrnoText(errno));
   }
   fcntl(listener->fd_, F_SETFL, fcntl(listener->fd_, F_GETFL) | O_NONBLOCK);
+  listener->reserve_fd_ = open("/dev/null", O_RDONLY | O_CLOEXEC);
   return listener;
 }
 
 LocalListener::~LocalListener() {
   if (fd_ >= 0) close(fd_);
+  if (reserve_fd_ >= 0) close(reserve_fd_);
   if (!path_.empty()) unlink(path_.c_str());
 }
 
 std::optional<LocalConnection> LocalListener::Accept() {
   const int fd = accept4(fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+  out_of_descriptors_ = fd < 0 && (errno == EMFILE || errno == ENFILE);
+  if (out_of_descriptors_) ShedOneConnection();
   if (fd < 0) return std::nullopt;
+  if (reserve_fd_ < 0) reserve_fd_ = open("/dev/null", O_RDONLY | O_CLOEXEC);
   return LocalConnection(fd);
+}
+
+void LocalListener::ShedOneConnection() {
+  if (reserve_fd_ >= 0) close(reserve_fd_);
+  const int fd = accept4(fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+  if (fd >= 0) close(fd);
+  // Another thread may have taken the descriptor meanwhile: then there is no reserve until a
+  // later Accept finds one free.
+  reserve_fd_ = open("/dev/null", O_RDONLY | O_CLOEXEC);
 }
 
 Result<void> CheckDaemonSocket(const std::string& path, const PeerCredentials& daemon) {

@@ -74,6 +74,14 @@ void SocketServer::AcceptAll() {
     }
     pending_.push_back({std::move(*connection), peer, Clock::now() + kHandshakeTimeout});
   }
+  // Out of descriptors: the listener closed one waiting connection unanswered, and is left
+  // alone for a while, until connections close (it stays readable: polling it would spin).
+  if (listener_->out_of_descriptors()) {
+    stats_.CountRejected("out_of_descriptors",
+                         "far-daemon has no file descriptor left (RLIMIT_NOFILE): a connection "
+                         "was closed unanswered");
+    listener_paused_until_ = Clock::now() + kOutOfDescriptorsPause;
+  }
 }
 
 void SocketServer::Handshake(Pending& pending) {
@@ -163,7 +171,9 @@ void SocketServer::DropClosedSessions() {
 
 void SocketServer::Run(const std::atomic<bool>& stop) {
   while (!stop) {
-    std::vector<pollfd> fds = {{listener_->fd(), POLLIN, 0}};
+    // (poll ignores a negative descriptor: revents stays 0)
+    const bool listening = Clock::now() >= listener_paused_until_;
+    std::vector<pollfd> fds = {{listening ? listener_->fd() : -1, POLLIN, 0}};
     for (const Pending& p : pending_) fds.push_back({p.connection.fd(), POLLIN, 0});
     std::vector<int64_t> ids;
     for (const auto& [id, connection] : connections_) {
