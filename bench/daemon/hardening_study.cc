@@ -7,17 +7,21 @@
 //       requests; the daemon's rejected-message counter and log growth;
 //   (c) one user opening sessions as fast as it can, and a second user's opens meanwhile;
 //   (d) the daemon's resident size before, with and after 4 sessions of the largest scene;
-//   (e) issue 41: what a client's floods add to the daemon's log (a step flood, an open flood).
+//   (e) issue 41: what a client's floods add to the daemon's log (a step flood, an open flood);
+//   (f) issue 41: the daemon's CPU while it is out of file descriptors, and its recovery.
 // Run inside a network namespace (it re-runs itself through deploy/netns-run.sh otherwise):
 //   deploy/netns-run.sh build/release/bench/daemon/far_hardening_study [--seconds 6]
+#include <sys/resource.h>
 #include <sys/utsname.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <future>
 #include <thread>
@@ -31,6 +35,7 @@
 #include <CLI/CLI.hpp>
 
 #include "far/base/quantile.h"
+#include "far/protocol/local_socket.h"
 
 namespace far::study {
 namespace {
@@ -43,7 +48,7 @@ struct Settings {
   int64_t triangles = 1'990'000;  // the heavy scene (the default max_triangles_per_session: 2M)
   double flood_rate = 50'000;
   int hog_attempts = 100;
-  std::string parts = "abcde";
+  std::string parts = "abcdef";
   double log_flood_seconds = 20;      // each flood of (e)
   std::string heavy_method = "aabb";  // the heaviest legal: exact refuses over 2^30 pairs
   // Contacts among the triangles within this distance of a partner object's box: a wider
@@ -441,6 +446,77 @@ void StudyLogFloods(const Settings& settings) {
   std::printf("\n");
 }
 
+size_t OpenDescriptors(pid_t pid) {
+  size_t count = 0;
+  for ([[maybe_unused]] const auto& entry :
+       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/fd"))
+    ++count;
+  return count;
+}
+
+// Connects to `socket` every 20 ms (each connection kept, up to 32) until `stop`.
+int KnockUntil(const std::string& socket, const std::atomic<bool>& stop) {
+  int knocks = 0;
+  std::vector<protocol::LocalConnection> held;
+  while (!stop) {
+    if (auto connection = protocol::LocalConnection::Connect(socket)) {
+      held.push_back(std::move(*connection));
+      ++knocks;
+    }
+    if (held.size() > 32) held.clear();
+    std::this_thread::sleep_for(20ms);
+  }
+  return knocks;
+}
+
+// (f) The daemon's RLIMIT_NOFILE lowered to what it has open plus 6, then filled with sessions;
+// a client keeps connecting for `seconds`; then the sessions close and a client opens again.
+void StudyOutOfDescriptors(const Settings& settings) {
+  auto daemon = StartDaemon(settings);
+  const rlimit low{OpenDescriptors(daemon->pid()) + 6, 4096};
+  if (prlimit(daemon->pid(), RLIMIT_NOFILE, &low, nullptr) != 0)
+    Die("prlimit", MakeError(ErrorCode::kUnavailable, std::strerror(errno)));
+  std::vector<std::unique_ptr<client::Client>> sessions;
+  std::string refusal;
+  for (int i = 0; i < 16 && refusal.empty(); ++i) {
+    auto client = client::Client::Connect(daemon->Options("filler-" + std::to_string(i)));
+    if (client) sessions.push_back(std::move(*client));
+    if (!client) refusal = far::ToString(client.error());
+  }
+  std::atomic<bool> stop{false};
+  auto knocks =
+      std::async(std::launch::async, [&] { return KnockUntil(daemon->socket_path(), stop); });
+  const double cpu_before = daemon->CpuSeconds();
+  const auto start = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::duration<double>(settings.seconds));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double cores = (daemon->CpuSeconds() - cpu_before) / seconds;
+  stop = true;
+  const int knocked = knocks.get();
+  // Descriptors back: how long until a client opens a session again.
+  const size_t held = sessions.size();
+  sessions.clear();
+  const auto freed = std::chrono::steady_clock::now();
+  bool reopened = false;
+  while (!reopened && std::chrono::steady_clock::now() - freed < 10s)
+    reopened = client::Client::Connect(daemon->Options("after")).ok();
+  const double recovery_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - freed).count();
+  std::printf("## (f) Out of file descriptors\n\n");
+  std::printf(
+      "far-daemon's RLIMIT_NOFILE lowered (prlimit) to the descriptors it has open plus 6, then "
+      "sessions opened until one failed (%s); meanwhile a client connects every 20 ms for %.0f s "
+      "(each connection waits in the backlog, or is closed unanswered). Daemon CPU: all its "
+      "threads, in cores.\n\n",
+      refusal.empty() ? "none did" : refusal.c_str(), settings.seconds);
+  std::printf(
+      "| sessions held | connections tried | daemon CPU | reopened after the sessions "
+      "closed |\n| --: | --: | --: | --- |\n");
+  std::printf("| %zu | %d | %.1f%% | %s in %.2f s |\n\n", held, knocked, 100 * cores,
+              reopened ? "yes" : "NO", recovery_s);
+}
+
 }  // namespace
 }  // namespace far::study
 
@@ -463,7 +539,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--log-flood-seconds", settings.log_flood_seconds, "length of each flood of (e)")
       ->capture_default_str();
-  app.add_option("--parts", settings.parts, "which parts to run (letters of abcde)")
+  app.add_option("--parts", settings.parts, "which parts to run (letters of abcdef)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")
       ->capture_default_str()
@@ -494,5 +570,6 @@ int main(int argc, char** argv) {
   if (runs('c')) StudySlots(settings, std::filesystem::read_symlink("/proc/self/exe").string());
   if (runs('d')) StudyMemory(settings, scene);
   if (runs('e')) StudyLogFloods(settings);
+  if (runs('f')) StudyOutOfDescriptors(settings);
   return 0;
 }
