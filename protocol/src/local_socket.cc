@@ -222,11 +222,18 @@ Result<std::unique_ptr<LocalListener>> LocalListener::Listen(const std::string& 
   }
   if (!S_ISDIR(info.st_mode) || WritableByOthers(info) ||
       (info.st_uid != geteuid() && info.st_uid != 0)) {
+    // Another user's: perhaps made to keep this daemon from starting (docs/daemon.md).
+    const std::string whose =
+        info.st_uid != geteuid() && info.st_uid != 0
+            ? "; another user's directory: ask root to remove it, or listen elsewhere with "
+              "--socket PATH (clients: --socket PATH or $FAR_SOCKET_DIR)"
+            : "";
     return MakeError(ErrorCode::kPermissionDenied,
                      "socket directory " + directory.string() + " (owner uid " +
                          std::to_string(info.st_uid) + ", mode " + Octal(info.st_mode) +
                          ") must be a directory of this user or root that only its owner may "
-                         "write to");
+                         "write to" +
+                         whose);
   }
   // A socket already there: another daemon of this name, or one that died.
   if (lstat(path.c_str(), &info) == 0) {

@@ -17,6 +17,7 @@
 #include "far/gpu/gl_context.h"
 #include "far/model/scene_budget.h"
 #include "far/pipeline/pipeline.h"
+#include "far/protocol/channels.h"
 #include "far/protocol/lcm_bus.h"
 #include "far/protocol/local_socket.h"
 
@@ -60,6 +61,13 @@ Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, Daemo
   auto listener = protocol::LocalListener::Listen(SocketPathOf(config));
   if (!listener) return listener.error();
   impl->listener = std::move(*listener);
+  // Another user took /tmp/far-<uid>: the socket is in $HOME instead, where clients look too.
+  if (const auto user = protocol::PerUserSocketDirectory();
+      config.socket_path.empty() && !user.tmp_taken.empty() &&
+      protocol::DefaultSocketDirectory() == user.path) {
+    spdlog::warn("event=socket_directory_taken reason=\"{}\" socket={}", user.tmp_taken,
+                 SocketPathOf(config));
+  }
   impl->replier = std::make_unique<Replier>(*impl->bus, impl->stats);
   impl->handlers =
       std::make_unique<MessageHandlers>(impl->config, impl->sessions, *impl->replier, impl->stats);
