@@ -7,8 +7,9 @@
 //       requests; the daemon's rejected-message counter and log growth;
 //   (c) one user opening sessions as fast as it can, and a second user's opens meanwhile;
 //   (d) the daemon's resident size before, with and after 4 sessions of the largest scene;
-//   (e) issue 41: what a client's floods add to the daemon's log (a step flood, an open flood);
-//   (f) issue 41: the daemon's CPU while it is out of file descriptors, and its recovery.
+//   (l) issue 41: what a client's floods add to the daemon's log (a step flood, an open flood);
+//   (n) issue 41: the daemon's CPU while it is out of file descriptors (RLIMIT_NOFILE), and
+//       its recovery.
 // Run inside a network namespace (it re-runs itself through deploy/netns-run.sh otherwise):
 //   deploy/netns-run.sh build/release/bench/daemon/far_hardening_study [--seconds 6]
 #include <sys/resource.h>
@@ -48,8 +49,8 @@ struct Settings {
   int64_t triangles = 1'990'000;  // the heavy scene (the default max_triangles_per_session: 2M)
   double flood_rate = 50'000;
   int hog_attempts = 100;
-  std::string parts = "abcdef";
-  double log_flood_seconds = 20;      // each flood of (e)
+  std::string parts = "abcdln";
+  double log_flood_seconds = 20;      // each flood of (l)
   std::string heavy_method = "aabb";  // the heaviest legal: exact refuses over 2^30 pairs
   // Contacts among the triangles within this distance of a partner object's box: a wider
   // search, so that each heavy step runs until its deadline (0: plain contacts).
@@ -420,10 +421,10 @@ void PrintLogRow(const char* flood, const LogFloodReport& sent, const LogGrowth&
               growth.bytes / s, growth.Events().c_str());
 }
 
-// (e) One client floods the daemon with what gets a log line, one flood at a time, each
+// (l) One client floods the daemon with what gets a log line, one flood at a time, each
 // against a daemon of its own; the log's growth over the flood and the second after it.
 void StudyLogFloods(const Settings& settings) {
-  std::printf("## (e) The daemon's log during a client's floods\n\n");
+  std::printf("## (l) The daemon's log during a client's floods\n\n");
   std::printf(
       "Each flood runs %.0f s against a far-daemon of its own (--log-level info), from one "
       "client of uid %d. Step flood: one session of one 16-triangle object sends step requests "
@@ -469,7 +470,7 @@ int KnockUntil(const std::string& socket, const std::atomic<bool>& stop) {
   return knocks;
 }
 
-// (f) The daemon's RLIMIT_NOFILE lowered to what it has open plus 6, then filled with sessions;
+// (n) The daemon's RLIMIT_NOFILE lowered to what it has open plus 6, then filled with sessions;
 // a client keeps connecting for `seconds`; then the sessions close and a client opens again.
 void StudyOutOfDescriptors(const Settings& settings) {
   auto daemon = StartDaemon(settings);
@@ -503,7 +504,7 @@ void StudyOutOfDescriptors(const Settings& settings) {
     reopened = client::Client::Connect(daemon->Options("after")).ok();
   const double recovery_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - freed).count();
-  std::printf("## (f) Out of file descriptors\n\n");
+  std::printf("## (n) Out of file descriptors\n\n");
   std::printf(
       "far-daemon's RLIMIT_NOFILE lowered (prlimit) to the descriptors it has open plus 6, then "
       "sessions opened until one failed (%s); meanwhile a client connects every 20 ms for %.0f s "
@@ -537,9 +538,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hog-attempts", settings.hog_attempts, "opens of the first user in (c)")
       ->capture_default_str();
-  app.add_option("--log-flood-seconds", settings.log_flood_seconds, "length of each flood of (e)")
+  app.add_option("--log-flood-seconds", settings.log_flood_seconds, "length of each flood of (l)")
       ->capture_default_str();
-  app.add_option("--parts", settings.parts, "which parts to run (letters of abcdef)")
+  app.add_option("--parts", settings.parts, "which parts to run (letters of abcdln)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")
       ->capture_default_str()
@@ -569,7 +570,7 @@ int main(int argc, char** argv) {
   if (runs('b')) StudyGarbageFlood(settings);
   if (runs('c')) StudySlots(settings, std::filesystem::read_symlink("/proc/self/exe").string());
   if (runs('d')) StudyMemory(settings, scene);
-  if (runs('e')) StudyLogFloods(settings);
-  if (runs('f')) StudyOutOfDescriptors(settings);
+  if (runs('l')) StudyLogFloods(settings);
+  if (runs('n')) StudyOutOfDescriptors(settings);
   return 0;
 }
