@@ -430,19 +430,33 @@ void StudyLogFloods(const Settings& settings) {
       "client of uid %d. Step flood: one session of one 16-triangle object sends step requests "
       "(aabb) back to back without waiting for the answers (those past the session's queue or "
       "request rate are refused busy). Open flood: sessions opened back to back, each one that "
-      "opens closed at once (those past the open rate are refused busy). Log growth: from the "
-      "flood's start to 1 s after its end.\n\n",
+      "opens closed at once (those past the open rate are refused busy). Refused opens: the "
+      "same against a daemon started with --max-sessions-per-user 1 while the user holds one "
+      "session, so that every open is refused. Log growth: from the flood's start to 1 s after "
+      "its end.\n\n",
       settings.log_flood_seconds, static_cast<int>(geteuid()));
   std::printf("| flood | time | sent | log lines | log growth | per second | lines by event |\n");
   std::printf("| --- | --: | --: | --: | --: | --: | --- |\n");
   using Flood = LogFloodReport (*)(const StudyDaemon&, double);
-  for (const auto& [name, flood] :
-       {std::pair<const char*, Flood>{"step flood", &StepFlood}, {"open flood", &OpenFlood}}) {
-    auto daemon = StartDaemon(settings);
+  struct Case {
+    const char* name;
+    Flood flood;
+    std::vector<std::string> args;
+  };
+  for (const Case& c : {Case{"step flood", &StepFlood, {}}, Case{"open flood", &OpenFlood, {}},
+                        Case{"refused opens", &OpenFlood, {"--max-sessions-per-user", "1"}}}) {
+    auto daemon = StartDaemon(settings, c.args);
+    // At its limit: the user holds the one session it may.
+    std::unique_ptr<client::Client> held;
+    if (!c.args.empty()) {
+      auto client = client::Client::Connect(daemon->Options("held"));
+      if (!client) Die("held session", client.error());
+      held = std::move(*client);
+    }
     const int64_t before = daemon->LogBytes();
-    const LogFloodReport sent = flood(*daemon, settings.log_flood_seconds);
+    const LogFloodReport sent = c.flood(*daemon, settings.log_flood_seconds);
     std::this_thread::sleep_for(1s);
-    PrintLogRow(name, sent, LogGrowthSince(*daemon, before));
+    PrintLogRow(c.name, sent, LogGrowthSince(*daemon, before));
   }
   std::printf("\n");
 }
