@@ -13,16 +13,23 @@
 // And issue 41's memory attacks (memory_attacks.h; not in the default --parts):
 //   (h) sessions opened and closed with their segments' descriptors kept (hoarding);
 //   (i) a client killed while its step runs; (j) a flood of 60 KB datagrams.
+// And issue 41's log floods and descriptor exhaustion (not in the default --parts):
+//   (l) what a client's floods add to the daemon's log (a step flood, an open flood);
+//   (n) the daemon's CPU while it is out of file descriptors (RLIMIT_NOFILE), and
+//       its recovery.
 // Run inside a network namespace (it re-runs itself through deploy/netns-run.sh otherwise):
 //   deploy/netns-run.sh build/release/bench/daemon/far_hardening_study [--seconds 6]
+#include <sys/resource.h>
 #include <sys/utsname.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <future>
 #include <thread>
@@ -32,11 +39,13 @@
 #include "healthy_client.h"
 #include "large_scene.h"
 #include "memory_attacks.h"
+#include "log_flood.h"
 #include "slot_exhaustion.h"
 #include "study_daemon.h"
 #include <CLI/CLI.hpp>
 
 #include "far/base/quantile.h"
+#include "far/protocol/local_socket.h"
 
 namespace far::study {
 namespace {
@@ -50,9 +59,10 @@ struct Settings {
   double flood_rate = 50'000;
   int hog_attempts = 100;
   std::string parts = "abcd";
-  int hoard_sessions = 40;            // (e)
-  KilledClientSetup killed;           // (f)
-  int64_t flood_bytes = 60'000;       // (g): bytes per datagram
+  int hoard_sessions = 40;            // (h)
+  KilledClientSetup killed;           // (i)
+  int64_t flood_bytes = 60'000;       // (j): bytes per datagram
+  double log_flood_seconds = 20;      // each flood of (l)
   std::string heavy_method = "aabb";  // the heaviest legal: exact refuses over 2^30 pairs
   // Contacts among the triangles within this distance of a partner object's box: a wider
   // search, so that each heavy step runs until its deadline (0: plain contacts).
@@ -511,6 +521,128 @@ void StudyMemoryAttacks(const Settings& settings, Runs runs) {
   if (runs('j'))
     PrintLargeFlood(
         FloodLargeDatagrams(*StartDaemon(settings), settings.flood_bytes, settings.seconds, 3));
+
+void PrintLogRow(const char* flood, const LogFloodReport& sent, const LogGrowth& growth) {
+  if (!sent.error.empty()) {
+    std::printf("| %s | not run: %s | | | | | |\n", flood, sent.error.c_str());
+    return;
+  }
+  const double s = std::max(1e-9, sent.seconds);
+  std::printf("| %s | %.1f s | %lld (%lld refused) | %lld | %lld B | %.0f B/s | %s |\n", flood,
+              sent.seconds, static_cast<long long>(sent.sent), static_cast<long long>(sent.refused),
+              static_cast<long long>(growth.lines), static_cast<long long>(growth.bytes),
+              growth.bytes / s, growth.Events().c_str());
+}
+
+// (l) One client floods the daemon with what gets a log line, one flood at a time, each
+// against a daemon of its own; the log's growth over the flood and the second after it.
+void StudyLogFloods(const Settings& settings) {
+  std::printf("## (l) The daemon's log during a client's floods\n\n");
+  std::printf(
+      "Each flood runs %.0f s against a far-daemon of its own (--log-level info), from one "
+      "client of uid %d. Step flood: one session of one 16-triangle object sends step requests "
+      "(aabb) back to back without waiting for the answers (those past the session's queue or "
+      "request rate are refused busy). Open flood: sessions opened back to back, each one that "
+      "opens closed at once (those past the open rate are refused busy). Refused opens: the "
+      "same against a daemon started with --max-sessions-per-user 1 while the user holds one "
+      "session, so that every open is refused. Log growth: from the flood's start to 1 s after "
+      "its end.\n\n",
+      settings.log_flood_seconds, static_cast<int>(geteuid()));
+  std::printf("| flood | time | sent | log lines | log growth | per second | lines by event |\n");
+  std::printf("| --- | --: | --: | --: | --: | --: | --- |\n");
+  using Flood = LogFloodReport (*)(const StudyDaemon&, double);
+  struct Case {
+    const char* name;
+    Flood flood;
+    std::vector<std::string> args;
+  };
+  for (const Case& c : {Case{"step flood", &StepFlood, {}}, Case{"open flood", &OpenFlood, {}},
+                        Case{"refused opens", &OpenFlood, {"--max-sessions-per-user", "1"}}}) {
+    auto daemon = StartDaemon(settings, c.args);
+    // At its limit: the user holds the one session it may.
+    std::unique_ptr<client::Client> held;
+    if (!c.args.empty()) {
+      auto client = client::Client::Connect(daemon->Options("held"));
+      if (!client) Die("held session", client.error());
+      held = std::move(*client);
+    }
+    const int64_t before = daemon->LogBytes();
+    const LogFloodReport sent = c.flood(*daemon, settings.log_flood_seconds);
+    std::this_thread::sleep_for(1s);
+    PrintLogRow(c.name, sent, LogGrowthSince(*daemon, before));
+  }
+  std::printf("\n");
+}
+
+size_t OpenDescriptors(pid_t pid) {
+  size_t count = 0;
+  for ([[maybe_unused]] const auto& entry :
+       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/fd"))
+    ++count;
+  return count;
+}
+
+// Connects to `socket` every 20 ms (each connection kept, up to 32) until `stop`.
+int KnockUntil(const std::string& socket, const std::atomic<bool>& stop) {
+  int knocks = 0;
+  std::vector<protocol::LocalConnection> held;
+  while (!stop) {
+    if (auto connection = protocol::LocalConnection::Connect(socket)) {
+      held.push_back(std::move(*connection));
+      ++knocks;
+    }
+    if (held.size() > 32) held.clear();
+    std::this_thread::sleep_for(20ms);
+  }
+  return knocks;
+}
+
+// (n) The daemon's RLIMIT_NOFILE lowered to what it has open plus 6, then filled with sessions;
+// a client keeps connecting for `seconds`; then the sessions close and a client opens again.
+void StudyOutOfDescriptors(const Settings& settings) {
+  auto daemon = StartDaemon(settings);
+  const rlimit low{OpenDescriptors(daemon->pid()) + 6, 4096};
+  if (prlimit(daemon->pid(), RLIMIT_NOFILE, &low, nullptr) != 0)
+    Die("prlimit", MakeError(ErrorCode::kUnavailable, std::strerror(errno)));
+  std::vector<std::unique_ptr<client::Client>> sessions;
+  std::string refusal;
+  for (int i = 0; i < 16 && refusal.empty(); ++i) {
+    auto client = client::Client::Connect(daemon->Options("filler-" + std::to_string(i)));
+    if (client) sessions.push_back(std::move(*client));
+    if (!client) refusal = far::ToString(client.error());
+  }
+  std::atomic<bool> stop{false};
+  auto knocks =
+      std::async(std::launch::async, [&] { return KnockUntil(daemon->socket_path(), stop); });
+  const double cpu_before = daemon->CpuSeconds();
+  const auto start = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::duration<double>(settings.seconds));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double cores = (daemon->CpuSeconds() - cpu_before) / seconds;
+  stop = true;
+  const int knocked = knocks.get();
+  // Descriptors back: how long until a client opens a session again.
+  const size_t held = sessions.size();
+  sessions.clear();
+  const auto freed = std::chrono::steady_clock::now();
+  bool reopened = false;
+  while (!reopened && std::chrono::steady_clock::now() - freed < 10s)
+    reopened = client::Client::Connect(daemon->Options("after")).ok();
+  const double recovery_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - freed).count();
+  std::printf("## (n) Out of file descriptors\n\n");
+  std::printf(
+      "far-daemon's RLIMIT_NOFILE lowered (prlimit) to the descriptors it has open plus 6, then "
+      "sessions opened until one failed (%s); meanwhile a client connects every 20 ms for %.0f s "
+      "(each connection waits in the backlog, or is closed unanswered). Daemon CPU: all its "
+      "threads, in cores.\n\n",
+      refusal.empty() ? "none did" : refusal.c_str(), settings.seconds);
+  std::printf(
+      "| sessions held | connections tried | daemon CPU | reopened after the sessions "
+      "closed |\n| --: | --: | --: | --- |\n");
+  std::printf("| %zu | %d | %.1f%% | %s in %.2f s |\n\n", held, knocked, 100 * cores,
+              reopened ? "yes" : "NO", recovery_s);
 }
 
 }  // namespace
@@ -537,9 +669,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hog-attempts", settings.hog_attempts, "opens of the first user in (c)")
       ->capture_default_str();
+  app.add_option("--log-flood-seconds", settings.log_flood_seconds, "length of each flood of (l)")
+      ->capture_default_str();
   app.add_option("--parts", settings.parts,
-                 "which parts to run (letters of abcdefhij; e, f: issue 41's fair shares; h, i, "
-                 "j: its memory attacks)")
+                 "which parts to run (letters of abcdefhijln; e, f: issue 41's fair shares; h, i, "
+                 "j: its memory attacks; l, n: its log floods and descriptors)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")
       ->capture_default_str()
@@ -554,23 +688,23 @@ int main(int argc, char** argv) {
                  "the healthy client's steps per second in (a) and (b), as a simulator's fixed "
                  "rate (0: back to back)")
       ->capture_default_str();
-  app.add_option("--hoard-sessions", settings.hoard_sessions, "sessions opened and left in (e)")
+  app.add_option("--hoard-sessions", settings.hoard_sessions, "sessions opened and left in (h)")
       ->capture_default_str();
   app.add_option("--killed-triangles", settings.killed.triangles,
-                 "the scene of the client killed mid-step in (f)")
+                 "the scene of the client killed mid-step in (i)")
       ->capture_default_str();
   app.add_option("--killed-neighbour", settings.killed.neighbour_triangles,
-                 "the scene of another client stepping beside it in (f) (0: none)")
+                 "the scene of another client stepping beside it in (i) (0: none)")
       ->capture_default_str();
-  app.add_option("--killed-method", settings.killed.method, "their steps' method in (f)")
+  app.add_option("--killed-method", settings.killed.method, "their steps' method in (i)")
       ->capture_default_str();
   app.add_option("--killed-resolution", settings.killed.resolution,
-                 "their steps' resolution in (f)")
+                 "their steps' resolution in (i)")
       ->capture_default_str();
   app.add_option("--killed-after", settings.killed.kill_after_s,
-                 "seconds the client's step runs before (f)'s kill")
+                 "seconds the client's step runs before (i)'s kill")
       ->capture_default_str();
-  app.add_option("--flood-bytes", settings.flood_bytes, "bytes per datagram in (g)")
+  app.add_option("--flood-bytes", settings.flood_bytes, "bytes per datagram in (j)")
       ->capture_default_str();
   app.add_option("--daemon", settings.daemon, "far-daemon to start")->capture_default_str();
   app.add_option("--daemon-arg", settings.daemon_args,
@@ -591,5 +725,7 @@ int main(int argc, char** argv) {
   if (runs('e')) StudyTriangleShares(settings, self);
   if (runs('f')) StudySlotShares(settings, self);
   StudyMemoryAttacks(settings, runs);
+  if (runs('l')) StudyLogFloods(settings);
+  if (runs('n')) StudyOutOfDescriptors(settings);
   return 0;
 }

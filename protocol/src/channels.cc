@@ -3,9 +3,54 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <climits>
 #include <cstdlib>
+#include <cstring>
 
 namespace far::protocol {
+namespace {
+
+// Whether `path` is a directory of this user itself (not a symbolic link to one); else why not.
+bool IsOwnDirectory(const std::string& path, std::string* why_not = nullptr) {
+  struct stat info {};
+  std::string why;
+  if (lstat(path.c_str(), &info) != 0) {
+    why = std::strerror(errno);
+  } else if (S_ISLNK(info.st_mode)) {
+    why = "is a symbolic link";
+  } else if (!S_ISDIR(info.st_mode)) {
+    why = "is not a directory";
+  } else if (info.st_uid != geteuid()) {
+    why = "belongs to uid " + std::to_string(info.st_uid);
+  } else {
+    return true;
+  }
+  if (why_not != nullptr) *why_not = path + " " + why;
+  return false;
+}
+
+// The host name, with anything but [A-Za-z0-9.-] as '_' (it becomes part of a path).
+std::string HostName() {
+  char name[HOST_NAME_MAX + 1] = {};
+  if (gethostname(name, sizeof(name) - 1) != 0 || name[0] == '\0') return "localhost";
+  std::string host = name;
+  for (char& c : host) {
+    const bool plain = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                       c == '.' || c == '-';
+    if (!plain) c = '_';
+  }
+  return host;
+}
+
+// $HOME/.far/run-<host> when $HOME is a directory of this user, else "".
+std::string HomeSocketDirectory() {
+  const char* home = std::getenv("HOME");
+  if (home == nullptr || *home != '/' || !IsOwnDirectory(home)) return "";
+  return std::string(home) + "/.far/run-" + HostName();
+}
+
+}  // namespace
 
 bool IsValidDaemonName(std::string_view name) {
   if (name.empty() || name.size() > 16 || name[0] < 'a' || name[0] > 'z') return false;
@@ -67,7 +112,25 @@ std::string DefaultSocketDirectory() {
   if (stat("/run/far", &info) == 0 && S_ISDIR(info.st_mode)) return "/run/far";
   if (const char* runtime = std::getenv("XDG_RUNTIME_DIR"); runtime != nullptr && *runtime == '/')
     return std::string(runtime) + "/far";
-  return "/tmp/far-" + std::to_string(geteuid());
+  return PerUserSocketDirectory().path;
+}
+
+UserSocketDirectory PerUserSocketDirectory() {
+  UserSocketDirectory choice{"/tmp/far-" + std::to_string(geteuid()), ""};
+  std::string why_not;
+  if (IsOwnDirectory(choice.path, &why_not)) return choice;
+  const std::string home = HomeSocketDirectory();
+  struct stat info {};
+  if (lstat(choice.path.c_str(), &info) != 0 && errno == ENOENT) {
+    // Missing: the home directory stays in use once made (the other user may have removed
+    // theirs since, and the daemon serves there still).
+    if (!home.empty() && IsOwnDirectory(home)) choice.path = home;
+    return choice;
+  }
+  // Someone else's, or a link: never this user's socket directory.
+  choice.tmp_taken = why_not;
+  if (!home.empty()) choice.path = home;
+  return choice;
 }
 
 std::string DefaultSocketPath(std::string_view name) {

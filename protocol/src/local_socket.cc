@@ -222,11 +222,18 @@ Result<std::unique_ptr<LocalListener>> LocalListener::Listen(const std::string& 
   }
   if (!S_ISDIR(info.st_mode) || WritableByOthers(info) ||
       (info.st_uid != geteuid() && info.st_uid != 0)) {
+    // Another user's: perhaps made to keep this daemon from starting (docs/daemon.md).
+    const std::string whose =
+        info.st_uid != geteuid() && info.st_uid != 0
+            ? "; another user's directory: ask root to remove it, or listen elsewhere with "
+              "--socket PATH (clients: --socket PATH or $FAR_SOCKET_DIR)"
+            : "";
     return MakeError(ErrorCode::kPermissionDenied,
                      "socket directory " + directory.string() + " (owner uid " +
                          std::to_string(info.st_uid) + ", mode " + Octal(info.st_mode) +
                          ") must be a directory of this user or root that only its owner may "
-                         "write to");
+                         "write to" +
+                         whose);
   }
   // A socket already there: another daemon of this name, or one that died.
   if (lstat(path.c_str(), &info) == 0) {
@@ -259,18 +266,32 @@ Result<std::unique_ptr<LocalListener>> LocalListener::Listen(const std::string& 
     return MakeError(ErrorCode::kUnavailable, "listen failed: " + ErrnoText(errno));
   }
   fcntl(listener->fd_, F_SETFL, fcntl(listener->fd_, F_GETFL) | O_NONBLOCK);
+  listener->reserve_fd_ = open("/dev/null", O_RDONLY | O_CLOEXEC);
   return listener;
 }
 
 LocalListener::~LocalListener() {
   if (fd_ >= 0) close(fd_);
+  if (reserve_fd_ >= 0) close(reserve_fd_);
   if (!path_.empty()) unlink(path_.c_str());
 }
 
 std::optional<LocalConnection> LocalListener::Accept() {
   const int fd = accept4(fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+  out_of_descriptors_ = fd < 0 && (errno == EMFILE || errno == ENFILE);
+  if (out_of_descriptors_) ShedOneConnection();
   if (fd < 0) return std::nullopt;
+  if (reserve_fd_ < 0) reserve_fd_ = open("/dev/null", O_RDONLY | O_CLOEXEC);
   return LocalConnection(fd);
+}
+
+void LocalListener::ShedOneConnection() {
+  if (reserve_fd_ >= 0) close(reserve_fd_);
+  const int fd = accept4(fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+  if (fd >= 0) close(fd);
+  // Another thread may have taken the descriptor meanwhile: then there is no reserve until a
+  // later Accept finds one free.
+  reserve_fd_ = open("/dev/null", O_RDONLY | O_CLOEXEC);
 }
 
 Result<void> CheckDaemonSocket(const std::string& path, const PeerCredentials& daemon) {

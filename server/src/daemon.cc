@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "daemon_stats.h"
+#include "log_limiter.h"
 #include "message_handlers.h"
 #include "replier.h"
 #include "session_registry.h"
@@ -18,6 +19,7 @@
 #include "far/gpu/gl_context.h"
 #include "far/model/scene_budget.h"
 #include "far/pipeline/pipeline.h"
+#include "far/protocol/channels.h"
 #include "far/protocol/lcm_bus.h"
 #include "far/protocol/local_socket.h"
 
@@ -85,6 +87,13 @@ Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, Daemo
   auto listener = protocol::LocalListener::Listen(SocketPathOf(config));
   if (!listener) return listener.error();
   impl->listener = std::move(*listener);
+  // Another user took /tmp/far-<uid>: the socket is in $HOME instead, where clients look too.
+  if (const auto user = protocol::PerUserSocketDirectory();
+      config.socket_path.empty() && !user.tmp_taken.empty() &&
+      protocol::DefaultSocketDirectory() == user.path) {
+    spdlog::warn("event=socket_directory_taken reason=\"{}\" socket={}", user.tmp_taken,
+                 SocketPathOf(config));
+  }
   impl->replier = std::make_unique<Replier>(*impl->bus, impl->stats);
   impl->handlers =
       std::make_unique<MessageHandlers>(impl->config, impl->sessions, *impl->replier, impl->stats);
@@ -110,7 +119,8 @@ void Daemon::Impl::EndSession(int64_t id, const Error& why) {
   // before it sees its end of the connection go.
   replier->SessionError(*session, -1, why, true);
   if (!sessions.Close(id)) return;
-  spdlog::info("event=session_close session={} uid={} reason=\"{}\"", id, session->uid,
+  LogForClient(spdlog::level::info, session->uid, "session_close",
+               "event=session_close session={} uid={} reason=\"{}\"", id, session->uid,
                why.message);
 }
 
@@ -145,9 +155,12 @@ void Daemon::Impl::ServeMessages(const std::atomic<bool>* stop_flag) {
   while (!Stopping(stop_flag)) {
     ExpireIdleSessions();
     const bool handled = bus->Handle(std::chrono::milliseconds(100));
+    // The summaries of floods that stopped (at most once a second).
+    ClientLogLimiter().Flush();
     // (a signal that stops the daemon also interrupts LCM's wait: not an error)
     if (!handled && !Stopping(stop_flag)) {
-      spdlog::error("event=lcm_error lcm_url={}", config.lcm_url);
+      LogForClient(spdlog::level::err, LogLimiter::kNoUser, "lcm_error",
+                   "event=lcm_error lcm_url={}", config.lcm_url);
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
   }
@@ -193,6 +206,7 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   socket_thread.join();
   spdlog::info("event=daemon_stopping sessions={}", d.sessions.size());
   d.CloseEverySession();
+  ClientLogLimiter().Flush(LogLimiter::Clock::now(), /*all=*/true);
   spdlog::info("event=daemon_stopped steps_total={}", d.stats.steps_total());
   return {};
 }

@@ -51,7 +51,8 @@ struct CommandLine {
     Add("--socket", &DaemonConfig::socket_path,
         "socket path (default: $FAR_SOCKET_DIR/<name>.sock when set, else /run/far/<name>.sock "
         "when /run/far exists, else $XDG_RUNTIME_DIR/far/<name>.sock, else "
-        "/tmp/far-<uid>/<name>.sock)",
+        "/tmp/far-<uid>/<name>.sock, or $HOME/.far/run-<host>/<name>.sock when another user "
+        "holds /tmp/far-<uid>)",
         false);
     Add("--gpu", &DaemonConfig::gpu,
         "EGL device index of the GPU to use, as --list-gpus numbers them (that device and no "

@@ -4,7 +4,7 @@
 #include <exception>
 #include <string>
 
-#include <spdlog/spdlog.h>
+#include "log_limiter.h"
 
 #include "far/protocol/channels.h"
 #include "far/protocol/message.h"
@@ -46,7 +46,8 @@ void MessageHandlers::Guarded(std::string_view channel, std::span<const uint8_t>
   // LCM calls handlers from its C code: an exception must never leave this function.
   try {
     stats_.CountError(far::ToString(ErrorCode::kInternal));
-    spdlog::error("event=handler_exception channel={} what=\"{}\"", channel, what);
+    LogForClient(spdlog::level::err, LogLimiter::kNoUser, "handler_exception",
+                 "event=handler_exception channel={} what=\"{}\"", channel, what);
   } catch (...) {
     // Out of memory while reporting: nothing more can be done for this message.
   }

@@ -1,6 +1,6 @@
 #include "replier.h"
 
-#include <spdlog/spdlog.h>
+#include "log_limiter.h"
 
 #include "far/protocol/convert.h"
 #include "far/protocol/message.h"
@@ -8,22 +8,23 @@
 
 namespace far::server {
 
-void Replier::Publish(const std::string& channel, std::span<const uint8_t> bytes) {
+void Replier::Publish(uid_t uid, const std::string& channel, std::span<const uint8_t> bytes) {
   if (auto ok = bus_.Publish(channel, bytes); !ok) {
-    spdlog::error("event=publish_failed channel={} reason=\"{}\"", channel, ok.error().message);
+    LogForClient(spdlog::level::err, uid, "publish_failed",
+                 "event=publish_failed channel={} reason=\"{}\"", channel, ok.error().message);
   }
 }
 
 void Replier::Seal(Session& session, std::span<const uint8_t> inner) {
   auto sealed = protocol::SealEncoded(inner, session.id, session.next_reply_id++, session.key);
-  if (sealed) Publish(session.reply_channel, *sealed);
+  if (sealed) Publish(session.uid, session.reply_channel, *sealed);
 }
 
 Result<void> Replier::StepReply(Session& session, const far_lcm::step_reply_t& full) {
   auto bytes = protocol::EncodeStepReplyForTransport(full, *session.replies, session.key,
                                                      session.next_reply_id++);
   if (!bytes) return bytes.error();
-  Publish(session.reply_channel, *bytes);
+  Publish(session.uid, session.reply_channel, *bytes);
   return {};
 }
 
@@ -34,7 +35,8 @@ void Replier::StepError(Session& session, const protocol::StepCommand& command,
                                    session.applied_sequence.load()};
   if (auto bytes = protocol::EncodeMessage(protocol::MakeStepErrorReply(ids, error)))
     Seal(session, *bytes);
-  spdlog::info("event=step_error session={} step={} code={} reason=\"{}\"", session.id,
+  LogForClient(spdlog::level::info, session.uid, std::string("step_") + far::ToString(error.code),
+               "event=step_error session={} step={} code={} reason=\"{}\"", session.id,
                command.step_id, far::ToString(error.code), error.message);
 }
 

@@ -38,7 +38,8 @@ class Replier {
   void SessionError(Session& session, int64_t request_id, const Error& error, bool session_closed);
 
  private:
-  void Publish(const std::string& channel, std::span<const uint8_t> bytes);
+  // A failure is logged as the session's user's (LogForClient).
+  void Publish(uid_t uid, const std::string& channel, std::span<const uint8_t> bytes);
 
   protocol::LcmBus& bus_;
   DaemonStats& stats_;

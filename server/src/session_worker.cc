@@ -11,8 +11,8 @@
 #include <thread>
 
 #include "deadline_memory.h"
+#include "log_limiter.h"
 #include "step_cpu_meter.h"
-#include <spdlog/spdlog.h>
 
 #include "far/base/thread_pool.h"
 #include "far/protocol/convert.h"
@@ -100,7 +100,8 @@ class SessionWorker {
     auto pipeline = Pipeline::Create(options);
     if (!pipeline && options.use_gl) {
       // No GL context for this session (the driver's limit?): the CPU methods still work.
-      spdlog::warn("event=session_without_gl session={} reason=\"{}\"", session_->id,
+      LogForClient(spdlog::level::warn, session_->uid, "session_without_gl",
+                   "event=session_without_gl session={} reason=\"{}\"", session_->id,
                    pipeline.error().message);
       options.use_gl = false;
       pipeline = Pipeline::Create(options);
@@ -183,11 +184,11 @@ class SessionWorker {
   void Demote(double ms, const char* step_state, const StepCpuMeter& meter) {
     if (session_->demoted.exchange(true)) return;
     if (session_->pipeline) session_->pipeline->SetCpuBackground(HeavySessionThreads());
-    spdlog::info(
-        "event=session_demoted session={} step_ms={:.1f} step={} nice={} cpu_ms={:.1f} "
-        "setup_ms={:.1f} setup_covered_ms={:.1f}",
-        session_->id, ms, step_state, ThreadPool::kBackgroundNice, meter.SteadyMs(),
-        meter.setup_ms(), meter.covered_ms());
+    LogForClient(spdlog::level::info, session_->uid, "session_demoted",
+                 "event=session_demoted session={} step_ms={:.1f} step={} nice={} cpu_ms={:.1f} "
+                 "setup_ms={:.1f} setup_covered_ms={:.1f}",
+                 session_->id, ms, step_state, ThreadPool::kBackgroundNice, meter.SteadyMs(),
+                 meter.setup_ms(), meter.covered_ms());
   }
 
   void RunStep(const StepJob& job) {
@@ -244,8 +245,9 @@ class SessionWorker {
       session_->latency.Add(ms);
     }
     session_->steps++;
-    spdlog::debug("event=step session={} step={} method={} ms={:.3f} contacts={}", session_->id,
-                  command.step_id, result->stats.method, ms, result->contacts.size());
+    LogForClient(spdlog::level::debug, session_->uid, "step",
+                 "event=step session={} step={} method={} ms={:.3f} contacts={}", session_->id,
+                 command.step_id, result->stats.method, ms, result->contacts.size());
   }
 
   std::shared_ptr<Session> session_;

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <string>
 
-#include <spdlog/spdlog.h>
+#include "log_limiter.h"
 
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
@@ -74,6 +74,14 @@ void SocketServer::AcceptAll() {
     }
     pending_.push_back({std::move(*connection), peer, Clock::now() + kHandshakeTimeout});
   }
+  // Out of descriptors: the listener closed one waiting connection unanswered, and is left
+  // alone for a while, until connections close (it stays readable: polling it would spin).
+  if (listener_->out_of_descriptors()) {
+    stats_.CountRejected("out_of_descriptors",
+                         "far-daemon has no file descriptor left (RLIMIT_NOFILE): a connection "
+                         "was closed unanswered");
+    listener_paused_until_ = Clock::now() + kOutOfDescriptorsPause;
+  }
 }
 
 void SocketServer::Handshake(Pending& pending) {
@@ -107,7 +115,8 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
   auto refuse = [&](const Error& error) {
     SetRefusal(reply, error);
     stats_.CountError(reply.status_name);
-    spdlog::warn("event=open_refused uid={} reason=\"{}\"", uid, ToString(error));
+    LogForClient(spdlog::level::warn, uid, "open_refused",
+                 "event=open_refused uid={} reason=\"{}\"", uid, ToString(error));
     if (auto out = protocol::EncodeMessage(reply)) (void)pending.connection.Send(*out);
   };
   auto [rate, inserted] =
@@ -137,12 +146,14 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
   if (!sent) {
     sessions_.Close((*session)->id);
     (*session)->worker_done = true;  // none will start: reaped (and its budget given back) now
-    spdlog::warn("event=open_failed uid={} reason=\"{}\"", uid, sent.error().message);
+    LogForClient(spdlog::level::warn, uid, "open_failed", "event=open_failed uid={} reason=\"{}\"",
+                 uid, sent.error().message);
     return;
   }
   // Said before the worker starts: from then on the segment is the worker's, which frees it as
   // soon as the session closes, and another thread may close it (a shutdown, a faulted ring).
-  spdlog::info("event=session_open session={} uid={} pid={} client=\"{}\" segment={}",
+  LogForClient(spdlog::level::info, uid, "session_open",
+               "event=session_open session={} uid={} pid={} client=\"{}\" segment={}",
                (*session)->id, uid, pending.peer.pid, (*session)->client_name,
                (*session)->segment->name());
   connections_.emplace((*session)->id, std::move(pending.connection));
@@ -162,7 +173,9 @@ void SocketServer::DropClosedSessions() {
 
 void SocketServer::Run(const std::atomic<bool>& stop) {
   while (!stop) {
-    std::vector<pollfd> fds = {{listener_->fd(), POLLIN, 0}};
+    // (poll ignores a negative descriptor: revents stays 0)
+    const bool listening = Clock::now() >= listener_paused_until_;
+    std::vector<pollfd> fds = {{listening ? listener_->fd() : -1, POLLIN, 0}};
     for (const Pending& p : pending_) fds.push_back({p.connection.fd(), POLLIN, 0});
     std::vector<int64_t> ids;
     for (const auto& [id, connection] : connections_) {
@@ -196,9 +209,11 @@ void SocketServer::Run(const std::atomic<bool>& stop) {
       // A client sends nothing after its open: anything readable is its end of the session.
       (void)it->second.Receive(protocol::kMaxControlMessageBytes, std::chrono::milliseconds(0));
       if (it->second.PeerClosed() || (fds[first + k].revents & (POLLHUP | POLLERR | POLLRDHUP))) {
-        if (sessions_.Close(ids[k]))
-          spdlog::info("event=session_close session={} reason=\"the client closed its connection\"",
+        if (auto closed = sessions_.Close(ids[k])) {
+          LogForClient(spdlog::level::info, closed->uid, "session_close",
+                       "event=session_close session={} reason=\"the client closed its connection\"",
                        ids[k]);
+        }
         connections_.erase(it);
       }
     }

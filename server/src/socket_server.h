@@ -31,6 +31,9 @@ namespace far::server {
 class SocketServer {
  public:
   static constexpr std::chrono::milliseconds kHandshakeTimeout{2000};
+  /// How long the listener is not polled after an accept found the daemon out of file
+  /// descriptors (it stays readable: polling it would spin).
+  static constexpr std::chrono::milliseconds kOutOfDescriptorsPause{100};
 
   SocketServer(std::unique_ptr<protocol::LocalListener> listener, const DaemonConfig& config,
                SessionRegistry& sessions, DaemonStats& stats, const WorkerContext& workers,
@@ -70,6 +73,7 @@ class SocketServer {
   std::vector<Pending> pending_;
   std::map<int64_t, protocol::LocalConnection> connections_;  // by session id
   std::map<uid_t, RateLimiter> open_rate_;
+  Clock::time_point listener_paused_until_{};  // out of descriptors: see AcceptAll
 };
 
 }  // namespace far::server

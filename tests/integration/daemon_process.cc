@@ -277,7 +277,8 @@ Result<std::string> CopyForAnyUser(const std::string& executable, const TempDir&
 }  // namespace
 
 Result<std::unique_ptr<ChildProcess>> ChildProcess::Spawn(const std::vector<std::string>& argv_in,
-                                                          std::optional<uid_t> user) {
+                                                          std::optional<uid_t> user,
+                                                          bool with_stderr) {
   std::vector<std::string> args = argv_in;
   std::unique_ptr<TempDir> executable_dir;
   if (user) {
@@ -292,6 +293,7 @@ Result<std::unique_ptr<ChildProcess>> ChildProcess::Spawn(const std::vector<std:
   const pid_t pid = fork();
   if (pid == 0) {
     dup2(out[1], STDOUT_FILENO);
+    if (with_stderr) dup2(out[1], STDERR_FILENO);
     // The child has one thread: these are plain system calls here. Group first (after the uid
     // changes, the child may no longer change it).
     if (user && (setgroups(0, nullptr) != 0 || setresgid(*user, *user, *user) != 0 ||

@@ -102,9 +102,11 @@ class ChildProcess {
   /// cannot switch. The other user may not reach argv[0] (a clone under a 0700 /root), so it
   /// runs a copy of it in a directory of its own under the temp directory (mode 0755, removed
   /// with *this*), from `/`. Errors: kUnavailable (also when that user cannot enter the temp
-  /// directory: the message names the folder in the way).
+  /// directory: the message names the folder in the way). With `with_stderr`, its stderr is
+  /// read as stdout too.
   static Result<std::unique_ptr<ChildProcess>> Spawn(const std::vector<std::string>& argv,
-                                                     std::optional<uid_t> user = std::nullopt);
+                                                     std::optional<uid_t> user = std::nullopt,
+                                                     bool with_stderr = false);
   static constexpr int kCannotSwitchUser = 77;
   ~ChildProcess();
   /// The next line of its stdout (without the newline); nullopt at EOF or after `timeout`.

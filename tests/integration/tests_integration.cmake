@@ -29,7 +29,11 @@ add_executable(far_integration_test
   integration/user_limits_test.cc
   integration/fair_shares_test.cc
   integration/memory_test.cc
-  integration/cpu_priority_test.cc)
+  integration/cpu_priority_test.cc
+  integration/log_flood_test.cc
+  integration/lcm_route_error_test.cc
+  integration/out_of_descriptors_test.cc
+  integration/socket_directory_test.cc)
 target_link_libraries(far_integration_test PRIVATE far::client far::protocol far::scenes far::io
                       far_server_core
                       far_test_scenes nlohmann_json::nlohmann_json GTest::gtest far_warnings

@@ -6,6 +6,7 @@
 #include <pthread.h>
 #include <signal.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
@@ -163,6 +164,51 @@ TEST(LocalSocketTest, NobodyCanPutASocketWhereAClientLooks) {
   auto impostor = CheckDaemonSocket(dir + "/far.sock", other);
   ASSERT_FALSE(impostor);
   EXPECT_NE(impostor.error().message.find("listens on it"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// Out of descriptors (EMFILE), accept fails and the connection stays in the backlog, so the
+// listener stays readable and a daemon that polls it spins (half a core, issue 41). The
+// listener closes one waiting connection unanswered with its reserve descriptor instead: its
+// client hears at once, and the listener is quiet again.
+TEST(LocalSocketTest, OutOfDescriptorsAcceptClosesOneWaitingConnectionAndRecovers) {
+  const std::string dir = TempDirectory();
+  auto listener = LocalListener::Listen(dir + "/far.sock");
+  ASSERT_TRUE(listener) << listener.error().message;
+  auto client = LocalConnection::Connect(dir + "/far.sock");
+  ASSERT_TRUE(client) << client.error().message;
+  // This process's descriptors, all taken (RLIMIT_NOFILE lowered to what is open, plus a few).
+  rlimit old{};
+  ASSERT_EQ(getrlimit(RLIMIT_NOFILE, &old), 0);
+  rlimit low = old;
+  low.rlim_cur = OpenDescriptors() + 8;
+  ASSERT_EQ(setrlimit(RLIMIT_NOFILE, &low), 0);
+  std::vector<int> fillers;
+  for (int fd; (fd = open("/dev/null", O_RDONLY | O_CLOEXEC)) >= 0;) fillers.push_back(fd);
+  const int full_errno = errno;
+
+  const std::optional<LocalConnection> refused = (*listener)->Accept();
+  const bool out = (*listener)->out_of_descriptors();
+  for (const int fd : fillers) close(fd);
+  ASSERT_EQ(setrlimit(RLIMIT_NOFILE, &old), 0);
+  ASSERT_EQ(full_errno, EMFILE);
+  EXPECT_FALSE(refused.has_value());
+  EXPECT_TRUE(out);
+  // The waiting connection was closed: its client hears it, and nothing is left to accept.
+  auto heard = client->Receive(16, std::chrono::seconds(2));
+  ASSERT_FALSE(heard);
+  EXPECT_EQ(heard.error().code, ErrorCode::kUnavailable) << heard.error().message;
+  EXPECT_FALSE((*listener)->Accept().has_value());
+  EXPECT_FALSE((*listener)->out_of_descriptors());
+  // With descriptors again, the next client is accepted.
+  auto next = LocalConnection::Connect(dir + "/far.sock");
+  ASSERT_TRUE(next) << next.error().message;
+  std::optional<LocalConnection> accepted;
+  for (int i = 0; i < 100 && !accepted; ++i) {
+    accepted = (*listener)->Accept();
+    if (!accepted) usleep(1000);
+  }
+  EXPECT_TRUE(accepted.has_value());
   fs::remove_all(dir);
 }
 

@@ -32,7 +32,8 @@ inline constexpr std::string_view kDefaultDaemonName = "far";
 /// How to reach a daemon and how long to wait for it.
 struct ClientOptions {
   /// The daemon's name: its socket is <dir>/<name>.sock, dir as far-daemon chooses it
-  /// (/run/far, else $XDG_RUNTIME_DIR/far, else /tmp/far-<uid>; docs/protocol.md).
+  /// (/run/far, else $XDG_RUNTIME_DIR/far, else /tmp/far-<uid> or, when another user holds
+  /// that, $HOME/.far/run-<host>; docs/daemon.md, "Where it listens").
   std::string daemon = std::string(kDefaultDaemonName);
   std::string socket_path;  ///< the daemon's socket, when not the default for `daemon`
   /// The LCM URL of the session's channels; "" = the one the daemon names when it opens the

@@ -45,8 +45,23 @@ std::optional<int64_t> ParseSessionRequestChannel(std::string_view prefix,
 
 /// The directory of daemon sockets when none is given: $FAR_SOCKET_DIR when set (an absolute
 /// path), else /run/far when it exists (the system service's RuntimeDirectory), else
-/// $XDG_RUNTIME_DIR/far (a user's own daemon), else /tmp/far-<uid>.
+/// $XDG_RUNTIME_DIR/far (a user's own daemon), else PerUserSocketDirectory().path.
 std::string DefaultSocketDirectory();
+
+/// The last choice of DefaultSocketDirectory, a directory no other user can take: /tmp/far-<uid>
+/// while it is this user's (a directory, not a symbolic link, owned by this uid) or missing.
+/// When another user holds that name (or it is a link or a file), $HOME/.far/run-<host> instead
+/// ($HOME a directory of this user, not a link; <host> the host name, so that a home shared
+/// between machines holds one per machine), and that one from then on while /tmp/far-<uid> is
+/// missing (so that the other user cannot move it back by removing theirs). Without such a
+/// $HOME, /tmp/far-<uid> all the same: the daemon then refuses it, naming its owner. The daemon
+/// and its clients, of one uid and one environment, compute the same.
+struct UserSocketDirectory {
+  std::string path;
+  /// Why /tmp/far-<uid> cannot be used ("/tmp/far-1000 belongs to uid 1001"), or "".
+  std::string tmp_taken;
+};
+UserSocketDirectory PerUserSocketDirectory();
 /// DefaultSocketDirectory() + "/" + name + ".sock".
 std::string DefaultSocketPath(std::string_view name);
 

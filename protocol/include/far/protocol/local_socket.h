@@ -86,12 +86,23 @@ class LocalListener {
 
   int fd() const { return fd_; }
   const std::string& path() const { return path_; }
-  /// Accepts a pending connection without blocking; nullopt when none is pending.
+  /// Accepts a pending connection without blocking; nullopt when none is pending, or when
+  /// the process is out of descriptors (EMFILE, ENFILE): then out_of_descriptors() is true
+  /// and one pending connection was closed unanswered, with a descriptor kept in reserve for
+  /// this (its client hears at once that the connection closed, instead of waiting in the
+  /// backlog, and the listener does not stay readable for a connection that cannot be taken).
   std::optional<LocalConnection> Accept();
+  /// Whether the last Accept found the process out of descriptors.
+  bool out_of_descriptors() const { return out_of_descriptors_; }
 
  private:
   LocalListener() = default;
+  // Closes the reserve descriptor, accepts one connection and closes it, then takes the
+  // reserve again.
+  void ShedOneConnection();
   int fd_ = -1;
+  int reserve_fd_ = -1;  // /dev/null, kept for ShedOneConnection
+  bool out_of_descriptors_ = false;
   std::string path_;
 };
 
