@@ -6,7 +6,9 @@
 //   (b) the same healthy client while this process floods LCM with garbage and forged step
 //       requests; the daemon's rejected-message counter and log growth;
 //   (c) one user opening sessions as fast as it can, and a second user's opens meanwhile;
-//   (d) the daemon's resident size before, with and after 4 sessions of the largest scene.
+//   (d) the daemon's resident size before, with and after 4 sessions of the largest scene;
+//   (e) issue 41: what a lost datagram costs a light client on its default timeout (its step
+//       request or reply lost on purpose; a forged-request flood), lost_datagrams.h.
 // Run inside a network namespace (it re-runs itself through deploy/netns-run.sh otherwise):
 //   deploy/netns-run.sh build/release/bench/daemon/far_hardening_study [--seconds 6]
 #include <sys/utsname.h>
@@ -24,6 +26,7 @@
 #include "garbage_flood.h"
 #include "healthy_client.h"
 #include "large_scene.h"
+#include "lost_datagrams.h"
 #include "slot_exhaustion.h"
 #include "study_daemon.h"
 #include <CLI/CLI.hpp>
@@ -53,6 +56,7 @@ struct Settings {
   // which a back-to-back client reaches on a quiet machine (it is then refused as "busy": no
   // longer a healthy client by the daemon's own rules).
   double healthy_rate = 500;
+  int loss_trials = 3;  // steps per loss case of (e)
 };
 
 // How the healthy client steps, for the tables' captions.
@@ -420,7 +424,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--hog-attempts", settings.hog_attempts, "opens of the first user in (c)")
       ->capture_default_str();
-  app.add_option("--parts", settings.parts, "which parts to run (letters of abcd)")
+  app.add_option("--parts", settings.parts, "which parts to run (letters of abcde)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")
       ->capture_default_str()
@@ -434,6 +438,8 @@ int main(int argc, char** argv) {
   app.add_option("--healthy-rate", settings.healthy_rate,
                  "the healthy client's steps per second in (a) and (b), as a simulator's fixed "
                  "rate (0: back to back)")
+      ->capture_default_str();
+  app.add_option("--loss-trials", settings.loss_trials, "steps per loss case of (e)")
       ->capture_default_str();
   app.add_option("--daemon", settings.daemon, "far-daemon to start")->capture_default_str();
   app.add_option("--daemon-arg", settings.daemon_args,
@@ -450,5 +456,9 @@ int main(int argc, char** argv) {
   if (runs('b')) StudyGarbageFlood(settings);
   if (runs('c')) StudySlots(settings, std::filesystem::read_symlink("/proc/self/exe").string());
   if (runs('d')) StudyMemory(settings, scene);
+  if (runs('e')) {
+    StudyLostDatagrams({settings.daemon, settings.loss_trials, settings.flood_rate,
+                        settings.seconds, settings.rounds, settings.healthy_rate});
+  }
   return 0;
 }
