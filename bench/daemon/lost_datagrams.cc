@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -40,18 +41,23 @@ class LossyClient {
     }
     return lossy;
   }
-  // One step: its time in seconds, or an error.
-  Result<double> Step() {
+  // One step: how long it took to answer or to fail, and its error when it failed.
+  struct Outcome {
+    double seconds = 0;
+    std::optional<Error> error;
+  };
+  Outcome Step() {
     for (const SceneObject& o : objects_) {
       Pose pose = o.X_WO;
       pose.translation.x() += 0.05 * std::sin(0.01 * static_cast<double>(step_) + o.id);
-      if (auto ok = client_->SetPose(o.id, pose); !ok) return ok.error();
+      if (auto ok = client_->SetPose(o.id, pose); !ok) return {0, ok.error()};
     }
     ++step_;
     const auto start = Clock::now();
     auto result = client_->Step(request_);
-    if (!result) return result.error();
-    return Seconds(Clock::now() - start);
+    const double seconds = Seconds(Clock::now() - start);
+    if (!result) return {seconds, result.error()};
+    return {seconds, std::nullopt};
   }
   int64_t next_step() const { return step_; }
   int64_t session_id() const { return client_->session_id(); }
@@ -108,13 +114,12 @@ void RunCase(const StudyDaemon& daemon, LossyClient& client, const LossCase& wha
       if (d.outgoing != outgoing || d.kind != what.kind || d.step_id != step) return false;
       return left->fetch_sub(1) > 0;
     });
-    auto result = client.Step();
+    const auto outcome = client.Step();
     client::internal::SetDatagramLoss({});
-    if (result) {
-      seconds.push_back(*result);
-    } else {
+    seconds.push_back(outcome.seconds);
+    if (outcome.error) {
       ++errors;
-      if (first_error.empty()) first_error = far::ToString(result.error());
+      if (first_error.empty()) first_error = far::ToString(*outcome.error);
     }
   }
   const int64_t run = StepsRun(daemon) - before;
@@ -130,7 +135,8 @@ void StudyLossCases(const StudyDaemon& daemon, LossyClient& client, int trials) 
   std::printf(
       "A light client (8 rigid clusters of 128 triangles, method bvh, contacts) on the default "
       "step timeout (60 s). In each trial one of its steps loses what the case says at the "
-      "client library's loss seam (as LCM over UDP would); the time is the step's round trip. "
+      "client library's loss seam (as LCM over UDP would); the time is the step's round trip, "
+      "to its answer or to its error. "
       "Steps run: the daemon's steps_total over the trials (one per step asked when no step runs "
       "twice).\n\n");
   std::printf("| lost | steps | median s | max s | errors | steps run | first error |\n");
@@ -159,6 +165,7 @@ void StudyFlood(const StudyDaemon& daemon, LossyClient& client,
       "/proc/net/udp over the phase (every UDP socket of the study's network namespace).\n\n",
       1000 / settings.healthy_rate, status->lcm_url.c_str(), settings.flood_rate,
       settings.flood_rounds, settings.flood_seconds);
+  std::printf("Every step counts, answered or failed (at its timeout).\n\n");
   std::printf(
       "| phase | steps | p50 ms | p99 ms | max ms | steps over 1 s | errors | flood sent/s | "
       "kernel drops | steps run / asked |\n| --: | --: | --: | --: | --: | --: | --: | --: | --: "
@@ -178,11 +185,9 @@ void StudyFlood(const StudyDaemon& daemon, LossyClient& client,
       std::this_thread::sleep_until(next);
       next = std::max(next + period, Clock::now());
       ++asked;
-      auto step = client.Step();
-      if (step)
-        ms.push_back(1000 * *step);
-      else
-        ++errors;
+      const auto step = client.Step();
+      ms.push_back(1000 * step.seconds);
+      if (step.error) ++errors;
     }
     const FloodReport sent = (*flood)->Stop();
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -207,7 +212,7 @@ void StudyLostDatagrams(const LostDatagramSettings& settings) {
   }
   auto client = LossyClient::Open(**daemon);
   if (!client) return;
-  if (!client->Step()) return;  // the first step makes the session's pipeline
+  if (client->Step().error) return;  // the first step makes the session's pipeline
   StudyLossCases(**daemon, *client, settings.trials);
   if (settings.flood_rounds > 0) StudyFlood(**daemon, *client, settings);
 }
