@@ -9,7 +9,9 @@
 //   (d) the daemon's resident size before, with and after 4 sessions of the largest scene;
 //   (e) one uid (1001) holding 4 idle sessions of 2M degenerate triangles, and what root's
 //       sessions then get (issue 41);
-//   (f) four uids (1001-1004) holding 16 sessions each, and root's opens meanwhile (issue 41).
+//   (f) four uids (1001-1004) holding 16 sessions each, and root's opens meanwhile (issue 41);
+//   (g) what a lost datagram costs a light client on its default timeout (its step request or
+//       reply lost on purpose; a forged-request flood; issue 41), lost_datagrams.h.
 // And issue 41's memory attacks (memory_attacks.h; not in the default --parts):
 //   (h) sessions opened and closed with their segments' descriptors kept (hoarding);
 //   (i) a client killed while its step runs; (j) a flood of 60 KB datagrams.
@@ -40,6 +42,7 @@
 #include "large_scene.h"
 #include "memory_attacks.h"
 #include "log_flood.h"
+#include "lost_datagrams.h"
 #include "slot_exhaustion.h"
 #include "study_daemon.h"
 #include <CLI/CLI.hpp>
@@ -74,6 +77,7 @@ struct Settings {
   // which a back-to-back client reaches on a quiet machine (it is then refused as "busy": no
   // longer a healthy client by the daemon's own rules).
   double healthy_rate = 500;
+  int loss_trials = 3;  // steps per loss case of (g)
 };
 
 // How the healthy client steps, for the tables' captions.
@@ -672,7 +676,7 @@ int main(int argc, char** argv) {
   app.add_option("--log-flood-seconds", settings.log_flood_seconds, "length of each flood of (l)")
       ->capture_default_str();
   app.add_option("--parts", settings.parts,
-                 "which parts to run (letters of abcdefhijln; e, f: issue 41's fair shares; h, i, "
+                 "which parts to run (letters of abcdefghijln; e, f, g: issue 41's fair shares and lost datagrams; h, i, "
                  "j: its memory attacks; l, n: its log floods and descriptors)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")
@@ -706,6 +710,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--flood-bytes", settings.flood_bytes, "bytes per datagram in (j)")
       ->capture_default_str();
+  app.add_option("--loss-trials", settings.loss_trials, "steps per loss case of (g)")
+      ->capture_default_str();
   app.add_option("--daemon", settings.daemon, "far-daemon to start")->capture_default_str();
   app.add_option("--daemon-arg", settings.daemon_args,
                  "an argument added to every far-daemon's command line (repeat: --daemon-arg "
@@ -724,6 +730,10 @@ int main(int argc, char** argv) {
   const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
   if (runs('e')) StudyTriangleShares(settings, self);
   if (runs('f')) StudySlotShares(settings, self);
+  if (runs('g')) {
+    StudyLostDatagrams({settings.daemon, settings.loss_trials, settings.flood_rate,
+                        settings.seconds, settings.rounds, settings.healthy_rate});
+  }
   StudyMemoryAttacks(settings, runs);
   if (runs('l')) StudyLogFloods(settings);
   if (runs('n')) StudyOutOfDescriptors(settings);

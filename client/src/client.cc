@@ -3,10 +3,12 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <vector>
 
 #include "daemon_connection.h"
 #include "session_recorder.h"
@@ -32,9 +34,39 @@ static_assert(kDefaultDaemonName == protocol::kDefaultDaemonName);
 using protocol::MessageType;
 namespace wire = far_lcm;
 
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
 // A full update ring is waited on this long at most: the daemon drains it only at a step, so
 // a longer wait would only delay the error.
 constexpr std::chrono::seconds kRingWait{5};
+
+// Asking again (docs/protocol.md, "Lost datagrams"). A step the daemon has said nothing of is
+// asked for again 200 ms after it was sent, then after 400 ms, 800 ms and every second: on
+// loopback the daemon acknowledges ("queued") within a millisecond when it hears. Whenever the
+// daemon says something of the step, it is left alone for a quiet second, then asked for again
+// the same way: its reply may be lost, and the daemon answers a repeat with the reply it kept,
+// or with where the step is. A probe at open is sent every 200 ms until options.hear_timeout.
+constexpr milliseconds kFirstRetry{200};
+constexpr milliseconds kLongestRetry{1000};
+constexpr milliseconds kQuietPoll{1000};
+constexpr milliseconds kProbeEvery{200};
+
+// The loss seam (internal::SetDatagramLoss): tests lose messages on purpose.
+std::mutex g_loss_mutex;
+std::function<bool(const internal::Datagram&)> g_loss;
+std::atomic<bool> g_loss_set{false};  // no seam, no cost
+
+bool Lost(const internal::Datagram& datagram) {
+  if (!g_loss_set.load(std::memory_order_relaxed)) return false;
+  std::function<bool(const internal::Datagram&)> lose;
+  {
+    std::lock_guard lock(g_loss_mutex);
+    if (!g_loss) return false;
+    lose = g_loss;
+  }
+  return lose(datagram);
+}
 
 // A distance left at the default output (contacts) asks for distance pairs, as far-client's
 // --distance does: otherwise the caller gets an empty list and no error.
@@ -59,15 +91,28 @@ struct Client::Impl {
   protocol::SessionKey key{};
   int64_t last_sealed_id = 0;  // receive thread only: the daemon's sequence, strictly growing
 
+  protocol::SkippedReplies skipped;  // receive thread only: reply records read past
+  std::string socket_path;           // where the session was opened
+  std::string lcm_url;               // the session's LCM URL: the daemon's unless the caller's
+  std::string daemon_lcm_url;        // the one the daemon serves
+  bool not_heard = false;            // the daemon answered no probe (Listen)
+
   std::mutex send_mutex;  // request ids are assigned and published in one order
   int64_t next_request_id = 1;
   int64_t next_step_id = 0;
 
-  std::mutex mutex;  // pending steps and the closed state
+  std::mutex mutex;  // pending steps, the probe and the closed state
+  std::condition_variable heard_probe;
+  bool probe_answered = false;
   struct Pending {
-    int64_t request_id = 0;
+    far_lcm::step_request_t message;  // the last one sent: its request id, for errors
     std::promise<Result<StepResult>> promise;
     ProgressCallback on_progress;
+    Clock::time_point next_try;           // when it is asked for again
+    milliseconds wait = 2 * kFirstRetry;  // after that, until the try after it
+    bool heard = false;                   // the daemon acknowledged it (a status, a reply)
+    int sent = 1;                         // requests sent for it
+    std::string progress;  // the last state passed to on_progress (repeats are not passed on)
   };
   std::map<int64_t, Pending> pending;  // by step id
   std::optional<Error> closed;         // set when the session ended
@@ -76,6 +121,83 @@ struct Client::Impl {
   std::atomic<bool> stopping{false};
   std::unique_ptr<internal::SessionRecorder> recorder;  // null: not recording
 
+  ~Impl() { StopReceiving(); }
+
+  // Opens a session as `options` say, listens on its reply channel and proves with a probe
+  // that the daemon hears this client (else *not_heard). Errors: those of Connect.
+  static Result<std::unique_ptr<Impl>> Open(const ClientOptions& options, bool* not_heard);
+  // Opens a session on the daemon at options.socket_path (or the default socket for the
+  // name): the connection, the open handshake, the segment and its rings; no bus yet.
+  static Result<std::unique_ptr<Impl>> OpenOn(const ClientOptions& options);
+  // Creates the bus, subscribes, starts the receive thread and probes (not_heard when no
+  // probe was answered within options.hear_timeout).
+  Result<void> Listen();
+
+  void StopReceiving() {
+    stopping = true;
+    if (receiver.joinable()) receiver.join();
+  }
+
+  // Signs and publishes a request, unless the loss seam loses it (call with send_mutex held).
+  Result<void> Publish(const far_lcm::step_request_t& message, std::string_view kind) {
+    if (Lost({true, session_id, kind, message.step_id, {}})) return {};
+    auto bytes = protocol::EncodeSigned(message, key);
+    if (!bytes) return bytes.error();
+    return bus->Publish(request_channel, *bytes);
+  }
+
+  // The daemon said something of a pending step: it is asked for again only after a quiet
+  // second (call with `mutex` held).
+  static void Acknowledge(Pending& p) {
+    p.heard = true;
+    p.next_try = Clock::now() + kQuietPoll;
+    p.wait = kFirstRetry;
+  }
+
+  // Asks again for every pending step whose time has come (the receive thread).
+  void AskAgain() {
+    const auto now = Clock::now();
+    std::lock_guard send_lock(send_mutex);
+    std::vector<far_lcm::step_request_t> due;
+    {
+      std::lock_guard lock(mutex);
+      for (auto& [step_id, p] : pending) {
+        if (now < p.next_try) continue;
+        p.message.request_id = next_request_id++;
+        ++p.sent;
+        p.next_try = now + p.wait;
+        p.wait = std::min(2 * p.wait, kLongestRetry);
+        due.push_back(p.message);
+      }
+    }
+    // A request that cannot be published now is tried again at its next turn.
+    for (const auto& message : due) (void)Publish(message, "request");
+  }
+
+  // Sends probes until the daemon answers one or `budget` is spent; the number sent, negative
+  // when none was answered. Fails when the session ended meanwhile.
+  Result<int> Probe(milliseconds budget) {
+    const auto deadline = Clock::now() + budget;
+    int probes = 0;
+    for (;;) {
+      {
+        std::lock_guard send_lock(send_mutex);
+        if (auto sent = Publish(protocol::MakeProbeRequest(session_id, next_request_id++), "probe");
+            !sent) {
+          return sent.error();
+        }
+        ++probes;
+      }
+      std::unique_lock lock(mutex);
+      const auto until = std::min(deadline, Clock::now() + kProbeEvery);
+      if (heard_probe.wait_until(lock, until, [&] { return probe_answered || closed; })) {
+        if (closed) return *closed;
+        return probes;
+      }
+      if (Clock::now() >= deadline) return -probes;
+    }
+  }
+
   int64_t NextStepId() {
     std::lock_guard lock(send_mutex);
     return next_step_id;
@@ -83,16 +205,18 @@ struct Client::Impl {
 
   // Records how a pending step ended without a reply of its own (call with `mutex` held).
   void RecordError(int64_t step_id, const Pending& p, const Error& error) {
-    if (recorder) recorder->ErrorReply({session_id, p.request_id, step_id, 0}, error);
+    if (recorder) recorder->ErrorReply({session_id, p.message.request_id, step_id, 0}, error);
   }
 
-  void Fail(int64_t step_id, const Error& error) {
+  // Ends a pending step with `error`; false when it was no longer pending (answered).
+  bool Fail(int64_t step_id, const Error& error) {
     std::lock_guard lock(mutex);
     auto it = pending.find(step_id);
-    if (it == pending.end()) return;
+    if (it == pending.end()) return false;
     RecordError(step_id, it->second, error);
     it->second.promise.set_value(error);
     pending.erase(it);
+    return true;
   }
 
   void FailAll(const Error& error) {
@@ -106,7 +230,7 @@ struct Client::Impl {
   }
 
   void OnStepReply(std::span<const uint8_t> inner) {
-    auto full = protocol::ReceiveStepReply(inner, *replies);
+    auto full = protocol::ReceiveStepReply(inner, *replies, &skipped);
     if (!full) return;  // (a stub whose record is gone: the step times out with a clear error)
     auto result = protocol::ParseStepReply(*full);
     std::lock_guard lock(mutex);
@@ -128,19 +252,29 @@ struct Client::Impl {
     pending.erase(it);
   }
 
-  void OnStepStatus(std::span<const uint8_t> inner) {
-    auto status = protocol::DecodeMessage<wire::step_status_t>(inner.data(), inner.size(),
-                                                               protocol::kMaxControlMessageBytes);
-    if (!status) return;
+  void OnStepStatus(const wire::step_status_t& status) {
+    if (status.state == protocol::kHeardState) {
+      {
+        std::lock_guard lock(mutex);
+        probe_answered = true;
+      }
+      heard_probe.notify_all();
+      return;
+    }
     ProgressCallback callback;
     {
       std::lock_guard lock(mutex);
-      auto it = pending.find(status->step_id);
-      if (it == pending.end() || !it->second.on_progress) return;
-      callback = it->second.on_progress;
+      auto it = pending.find(status.step_id);
+      if (it == pending.end()) return;
+      Pending& p = it->second;
+      Acknowledge(p);
+      // A repeat's answer says again where the step is: passed on only when that changed.
+      std::string progress = status.state + "/" + status.stage;
+      if (!p.on_progress || progress == p.progress) return;
+      p.progress = std::move(progress);
+      callback = p.on_progress;
     }
-    callback(
-        {status->state, status->queue_position, ParseStage(status->stage), status->elapsed_ms});
+    callback({status.state, status.queue_position, ParseStage(status.stage), status.elapsed_ms});
   }
 
   void OnError(std::span<const uint8_t> inner) {
@@ -151,7 +285,7 @@ struct Client::Impl {
     if (error->session_closed) return FailAll(e);
     std::lock_guard lock(mutex);
     for (auto it = pending.begin(); it != pending.end(); ++it) {
-      if (it->second.request_id == error->request_id) {
+      if (it->second.message.request_id == error->request_id) {
         RecordError(it->first, it->second, e);
         it->second.promise.set_value(e);
         pending.erase(it);
@@ -166,12 +300,33 @@ struct Client::Impl {
     auto opened = protocol::OpenSealed(bytes.data(), bytes.size(), session_id, key,
                                        protocol::kMaxStepReplyBytes);
     if (!opened || opened->request_id <= last_sealed_id) return;
-    last_sealed_id = opened->request_id;
-    auto type = protocol::IdentifyMessage(opened->inner.data(), opened->inner.size());
+    const std::span<const uint8_t> inner = opened->inner;
+    auto type = protocol::IdentifyMessage(inner.data(), inner.size());
     if (!type) return;
-    if (*type == MessageType::kStepReply) return OnStepReply(opened->inner);
-    if (*type == MessageType::kStepStatus) return OnStepStatus(opened->inner);
-    if (*type == MessageType::kError) return OnError(opened->inner);
+    std::optional<wire::step_status_t> status;
+    if (*type == MessageType::kStepStatus) {
+      auto decoded = protocol::DecodeMessage<wire::step_status_t>(
+          inner.data(), inner.size(), protocol::kMaxControlMessageBytes);
+      if (!decoded) return;
+      status = std::move(*decoded);
+    }
+    // Lost at the seam: as if it never came, its sequence number unseen.
+    if (g_loss_set.load(std::memory_order_relaxed) && Lost(DatagramOf(*type, inner, status)))
+      return;
+    last_sealed_id = opened->request_id;
+    if (*type == MessageType::kStepReply) return OnStepReply(inner);
+    if (status) return OnStepStatus(*status);
+    if (*type == MessageType::kError) return OnError(inner);
+  }
+
+  // A received message as the loss seam sees it.
+  internal::Datagram DatagramOf(MessageType type, std::span<const uint8_t> inner,
+                                const std::optional<wire::step_status_t>& status) const {
+    if (status) return {false, session_id, "status", status->step_id, status->state};
+    if (type != MessageType::kStepReply) return {false, session_id, "error", -1, {}};
+    auto reply = protocol::DecodeMessage<wire::step_reply_t>(inner.data(), inner.size(),
+                                                             protocol::kMaxStepReplyBytes);
+    return {false, session_id, "reply", reply ? reply->step_id : -1, {}};
   }
 
   // The receive thread: LCM replies, and the daemon's end of the connection: when it closes
@@ -179,12 +334,44 @@ struct Client::Impl {
   void Receive() {
     while (!stopping) {
       bus->Handle(std::chrono::milliseconds(50));
+      AskAgain();
       if (connection.PeerClosed()) {
         FailAll(MakeError(ErrorCode::kUnavailable,
                           "far-daemon ended the session (it stopped, restarted or closed it)"));
         return;
       }
     }
+  }
+
+  // Why step `step_id` is still unanswered at the caller's limit: the daemon working on it,
+  // or the daemon never acknowledging any of its requests.
+  std::string Unanswered(int64_t step_id) {
+    int sent = 0;
+    bool heard = true;
+    {
+      std::lock_guard lock(mutex);
+      if (auto it = pending.find(step_id); it != pending.end()) {
+        sent = it->second.sent;
+        heard = it->second.heard;
+      }
+    }
+    const std::string limit = std::to_string(options.timeout.count()) + " ms";
+    const std::string step = "step " + std::to_string(step_id);
+    if (heard) {
+      return step + " was not answered within " + limit +
+             ", the client's limit (the daemon is still running; raise the timeout for bigger "
+             "scenes)";
+    }
+    return step + " was never acknowledged within " + limit +
+           ", the client's limit: far-daemon "
+           "at " +
+           socket_path + " heard none of the " + std::to_string(sent) +
+           " requests sent "
+           "for it over LCM (" +
+           lcm_url +
+           "), though it answered this session's probe when it "
+           "opened. Its datagrams are being lost (a flood on the LCM URL, a receive buffer too "
+           "small: docs/protocol.md), or the daemon's LCM thread is stuck";
   }
 
   Result<void> CheckOpen() {
@@ -198,10 +385,11 @@ Client::Client(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Client::~Client() { (void)Close(); }
 
-Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
+Result<std::unique_ptr<Client::Impl>> Client::Impl::OpenOn(const ClientOptions& options) {
   auto impl = std::make_unique<Impl>();
   Impl& c = *impl;
   c.options = options;
+  c.socket_path = internal::SocketPath(options);
   auto connection = internal::ConnectToDaemon(options);
   if (!connection) return connection.error();
   c.connection = std::move(*connection);
@@ -216,11 +404,13 @@ Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
                                                      c.segment->layout().reply_ring_capacity);
   c.request_channel = reply.request_channel;
   c.reply_channel = reply.session_reply_channel;
-  auto recorder = internal::StartRecording(options, c.session_id);
-  if (!recorder) return recorder.error();
-  c.recorder = std::move(*recorder);
   // The session's channels are where the daemon says, unless the caller insists.
-  const std::string& lcm_url = options.lcm_url.empty() ? reply.lcm_url : options.lcm_url;
+  c.lcm_url = options.lcm_url.empty() ? reply.lcm_url : options.lcm_url;
+  c.daemon_lcm_url = reply.lcm_url;
+  return impl;
+}
+
+Result<void> Client::Impl::Listen() {
   if (protocol::IsInProcessUrl(lcm_url)) {
     // Every step would wait out its timeout: no message leaves a memq:// LCM instance.
     return MakeError(ErrorCode::kUnavailable,
@@ -230,14 +420,60 @@ Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
                          "(its default) or give the client one with --lcm-url / "
                          "ClientOptions::lcm_url");
   }
-  auto bus = protocol::LcmBus::Create(lcm_url);
-  if (!bus) return bus.error();
-  c.bus = std::move(*bus);
-  Impl* raw = impl.get();
-  c.bus->Subscribe(c.reply_channel,
-                   [raw](std::string_view, std::span<const uint8_t> b) { raw->OnReply(b); });
-  c.receiver = std::thread([raw] { raw->Receive(); });
-  return std::unique_ptr<Client>(new Client(std::move(impl)));
+  auto created = protocol::LcmBus::Create(lcm_url);
+  if (!created) return created.error();
+  bus = std::move(*created);
+  bus->Subscribe(reply_channel,
+                 [this](std::string_view, std::span<const uint8_t> b) { OnReply(b); });
+  receiver = std::thread([this] { Receive(); });
+  // The daemon must hear this client's steps, and the client its replies: a probe proves both
+  // before the first step, instead of a first step that waits out its timeout.
+  const auto start = Clock::now();
+  auto probes = Probe(options.hear_timeout);
+  if (!probes) return probes.error();
+  if (*probes > 0) return {};
+  StopReceiving();
+  internal::NotHeard what{
+      socket_path, connection.peer().pid,
+      lcm_url,     daemon_lcm_url,
+      -*probes,    std::chrono::duration_cast<milliseconds>(Clock::now() - start)};
+  not_heard = true;
+  return MakeError(ErrorCode::kUnavailable, internal::NotHeardMessage(options, what));
+}
+
+Result<std::unique_ptr<Client::Impl>> Client::Impl::Open(const ClientOptions& options,
+                                                         bool* not_heard) {
+  auto impl = OpenOn(options);
+  if (!impl) return impl.error();
+  if (auto listening = (*impl)->Listen(); !listening) {
+    *not_heard = (*impl)->not_heard;
+    return listening.error();
+  }
+  auto recorder = internal::StartRecording(options, (*impl)->session_id);
+  if (!recorder) return recorder.error();
+  (*impl)->recorder = std::move(*recorder);
+  return impl;
+}
+
+Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
+  bool not_heard = false;
+  auto impl = Impl::Open(options, &not_heard);
+  if (impl) return std::unique_ptr<Client>(new Client(std::move(*impl)));
+  // The daemon at the first socket cannot hear this client: a daemon of the same name in
+  // another socket directory (a user's own, in this network namespace) may be the one meant.
+  if (!not_heard) return impl.error();
+  std::string tried;
+  for (const std::string& path : internal::OtherSocketPaths(options)) {
+    ClientOptions other = options;
+    other.socket_path = path;
+    other.connect_timeout = milliseconds(0);
+    auto there = Impl::Open(other, &not_heard);
+    if (there) return std::unique_ptr<Client>(new Client(std::move(*there)));
+    tried += "; " + path + ": " + there.error().message;
+  }
+  if (tried.empty()) return impl.error();
+  return MakeError(ErrorCode::kUnavailable,
+                   impl.error().message + " (other sockets of this name tried" + tried + ")");
 }
 
 namespace {
@@ -336,22 +572,23 @@ std::future<Result<StepResult>> Client::StepAsync(const StepRequest& request,
   }
   std::lock_guard send_lock(c.send_mutex);
   const int64_t step_id = c.next_step_id++;
-  const int64_t request_id = c.next_request_id++;
-  {
-    std::lock_guard lock(c.mutex);
-    c.pending[step_id] = Impl::Pending{request_id, std::move(promise), std::move(on_progress)};
-  }
   const auto timeout_ms = static_cast<int32_t>(
       std::min<int64_t>(c.options.timeout.count(), std::numeric_limits<int32_t>::max()));
   auto message =
-      protocol::MakeStepRequest(c.session_id, request_id, step_id, c.updates->last_sequence(),
-                                RequestToSend(request), timeout_ms);
-  // Recorded before it is sent, so that the request comes before its reply in the file.
+      protocol::MakeStepRequest(c.session_id, c.next_request_id++, step_id,
+                                c.updates->last_sequence(), RequestToSend(request), timeout_ms);
+  {
+    std::lock_guard lock(c.mutex);
+    Impl::Pending& p = c.pending[step_id];
+    p.message = message;
+    p.promise = std::move(promise);
+    p.on_progress = std::move(on_progress);
+    p.next_try = Clock::now() + kFirstRetry;
+  }
+  // Recorded before it is sent, so that the request comes before its reply in the file; a
+  // request sent again is the same step, recorded once.
   if (c.recorder) c.recorder->Request(message);
-  auto bytes = protocol::EncodeSigned(message, c.key);
-  Result<void> sent =
-      bytes ? c.bus->Publish(c.request_channel, *bytes) : Result<void>(bytes.error());
-  if (!sent) c.Fail(step_id, sent.error());
+  if (auto sent = c.Publish(message, "request"); !sent) c.Fail(step_id, sent.error());
   return future;
 }
 
@@ -361,15 +598,11 @@ Result<StepResult> Client::Step(const StepRequest& request, const ProgressCallba
     return impl_->next_step_id;
   }();
   auto future = StepAsync(request, on_progress);
-  if (future.wait_for(impl_->options.timeout) != std::future_status::ready) {
-    impl_->Fail(step_id, MakeError(ErrorCode::kTimeout, "timeout"));
-    return MakeError(ErrorCode::kTimeout,
-                     "step " + std::to_string(step_id) + " was not answered within " +
-                         std::to_string(impl_->options.timeout.count()) +
-                         " ms, the client's limit (the daemon is still running; raise the "
-                         "timeout for bigger scenes)");
-  }
-  return future.get();
+  if (future.wait_for(impl_->options.timeout) == std::future_status::ready) return future.get();
+  const Error error = MakeError(ErrorCode::kTimeout, impl_->Unanswered(step_id));
+  // Answered between the wait and now: the answer stands.
+  if (!impl_->Fail(step_id, error)) return future.get();
+  return error;
 }
 
 Result<void> Client::Close() {
@@ -391,6 +624,12 @@ std::string Client::recording_path() const {
 namespace internal {
 
 protocol::UpdateWriter& ClientAccess::Updates(Client& client) { return *client.impl_->updates; }
+
+void SetDatagramLoss(std::function<bool(const Datagram&)> lose) {
+  std::lock_guard lock(g_loss_mutex);
+  g_loss_set = static_cast<bool>(lose);
+  g_loss = std::move(lose);
+}
 
 Result<std::unique_ptr<SessionRecorder>> StartRecording(const ClientOptions& options,
                                                         int64_t session_id) {

@@ -1,8 +1,10 @@
 #include "daemon_connection.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <climits>
 #include <thread>
 
 #include "far/protocol/channels.h"
@@ -41,7 +43,68 @@ Result<protocol::LocalMessage> Ask(protocol::LocalConnection& connection,
   return reply;
 }
 
+// The network namespace of process `pid` ("net:[4026531840]"), "" when it cannot be read (a
+// process of another user, or gone).
+std::string NetworkNamespaceOf(const std::string& pid) {
+  char target[PATH_MAX] = {};
+  const std::string link = "/proc/" + pid + "/ns/net";
+  const ssize_t n = readlink(link.c_str(), target, sizeof(target) - 1);
+  return n > 0 ? std::string(target, static_cast<size_t>(n)) : std::string();
+}
+
+// Why the daemon hears nothing, as far as this process can tell.
+std::string LikelyCause(const NotHeard& what) {
+  const std::string mine = NetworkNamespaceOf("self");
+  const std::string theirs =
+      what.daemon_pid > 0 ? NetworkNamespaceOf(std::to_string(what.daemon_pid)) : "";
+  const std::string pid = std::to_string(what.daemon_pid);
+  if (!mine.empty() && !theirs.empty() && mine != theirs) {
+    return "It runs in another network namespace (" + theirs + "; this client: " + mine +
+           "), and LCM multicast does not cross namespaces. Run the client in the daemon's "
+           "(nsenter --net=/proc/" +
+           pid +
+           "/ns/net ...), or start a daemon in this one and name "
+           "its socket (--socket, FAR_SOCKET_DIR)";
+  }
+  if (what.lcm_url != what.daemon_lcm_url) {
+    return "This client sends on " + what.lcm_url +
+           " (--lcm-url / ClientOptions::lcm_url) but "
+           "the daemon serves " +
+           what.daemon_lcm_url + "; leave the client's URL empty";
+  }
+  if (!mine.empty() && mine == theirs) {
+    return "Both run in this network namespace (" + mine +
+           "), so multicast is blocked here: "
+           "loopback needs multicast (ip link set lo multicast on; ip route add 224.0.0.0/4 dev "
+           "lo), and no firewall rule may drop it";
+  }
+  return "Is it in another network namespace than this client (then run the client in the "
+         "daemon's, or name the socket of a daemon in this one: --socket, FAR_SOCKET_DIR), or is "
+         "another daemon serving this name?";
+}
+
 }  // namespace
+
+std::vector<std::string> OtherSocketPaths(const ClientOptions& options) {
+  std::vector<std::string> paths;
+  if (!options.socket_path.empty()) return paths;
+  const std::vector<std::string> dirs = protocol::SocketDirectories();
+  for (size_t i = 1; i < dirs.size(); ++i) {
+    const std::string path = dirs[i] + "/" + options.daemon + ".sock";
+    struct stat info {};
+    if (lstat(path.c_str(), &info) == 0 && S_ISSOCK(info.st_mode)) paths.push_back(path);
+  }
+  return paths;
+}
+
+std::string NotHeardMessage(const ClientOptions& options, const NotHeard& what) {
+  const std::string daemon =
+      options.socket_path.empty() ? "far-daemon '" + options.daemon + "'" : "far-daemon";
+  return daemon + " at " + what.socket_path + " (pid " + std::to_string(what.daemon_pid) +
+         ") opened this session but hears none of its steps over LCM (" + what.lcm_url +
+         "): it answered none of " + std::to_string(what.probes) + " probes in " +
+         std::to_string(what.waited.count()) + " ms. " + LikelyCause(what);
+}
 
 std::string SocketPath(const ClientOptions& options) {
   return options.socket_path.empty() ? protocol::DefaultSocketPath(options.daemon)

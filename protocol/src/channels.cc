@@ -106,13 +106,16 @@ std::optional<int64_t> ParseSessionRequestChannel(std::string_view prefix,
   return id;
 }
 
-std::string DefaultSocketDirectory() {
-  if (const char* dir = std::getenv("FAR_SOCKET_DIR"); dir != nullptr && *dir == '/') return dir;
+std::vector<std::string> SocketDirectories() {
+  // Named by the user: that one alone.
+  if (const char* dir = std::getenv("FAR_SOCKET_DIR"); dir != nullptr && *dir == '/') return {dir};
+  std::vector<std::string> dirs;
   struct stat info {};
-  if (stat("/run/far", &info) == 0 && S_ISDIR(info.st_mode)) return "/run/far";
+  if (stat("/run/far", &info) == 0 && S_ISDIR(info.st_mode)) dirs.emplace_back("/run/far");
   if (const char* runtime = std::getenv("XDG_RUNTIME_DIR"); runtime != nullptr && *runtime == '/')
-    return std::string(runtime) + "/far";
-  return PerUserSocketDirectory().path;
+    dirs.push_back(std::string(runtime) + "/far");
+  dirs.push_back(PerUserSocketDirectory().path);
+  return dirs;
 }
 
 UserSocketDirectory PerUserSocketDirectory() {
@@ -132,6 +135,8 @@ UserSocketDirectory PerUserSocketDirectory() {
   if (!home.empty()) choice.path = home;
   return choice;
 }
+
+std::string DefaultSocketDirectory() { return SocketDirectories().front(); }
 
 std::string DefaultSocketPath(std::string_view name) {
   return DefaultSocketDirectory() + "/" + std::string(name) + ".sock";

@@ -259,6 +259,14 @@ far_lcm::step_status_t MakeStepStatus(int64_t session_id, int64_t request_id, in
   return message;
 }
 
+far_lcm::step_request_t MakeProbeRequest(int64_t session_id, int64_t request_id) {
+  far_lcm::step_request_t message = MakeStepRequest(session_id, request_id, -1, 0, StepRequest{});
+  message.output = std::string(kProbeOutput);
+  return message;
+}
+
+bool IsProbe(const far_lcm::step_request_t& message) { return message.output == kProbeOutput; }
+
 far_lcm::error_t MakeErrorMessage(int64_t session_id, int64_t request_id, const Error& error,
                                   bool session_closed) {
   far_lcm::error_t message{};

@@ -25,13 +25,75 @@ Result<ShmReplyRef> WriteShmReply(RingWriter& reply_ring, std::span<const uint8_
   return ref;
 }
 
-Result<std::vector<uint8_t>> ReadShmReply(RingReader& reply_ring, const ShmReplyRef& ref) {
-  auto mismatch = [&](const std::string& what) {
-    return MakeError(ErrorCode::kParseError,
-                     "reply ring: record " + std::to_string(ref.sequence) + ": " + what);
-  };
+namespace {
+
+Error Mismatch(const ShmReplyRef& ref, const std::string& what) {
+  return MakeError(ErrorCode::kParseError,
+                   "reply ring: record " + std::to_string(ref.sequence) + ": " + what);
+}
+
+// The payload of a step_reply record (its bytes after the record header's fixed part) when it
+// is the one `ref` names: index, size and hash as the stub says.
+Result<std::vector<uint8_t>> CheckedPayload(const ShmReplyRef& ref, uint64_t index,
+                                            std::span<const uint8_t> payload) {
+  if (index != ref.index) {
+    return Mismatch(ref, "index " + std::to_string(index) + " differs from the stub's " +
+                             std::to_string(ref.index));
+  }
+  if (payload.size() != ref.bytes) {
+    return Mismatch(ref, "payload_size " + std::to_string(payload.size()) +
+                             " does not match the stub's " + std::to_string(ref.bytes) + " bytes");
+  }
+  if (HashBytes(payload) != ref.hash)
+    return Mismatch(ref, "the payload's hash differs from the stub's");
+  return std::vector<uint8_t>(payload.begin(), payload.end());
+}
+
+// The payload of a step_reply record read from the ring, after its type and size checks.
+Result<std::span<const uint8_t>> RecordPayload(const ShmReplyRef& ref, const RawRecord& record) {
+  if (record.header.type != static_cast<uint32_t>(RecordType::kStepReply)) {
+    return Mismatch(ref, "type " + std::to_string(record.header.type) + " is not step_reply (16)");
+  }
+  if (record.bytes.size() < sizeof(StepReplyRecord)) {
+    return Mismatch(ref, "size " + std::to_string(record.bytes.size()) + " is too small");
+  }
+  uint64_t payload_size = 0;
+  std::memcpy(&payload_size, record.bytes.data() + offsetof(StepReplyRecord, payload_size),
+              sizeof(payload_size));
+  if (StepReplyRecordSize(payload_size) != record.bytes.size()) {
+    return Mismatch(ref, "payload_size " + std::to_string(payload_size) + " in a " +
+                             std::to_string(record.bytes.size()) + "-byte record does not fit it");
+  }
+  return std::span<const uint8_t>(record.bytes.data() + sizeof(StepReplyRecord), payload_size);
+}
+
+}  // namespace
+
+void SkippedReplies::Keep(uint64_t sequence, uint64_t index, std::vector<uint8_t> payload) {
+  records_.push_back({sequence, index, std::move(payload)});
+  while (records_.size() > kMaxRecords) records_.pop_front();
+}
+
+Result<std::vector<uint8_t>> SkippedReplies::Take(const ShmReplyRef& ref) {
+  for (auto it = records_.begin(); it != records_.end(); ++it) {
+    if (it->sequence != ref.sequence) continue;
+    const Record record = std::move(*it);
+    records_.erase(it);
+    return CheckedPayload(ref, record.index, record.payload);
+  }
+  return MakeError(ErrorCode::kNotFound, "reply ring: record " + std::to_string(ref.sequence) +
+                                             " was already read and is not kept");
+}
+
+Result<std::vector<uint8_t>> ReadShmReply(RingReader& reply_ring, const ShmReplyRef& ref,
+                                          SkippedReplies* skipped) {
   while (true) {
     if (reply_ring.last_sequence() >= ref.sequence) {
+      // Read past already: a stub sent again for a record skipped on the way to a later one.
+      if (skipped != nullptr) {
+        if (auto kept = skipped->Take(ref); kept || kept.error().code != ErrorCode::kNotFound)
+          return kept;
+      }
       return MakeError(ErrorCode::kNotFound, "reply ring: record " + std::to_string(ref.sequence) +
                                                  " was already read (last read: " +
                                                  std::to_string(reply_ring.last_sequence()) + ")");
@@ -44,34 +106,17 @@ Result<std::vector<uint8_t>> ReadShmReply(RingReader& reply_ring, const ShmReply
                                                  std::to_string(reply_ring.last_sequence()) + ")");
     }
     const RawRecord& record = **next;
-    // An older reply whose stub never arrived: skip it.
-    if (record.header.sequence < ref.sequence) continue;
-
-    if (record.header.type != static_cast<uint32_t>(RecordType::kStepReply)) {
-      return mismatch("type " + std::to_string(record.header.type) + " is not step_reply (16)");
+    auto payload = RecordPayload(ref, record);
+    // An older reply whose stub never arrived (or comes later): skip it, and keep it.
+    if (record.header.sequence < ref.sequence) {
+      if (skipped != nullptr && payload) {
+        skipped->Keep(record.header.sequence, record.index,
+                      std::vector<uint8_t>(payload->begin(), payload->end()));
+      }
+      continue;
     }
-    if (record.index != ref.index) {
-      return mismatch("index " + std::to_string(record.index) + " differs from the stub's " +
-                      std::to_string(ref.index));
-    }
-    if (record.bytes.size() < sizeof(StepReplyRecord)) {
-      return mismatch("size " + std::to_string(record.bytes.size()) + " is too small");
-    }
-    uint64_t payload_size = 0;
-    std::memcpy(&payload_size, record.bytes.data() + offsetof(StepReplyRecord, payload_size),
-                sizeof(payload_size));
-    if (payload_size != ref.bytes || StepReplyRecordSize(payload_size) != record.bytes.size()) {
-      return mismatch("payload_size " + std::to_string(payload_size) + " in a " +
-                      std::to_string(record.bytes.size()) + "-byte record does not match the " +
-                      "stub's " + std::to_string(ref.bytes) + " bytes");
-    }
-    std::vector<uint8_t> payload(
-        record.bytes.begin() + sizeof(StepReplyRecord),
-        record.bytes.begin() + static_cast<ptrdiff_t>(sizeof(StepReplyRecord) + payload_size));
-    if (HashBytes(payload) != ref.hash) {
-      return mismatch("the payload's hash differs from the stub's");
-    }
-    return payload;
+    if (!payload) return payload.error();
+    return CheckedPayload(ref, record.index, *payload);
   }
 }
 
@@ -112,23 +157,27 @@ far_lcm::step_reply_t MakeShmReplyStub(const far_lcm::step_reply_t& full, const 
   return stub;
 }
 
+Result<std::vector<uint8_t>> EncodeStepReplyInner(const far_lcm::step_reply_t& full,
+                                                  RingWriter& reply_ring) {
+  auto encoded = EncodeMessage(full);
+  if (!encoded) return encoded.error();
+  if (!ShouldUseShmReply(encoded->size())) return encoded;
+  auto ref = WriteShmReply(reply_ring, *encoded);
+  if (!ref) return ref.error();
+  return EncodeMessage(MakeShmReplyStub(full, *ref));
+}
+
 Result<std::vector<uint8_t>> EncodeStepReplyForTransport(const far_lcm::step_reply_t& full,
                                                          RingWriter& reply_ring,
                                                          const SessionKey& key,
                                                          int64_t seal_sequence) {
-  auto encoded = EncodeMessage(full);
-  if (!encoded) return encoded.error();
-  if (ShouldUseShmReply(encoded->size())) {
-    auto ref = WriteShmReply(reply_ring, *encoded);
-    if (!ref) return ref.error();
-    encoded = EncodeMessage(MakeShmReplyStub(full, *ref));
-    if (!encoded) return encoded.error();
-  }
-  return SealEncoded(*encoded, full.session_id, seal_sequence, key);
+  auto inner = EncodeStepReplyInner(full, reply_ring);
+  if (!inner) return inner.error();
+  return SealEncoded(*inner, full.session_id, seal_sequence, key);
 }
 
 Result<far_lcm::step_reply_t> ReceiveStepReply(std::span<const uint8_t> inner,
-                                               RingReader& reply_ring) {
+                                               RingReader& reply_ring, SkippedReplies* skipped) {
   auto reply = DecodeMessage<far_lcm::step_reply_t>(inner.data(), inner.size(), kMaxStepReplyBytes);
   if (!reply) return reply.error();
   if (!reply->reply_in_shm) return reply;
@@ -147,7 +196,7 @@ Result<far_lcm::step_reply_t> ReceiveStepReply(std::span<const uint8_t> inner,
   ref.index = static_cast<uint64_t>(stub.shm_reply_index);
   ref.bytes = static_cast<uint64_t>(stub.shm_reply_bytes);
   std::memcpy(ref.hash.data(), stub.shm_reply_hash, ref.hash.size());
-  auto payload = ReadShmReply(reply_ring, ref);
+  auto payload = ReadShmReply(reply_ring, ref, skipped);
   if (!payload) return payload.error();
   auto full =
       DecodeMessage<far_lcm::step_reply_t>(payload->data(), payload->size(), kMaxStepReplyBytes);

@@ -7,6 +7,7 @@
 #include "log_limiter.h"
 
 #include "far/protocol/channels.h"
+#include "far/protocol/convert.h"
 #include "far/protocol/message.h"
 #include "far/protocol/message_validate.h"
 #include "far/protocol/session_auth.h"
@@ -72,7 +73,10 @@ void MessageHandlers::OnSessionRequest(std::string_view channel, std::span<const
     return drop(MakeError(ErrorCode::kInvalidArgument, "request_id replayed or reordered"));
   }
   session->last_request_id = message->request_id;
-  // Authenticated: from here on the client hears why its request failed.
+  // Authenticated: from here on the client hears why its request failed. A probe, or a step
+  // asked for again, is answered from what the session keeps; no step runs twice.
+  if (protocol::IsProbe(*message) || !TakeStep(*session, message->step_id))
+    return AnswerAgain(*session, *message);
   auto command = protocol::ValidateStepRequest(*message);
   if (command && command->request.resolution > config_.max_resolution) {
     command = MakeError(ErrorCode::kLimitExceeded,
@@ -87,6 +91,27 @@ void MessageHandlers::OnSessionRequest(std::string_view channel, std::span<const
     return replier_.StepError(*session, ids, command.error());
   }
   Queue(*session, std::move(*command));
+}
+
+bool MessageHandlers::TakeStep(Session& session, int64_t step_id) {
+  std::lock_guard lock(session.mutex);
+  return session.ledger.Take(step_id);
+}
+
+void MessageHandlers::AnswerAgain(Session& session, const far_lcm::step_request_t& message) {
+  if (!session.repeat_rate.Allow()) {
+    return stats_.CountRejected(
+        far::ToString(ErrorCode::kBusy),
+        "session " + std::to_string(session.id) + " asks again faster than " +
+            FormatRate(Session::kRepeatsPerSecond) + "/s (probes and repeated steps)");
+  }
+  if (protocol::IsProbe(message)) return replier_.Heard(session, message.request_id);
+  StepRecall recall;
+  {
+    std::lock_guard lock(session.mutex);
+    recall = session.ledger.Recall(message.step_id, session.queue);
+  }
+  replier_.Again(session, message.request_id, message.step_id, recall);
 }
 
 void MessageHandlers::Queue(Session& session, protocol::StepCommand command) {

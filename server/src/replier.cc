@@ -16,15 +16,24 @@ void Replier::Publish(uid_t uid, const std::string& channel, std::span<const uin
 }
 
 void Replier::Seal(Session& session, std::span<const uint8_t> inner) {
+  std::lock_guard lock(session.publish_mutex);
   auto sealed = protocol::SealEncoded(inner, session.id, session.next_reply_id++, session.key);
   if (sealed) Publish(session.uid, session.reply_channel, *sealed);
 }
 
+void Replier::Answer(Session& session, int64_t step_id, std::vector<uint8_t> inner) {
+  // Kept first: a repeat that comes as soon as the answer is out finds it.
+  {
+    std::lock_guard lock(session.mutex);
+    session.ledger.Keep(step_id, inner);
+  }
+  Seal(session, inner);
+}
+
 Result<void> Replier::StepReply(Session& session, const far_lcm::step_reply_t& full) {
-  auto bytes = protocol::EncodeStepReplyForTransport(full, *session.replies, session.key,
-                                                     session.next_reply_id++);
-  if (!bytes) return bytes.error();
-  Publish(session.uid, session.reply_channel, *bytes);
+  auto inner = protocol::EncodeStepReplyInner(full, *session.replies);
+  if (!inner) return inner.error();
+  Answer(session, full.step_id, std::move(*inner));
   return {};
 }
 
@@ -34,18 +43,54 @@ void Replier::StepError(Session& session, const protocol::StepCommand& command,
   const protocol::StepReplyIds ids{session.id, command.request_id, command.step_id,
                                    session.applied_sequence.load()};
   if (auto bytes = protocol::EncodeMessage(protocol::MakeStepErrorReply(ids, error)))
-    Seal(session, *bytes);
+    Answer(session, command.step_id, std::move(*bytes));
   LogForClient(spdlog::level::info, session.uid, std::string("step_") + far::ToString(error.code),
                "event=step_error session={} step={} code={} reason=\"{}\"", session.id,
                command.step_id, far::ToString(error.code), error.message);
 }
 
+void Replier::Status(Session& session, int64_t request_id, int64_t step_id, std::string_view state,
+                     int32_t queue_position, std::optional<Stage> stage,
+                     Clock::time_point received) {
+  const auto message =
+      protocol::MakeStepStatus(session.id, request_id, step_id, state, queue_position, stage,
+                               MsBetween(received, Clock::now()));
+  if (auto bytes = protocol::EncodeMessage(message)) Seal(session, *bytes);
+}
+
 void Replier::StepStatus(Session& session, const StepJob& job, std::string_view state,
                          int32_t queue_position, std::optional<Stage> stage) {
-  const auto message =
-      protocol::MakeStepStatus(session.id, job.command.request_id, job.command.step_id, state,
-                               queue_position, stage, MsBetween(job.received, Clock::now()));
-  if (auto bytes = protocol::EncodeMessage(message)) Seal(session, *bytes);
+  Status(session, job.command.request_id, job.command.step_id, state, queue_position, stage,
+         job.received);
+}
+
+void Replier::Again(Session& session, int64_t request_id, int64_t step_id,
+                    const StepRecall& recall) {
+  switch (recall.kind) {
+    case StepRecall::Kind::kAnswered:
+      return Seal(session, recall.reply);
+    case StepRecall::Kind::kRunning:
+      return Status(session, recall.request_id, step_id, recall.stage ? "stage" : "started", 0,
+                    recall.stage, recall.received);
+    case StepRecall::Kind::kQueued:
+      return Status(session, recall.request_id, step_id, "queued", recall.queue_position,
+                    std::nullopt, recall.received);
+    case StepRecall::Kind::kForgotten:
+      break;
+  }
+  const Error error = MakeError(
+      ErrorCode::kNotFound, "step " + std::to_string(step_id) + " was answered before the last " +
+                                std::to_string(StepLedger::kMaxKept) +
+                                " answers this daemon keeps per session; it is not run again");
+  stats_.CountError(far::ToString(error.code));
+  const protocol::StepReplyIds ids{session.id, request_id, step_id,
+                                   session.applied_sequence.load()};
+  if (auto bytes = protocol::EncodeMessage(protocol::MakeStepErrorReply(ids, error)))
+    Seal(session, *bytes);
+}
+
+void Replier::Heard(Session& session, int64_t request_id) {
+  Status(session, request_id, -1, protocol::kHeardState, 0, std::nullopt, Clock::now());
 }
 
 void Replier::SessionError(Session& session, int64_t request_id, const Error& error,

@@ -14,6 +14,7 @@
 
 #include "latency_stats.h"
 #include "rate_limiter.h"
+#include "step_ledger.h"
 
 #include "far/pipeline/pipeline.h"
 #include "far/protocol/message_validate.h"
@@ -45,6 +46,11 @@ struct Session {
   // LCM thread:
   int64_t last_request_id = -1;
   RateLimiter request_rate{1000, 50};
+  /// Requests answered from memory (repeats of a step, probes), per second and in a burst: a
+  /// client asks again at most every 200 ms per step it waits for, and one repeat may put a
+  /// 63 KiB reply on the bus. Over it, repeats are dropped (counted) like a flood.
+  static constexpr double kRepeatsPerSecond = 20;
+  RateLimiter repeat_rate{kRepeatsPerSecond, kRepeatsPerSecond};
   // Worker thread (session_worker.h), which also frees them when the session ends:
   std::unique_ptr<protocol::ShmSegment> segment;
   std::unique_ptr<protocol::UpdateReader> updates;
@@ -58,10 +64,14 @@ struct Session {
   std::mutex mutex;
   std::condition_variable wake;
   std::deque<StepJob> queue;
+  StepLedger ledger;  ///< its steps by id: the highest taken, the running one, the last answers
   bool closing = false;
   // Any thread:
   std::atomic<bool> cancel{false};  ///< the running step stops at its next check
   std::atomic<bool> worker_done{false};
+  /// Taken for each sealed message from its sequence number to its publishing, so that the
+  /// client, which drops a sequence number below one it has seen, gets them in that order.
+  std::mutex publish_mutex;
   std::atomic<int64_t> next_reply_id{1};  ///< daemon -> client sequence (sealed_t.request_id)
   std::atomic<int64_t> steps{0};
   /// Idle expiry (session_idle_timeout_s): when a step of it was last queued, started or ended

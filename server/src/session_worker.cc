@@ -58,6 +58,8 @@ class SessionWorker {
             MakeError(ErrorCode::kInternal, std::string("step failed: ") + e.what()));
       }
       MarkActive(false);
+      std::lock_guard lock(session_->mutex);
+      session_->ledger.Finish();
     }
     // The pipeline's GL objects and context belong to this thread: free them here.
     session_->pipeline.reset();
@@ -84,6 +86,7 @@ class SessionWorker {
     if (session_->closing) return false;
     *job = std::move(session_->queue.front());
     session_->queue.pop_front();
+    session_->ledger.Start(job->command.step_id, job->command.request_id, job->received);
     return true;
   }
 
@@ -143,6 +146,10 @@ class SessionWorker {
     control.max_pairs = static_cast<size_t>(std::min<uint64_t>(
         static_cast<uint64_t>(context_.config.max_reply_pairs), (ring - 4096) / kWireBytesPerPair));
     control.on_stage = [this, &job](Stage stage) {
+      {
+        std::lock_guard lock(session_->mutex);
+        session_->ledger.EnterStage(stage);
+      }
       context_.replier.StepStatus(*session_, job, "stage", 0, stage);
     };
     // Past heavy_step_ms of wall time and of the worker's own CPU time, every thread of the

@@ -58,11 +58,12 @@ struct Session {
   }
   // The client's side: open the sealed message, then the reply (from the ring for a stub).
   Result<far_lcm::step_reply_t> Receive(const std::vector<uint8_t>& bytes,
-                                        const SessionKey* key = nullptr) {
+                                        const SessionKey* key = nullptr,
+                                        SkippedReplies* skipped = nullptr) {
     auto opened = OpenSealed(bytes.data(), bytes.size(), 3, key ? *key : client->session_key(),
                              kMaxStepReplyBytes);
     if (!opened) return opened.error();
-    return ReceiveStepReply(opened->inner, *client_replies);
+    return ReceiveStepReply(opened->inner, *client_replies, skipped);
   }
 };
 
@@ -119,6 +120,55 @@ TEST(ShmReplyTest, SkipsRepliesWhoseStubsWereLost) {
   auto late = session.Receive(*lost);
   ASSERT_FALSE(late);
   EXPECT_EQ(late.error().code, ErrorCode::kNotFound);
+}
+
+// The daemon sends a lost stub again when the client asks for its step again (docs/protocol.md,
+// "Lost datagrams"): the record skipped on the way to a later one is still there for it, once.
+TEST(ShmReplyTest, AStubSentAgainFindsTheRecordSkippedBeforeIt) {
+  Session session;
+  SkippedReplies skipped;
+  auto lost = session.Send(FullReply(20000, 1));
+  auto later = session.Send(FullReply(30000, 2));
+  ASSERT_TRUE(lost && later);
+  ASSERT_TRUE(session.Receive(*later, nullptr, &skipped));
+  // The daemon seals the kept stub again, under a new sequence number.
+  auto opened =
+      OpenSealed(lost->data(), lost->size(), 3, session.client->session_key(), kMaxStepReplyBytes);
+  ASSERT_TRUE(opened);
+  auto again = SealEncoded(opened->inner, 3, ++session.sequence, session.daemon->session_key());
+  ASSERT_TRUE(again);
+  auto received = session.Receive(*again, nullptr, &skipped);
+  ASSERT_TRUE(received) << received.error().message;
+  EXPECT_EQ(received->request_id, 1);
+  EXPECT_EQ(received->num_contacts, 20000);
+  auto twice = session.Receive(*again, nullptr, &skipped);
+  ASSERT_FALSE(twice);
+  EXPECT_EQ(twice.error().code, ErrorCode::kNotFound);
+}
+
+TEST(ShmReplyTest, ASkippedRecordIsCheckedAgainstItsStubLikeOneInTheRing) {
+  Session session;
+  SkippedReplies skipped;
+  auto lost = session.Send(FullReply(20000, 1));
+  auto later = session.Send(FullReply(30000, 2));
+  ASSERT_TRUE(lost && later);
+  ASSERT_TRUE(session.Receive(*later, nullptr, &skipped));
+  auto opened =
+      OpenSealed(lost->data(), lost->size(), 3, session.client->session_key(), kMaxStepReplyBytes);
+  ASSERT_TRUE(opened);
+  auto stub = DecodeMessage<far_lcm::step_reply_t>(opened->inner.data(), opened->inner.size(),
+                                                   kMaxStepReplyBytes);
+  ASSERT_TRUE(stub);
+  ShmReplyRef ref;
+  ref.sequence = static_cast<uint64_t>(stub->shm_reply_sequence);
+  ref.index = static_cast<uint64_t>(stub->shm_reply_index);
+  ref.bytes = static_cast<uint64_t>(stub->shm_reply_bytes);
+  std::memcpy(ref.hash.data(), stub->shm_reply_hash, ref.hash.size());
+  ref.hash[0] ^= 1;
+  auto taken = skipped.Take(ref);
+  ASSERT_FALSE(taken);
+  EXPECT_EQ(taken.error().code, ErrorCode::kParseError);
+  EXPECT_NE(taken.error().message.find("hash differs"), std::string::npos) << taken.error().message;
 }
 
 TEST(ShmReplyTest, DetectsAPayloadChangedAfterItWasWritten) {

@@ -32,8 +32,8 @@ inline constexpr std::string_view kDefaultDaemonName = "far";
 /// How to reach a daemon and how long to wait for it.
 struct ClientOptions {
   /// The daemon's name: its socket is <dir>/<name>.sock, dir as far-daemon chooses it
-  /// (/run/far, else $XDG_RUNTIME_DIR/far, else /tmp/far-<uid> or, when another user holds
-  /// that, $HOME/.far/run-<host>; docs/daemon.md, "Where it listens").
+  /// ($FAR_SOCKET_DIR, else /run/far, else $XDG_RUNTIME_DIR/far, else /tmp/far-<uid> or, when
+  /// another user holds that, $HOME/.far/run-<host>; docs/daemon.md, "Where it listens").
   std::string daemon = std::string(kDefaultDaemonName);
   std::string socket_path;  ///< the daemon's socket, when not the default for `daemon`
   /// The LCM URL of the session's channels; "" = the one the daemon names when it opens the
@@ -43,8 +43,16 @@ struct ClientOptions {
   /// How long Connect and Status keep trying to reach a daemon that is not there (yet): the
   /// answer "no daemon" comes after this; a daemon started at the same time is found.
   std::chrono::milliseconds connect_timeout{1000};
+  /// How long Connect waits for the daemon to answer a probe over LCM, which shows that the
+  /// daemon hears this client's steps and the client its replies. A daemon in another network
+  /// namespace (or any other reason LCM does not get through) is an error after this, naming
+  /// the likely cause, instead of a first step that waits out `timeout`.
+  std::chrono::milliseconds hear_timeout{1000};
   /// The longest Step waits for its reply. It waits only while the daemon is alive: a daemon
-  /// that stops or restarts ends the wait at once.
+  /// that stops or restarts ends the wait at once. While it waits, a request the daemon has not
+  /// acknowledged is sent again after 200 ms (then 400, 800 ms, and every second), and a step
+  /// it acknowledged is asked for again after each second without news: a lost datagram costs
+  /// about a second, not this limit (docs/protocol.md, "Lost datagrams").
   std::chrono::milliseconds timeout{60000};
   /// Records the session into a far recording, an LCM log file that `far-client replay` runs
   /// again against any daemon and compares (docs/record-replay.md): every ring record, step
@@ -96,8 +104,13 @@ struct DaemonStatus {
 class Client {
  public:
   /// Opens a session, retrying with backoff for options.connect_timeout while no daemon
-  /// answers (one may be starting). Errors: kUnavailable ("no far-daemon named ...", or the
-  /// session's LCM URL is memq://, which no other LCM instance can reach), the
+  /// answers (one may be starting), then proves with a probe over LCM that the daemon hears
+  /// this client. When the daemon at the default socket does not (within hear_timeout), the
+  /// sockets of the same name in the other socket directories are tried in order
+  /// (protocol::SocketDirectories; not with socket_path or $FAR_SOCKET_DIR). Errors:
+  /// kUnavailable ("no far-daemon named ...", "far-daemon 'far' at ... opened this session but
+  /// hears none of its steps over LCM (...)" with the likely cause, or the session's LCM URL
+  /// is memq://, which no other LCM instance can reach), the
   /// daemon's refusal (kLimitExceeded when it has too many sessions, kBusy when this user opens
   /// too fast), kPermissionDenied when its socket or segment cannot be trusted, kIoError when
   /// the recording (record_path, FAR_RECORD) cannot be created.

@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace far::protocol {
 
@@ -43,9 +44,14 @@ std::string SessionRequestChannelPattern(std::string_view prefix);
 std::optional<int64_t> ParseSessionRequestChannel(std::string_view prefix,
                                                   std::string_view channel);
 
-/// The directory of daemon sockets when none is given: $FAR_SOCKET_DIR when set (an absolute
-/// path), else /run/far when it exists (the system service's RuntimeDirectory), else
-/// $XDG_RUNTIME_DIR/far (a user's own daemon), else PerUserSocketDirectory().path.
+/// The directories where daemon sockets are looked for when none is given, in order:
+/// $FAR_SOCKET_DIR alone when set (an absolute path); else /run/far when it exists (the
+/// system service's RuntimeDirectory), $XDG_RUNTIME_DIR/far when that is set (a user's own
+/// daemon), and PerUserSocketDirectory().path. Never empty.
+std::vector<std::string> SocketDirectories();
+/// The directory of daemon sockets when none is given: SocketDirectories().front(). A daemon
+/// makes its socket there; a client tries it first and the others after it only when the
+/// daemon there cannot hear it (far::client::Client::Connect).
 std::string DefaultSocketDirectory();
 
 /// The last choice of DefaultSocketDirectory, a directory no other user can take: /tmp/far-<uid>

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "far/base/result.h"
 #include "far/model/step_request.h"
@@ -27,6 +28,18 @@ ErrorCode FromWireStatus(int32_t status);
 far_lcm::step_request_t MakeStepRequest(int64_t session_id, int64_t request_id, int64_t step_id,
                                         uint64_t ring_commit_sequence, const StepRequest& request,
                                         int32_t timeout_ms = 0);
+
+/// A probe: a step_request_t whose output is "probe" runs nothing; the daemon answers it at
+/// once with a step_status_t in state "heard" (kHeardState). A client sends one right after
+/// the open to learn that the daemon hears its LCM messages and that it hears the daemon's
+/// (docs/protocol.md, "Lost datagrams and a daemon that cannot hear").
+inline constexpr std::string_view kProbeOutput = "probe";
+inline constexpr std::string_view kHeardState = "heard";
+
+/// Builds a probe request (auth zero: sign it with EncodeSigned); its step_id is -1.
+far_lcm::step_request_t MakeProbeRequest(int64_t session_id, int64_t request_id);
+/// True when `message` is a probe (its output is kProbeOutput).
+bool IsProbe(const far_lcm::step_request_t& message);
 
 /// The identifiers a step reply echoes.
 struct StepReplyIds {

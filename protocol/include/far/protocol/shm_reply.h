@@ -13,6 +13,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <span>
 #include <vector>
 
@@ -46,19 +47,47 @@ struct ShmReplyRef {
 /// client's read index is inconsistent, segment truncated).
 Result<ShmReplyRef> WriteShmReply(RingWriter& reply_ring, std::span<const uint8_t> encoded);
 
+/// Client: the reply records ReadShmReply skipped to reach a later one (their stubs were lost
+/// or had not come yet), kept so that a stub the daemon sends again still finds its record.
+/// Bounded: the newest kMaxRecords. Not thread-safe (the client's receive thread owns it).
+class SkippedReplies {
+ public:
+  static constexpr size_t kMaxRecords = 4;
+  /// Keeps a skipped record's sequence, index and payload, dropping the oldest beyond the bound.
+  void Keep(uint64_t sequence, uint64_t index, std::vector<uint8_t> payload);
+  /// The payload kept for `ref`, checked like a record in the ring (index, size, hash), and
+  /// forgotten; kNotFound when none is kept, kParseError when it does not match the stub.
+  Result<std::vector<uint8_t>> Take(const ShmReplyRef& ref);
+
+ private:
+  struct Record {
+    uint64_t sequence = 0, index = 0;
+    std::vector<uint8_t> payload;
+  };
+  std::deque<Record> records_;
+};
+
 /// Client: reads the record `ref` names, skipping older records (replies whose stubs were
-/// lost), and returns its payload after checking type, index, size and hash. Errors:
-/// kNotFound (not in the ring, or already read past), kParseError (mismatch, ring corrupt).
-Result<std::vector<uint8_t>> ReadShmReply(RingReader& reply_ring, const ShmReplyRef& ref);
+/// lost: kept in `skipped` when given), and returns its payload after checking type, index,
+/// size and hash. A record already read past is taken from `skipped`. Errors: kNotFound (not
+/// in the ring, or already read past and not kept), kParseError (mismatch, ring corrupt).
+Result<std::vector<uint8_t>> ReadShmReply(RingReader& reply_ring, const ShmReplyRef& ref,
+                                          SkippedReplies* skipped = nullptr);
 
 /// Returns the stub for `full`: the same ids and status, reply_in_shm true, the shm_reply_*
 /// fields from `ref`, every array empty and every count 0 (auth zero: sign it).
 far_lcm::step_reply_t MakeShmReplyStub(const far_lcm::step_reply_t& full, const ShmReplyRef& ref);
 
 /// Daemon, one call per reply: encodes `full`; when ShouldUseShmReply, writes it into the
-/// reply ring and makes a stub; returns the sealed_t bytes (daemon -> client sequence
-/// `seal_sequence`) to publish on the session's reply channel. Errors: those of EncodeMessage,
-/// WriteShmReply and SealEncoded (the caller then publishes MakeStepErrorReply instead).
+/// reply ring and returns the encoding of a stub instead. The result is what travels inside
+/// the sealed_t, and what the daemon keeps to answer a repeated request for the step. Errors:
+/// those of EncodeMessage and WriteShmReply (the caller then sends MakeStepErrorReply).
+Result<std::vector<uint8_t>> EncodeStepReplyInner(const far_lcm::step_reply_t& full,
+                                                  RingWriter& reply_ring);
+
+/// Daemon: EncodeStepReplyInner, sealed; returns the sealed_t bytes (daemon -> client sequence
+/// `seal_sequence`) to publish on the session's reply channel. Errors: those of
+/// EncodeStepReplyInner and SealEncoded (the caller then publishes MakeStepErrorReply instead).
 Result<std::vector<uint8_t>> EncodeStepReplyForTransport(const far_lcm::step_reply_t& full,
                                                          RingWriter& reply_ring,
                                                          const SessionKey& key,
@@ -68,8 +97,9 @@ Result<std::vector<uint8_t>> EncodeStepReplyForTransport(const far_lcm::step_rep
 /// decodes it (cap kMaxStepReplyBytes), and when it is a stub reads, checks and decodes the
 /// full reply from the reply ring (its ids must match the stub's). Returns the full reply; its
 /// status may say the step failed (ParseStepReply turns it into a StepResult or an Error).
-/// Errors: those of DecodeMessage and ReadShmReply.
+/// Errors: those of DecodeMessage and ReadShmReply (`skipped` as there).
 Result<far_lcm::step_reply_t> ReceiveStepReply(std::span<const uint8_t> inner,
-                                               RingReader& reply_ring);
+                                               RingReader& reply_ring,
+                                               SkippedReplies* skipped = nullptr);
 
 }  // namespace far::protocol
