@@ -24,6 +24,9 @@ namespace far::internal {
 /// each with the GPU pieces of every object, rebuilt only when the object's vertices change.
 /// Owned by the GL thread (see far::GlContext); its GL work runs under far::LockGl, taken per
 /// view (the pieces are built and dropped on the CPU, and uploaded in the view that draws them).
+/// A long view is drawn in batches: between two, the lock goes to the threads waiting for it
+/// (each gets a turn) and the step's control is checked, so a view stops within a batch of
+/// its deadline (CullingRenderer::RenderView).
 class GpuCuller {
  public:
   /// `counters` gets the piece builds; `pool` builds the pieces of changed objects in
@@ -66,12 +69,13 @@ class GpuCuller {
   using RendererKeyType = std::tuple<int, int, int>;  // width, height, depth format
   static RendererKeyType RendererKey(const StepRequest& request);
   Result<RendererEntry*> RendererFor(const StepRequest& request);
-  void EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
-                    std::span<const PieceSet> sets, const StepControl& control);
+  StopReason EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
+                          std::span<const PieceSet> sets, const StepControl& control);
   Result<void> CullLevel(RendererEntry& entry, const StepRequest& request,
                          std::span<const PieceSet> sets, std::span<const ViewObject> view_objects,
                          int k, std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
-                         std::vector<uint8_t>& alive, StepStats& stats, LevelCertificate& level);
+                         std::vector<uint8_t>& alive, StepStats& stats, LevelCertificate& level,
+                         const StepControl& control);
 
   SceneCounters& counters_;
   ThreadPool& pool_;
