@@ -241,7 +241,7 @@ Result<ViewResult> CullingRenderer::RenderView(const AxisView& view, QueryMechan
     if (timing) glBeginQuery(GL_TIME_ELAPSED, gl.timer_query);
     return stop;
   };
-  DrawPacer pacer(gl.batch_costs, pause);
+  DrawPacer pacer(gl.batch_costs, pause, batch_ms_);
   // The pieces' uploads (in parts, with pauses), the view's data and draw commands.
   const Clock::time_point prepare_start = Clock::now();
   for (PieceSet set : view.sets) {

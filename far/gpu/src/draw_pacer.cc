@@ -23,9 +23,10 @@ void BatchCosts::Record(PieceSet set, FragmentRole role, uint64_t instances, dou
 
 uint64_t DrawPacer::Budget(PieceSet set, FragmentRole role) const {
   const double per_instance = costs_.ms_per_instance(set, role);
+  if (batch_ms_ <= 0) return 1;
   if (per_instance < 0) return kFirstBatch;
   if (per_instance == 0) return UINT32_MAX;
-  return static_cast<uint64_t>(std::clamp(kBatchMs / per_instance, 1.0, double{UINT32_MAX}));
+  return static_cast<uint64_t>(std::clamp(batch_ms_ / per_instance, 1.0, double{UINT32_MAX}));
 }
 
 bool DrawPacer::DrawCommands(PieceBuffers& pieces, PieceSet set, FragmentRole role,
@@ -78,8 +79,8 @@ bool DrawPacer::AfterBatch(PieceSet set, FragmentRole role, uint64_t instances,
   // by the next pause or by the view's read-back; a pause per pass would cost a GPU a round
   // trip each, for nothing.
   const double per_instance = costs_.ms_per_instance(set, role);
-  const double predicted = per_instance < 0 ? kBatchMs : per_instance * instances;
-  if (last && unfinished_ms_ + predicted < kBatchMs / 4 && MsSince(since_pause_) < kBatchMs / 4) {
+  const double predicted = per_instance < 0 ? batch_ms_ : per_instance * instances;
+  if (last && unfinished_ms_ + predicted < batch_ms_ / 4 && MsSince(since_pause_) < batch_ms_ / 4) {
     unfinished_ms_ += predicted;
     return true;
   }
@@ -90,7 +91,7 @@ bool DrawPacer::AfterBatch(PieceSet set, FragmentRole role, uint64_t instances,
 }
 
 bool DrawPacer::MaybePause() {
-  if (MsSince(since_pause_) < kBatchMs) return false;
+  if (MsSince(since_pause_) < batch_ms_) return false;
   glFinish();
   Pause();
   return true;

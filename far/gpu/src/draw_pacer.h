@@ -41,18 +41,20 @@ class BatchCosts {
 /// Draws one view's passes in batches and pauses between them. A pause finishes the GL work
 /// drawn so far (glFinish), measures it and calls the view's BetweenBatches hook, which may
 /// hand the GL lock over and says whether the view must stop. A batch is sized to take about
-/// kBatchMs; a view small enough to take less than a fraction of that in all is drawn as it
+/// `batch_ms`; a view small enough to take less than a fraction of that in all is drawn as it
 /// was before, one call per pass and no pause (its read-back waits for it anyway).
 class DrawPacer {
  public:
   using Clock = std::chrono::steady_clock;
-  /// The GL work one batch aims at.
-  static constexpr double kBatchMs = 8;
+  /// The GL work one batch aims at, by default.
+  static constexpr double kDefaultBatchMs = 8;
   /// Instances of a batch whose cost is not known yet.
   static constexpr uint64_t kFirstBatch = 512;
 
   /// Both aliased: must outlive *this. `between` may be empty (no pauses but the measuring).
-  DrawPacer(BatchCosts& costs, const BetweenBatches& between) : costs_(costs), between_(between) {}
+  /// `batch_ms` <= 0: one instance per batch, each followed by a pause (for tests).
+  DrawPacer(BatchCosts& costs, const BetweenBatches& between, double batch_ms = kDefaultBatchMs)
+      : costs_(costs), between_(between), batch_ms_(batch_ms) {}
 
   /// Draws the view's commands of `set` (PieceBuffers::PrepareViewDraws) with `role`'s program
   /// bound, in batches. False when the view must stop (stopped() says why).
@@ -62,7 +64,7 @@ class DrawPacer {
   bool DrawRange(PieceBuffers& pieces, PieceSet set, FragmentRole role, uint64_t first,
                  uint64_t count, RenderCounters* counters);
   /// For work drawn outside the pacer (per-primitive occlusion queries): pauses when the GL
-  /// work since the last pause may have taken kBatchMs, judged by the CPU time spent issuing
+  /// work since the last pause may have taken a batch's time, judged by the CPU time spent issuing
   /// it. Returns whether it paused (the work is then finished); stopped() says whether to stop.
   bool MaybePause();
   /// Why the view must stop, or kNone.
@@ -81,6 +83,7 @@ class DrawPacer {
 
   BatchCosts& costs_;
   const BetweenBatches& between_;
+  double batch_ms_;
   StopReason stopped_ = StopReason::kNone;
   int pauses_ = 0;
   Clock::time_point since_pause_ = Clock::now();

@@ -28,9 +28,10 @@ class TicketLock {
     Serve();
   }
 
-  bool contended() const {
+  // Tickets taken and not yet served, but the holder's.
+  int waiters() const {
     std::lock_guard lock(mutex_);
-    return next_ticket_ - serving_ > 1;  // the holder's ticket and at least one more
+    return static_cast<int>(next_ticket_ - serving_) - (depth_ > 0 ? 1 : 0);
   }
 
   // Hands the lock to the threads waiting now and takes it back after them; ms waited.
@@ -83,7 +84,7 @@ double GlLockWaitedMs() { return waited_ms; }
 GlLock::GlLock() { waited_ms += TheLock().Acquire(); }
 GlLock::~GlLock() { TheLock().Release(); }
 
-bool GlLock::contended() const { return TheLock().contended(); }
+int GlLock::waiters() const { return TheLock().waiters(); }
 
 double GlLock::Yield() {
   const double ms = TheLock().Yield();

@@ -227,8 +227,8 @@ bool TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
     const Box& box = builder.boxes.back();
     builder.centroids.emplace_back(0.5 * (box.lo[0] + box.hi[0]), 0.5 * (box.lo[1] + box.hi[1]),
                                    0.5 * (box.lo[2] + box.hi[2]));
+    if (builder.Stopped(1)) return abandon();  // (half a second for 2M triangles)
   }
-  if (stopper != nullptr && stopper->Poll()) return abandon();
   nodes_.emplace_back();
   builder.Build(0, 0, static_cast<uint32_t>(triangles.size()));
   if (stopper != nullptr && (stopper->stopped() || stopper->Poll())) return abandon();

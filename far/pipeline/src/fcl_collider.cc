@@ -35,16 +35,34 @@ struct BuildJob {
   std::shared_ptr<Model> model;  // set when built
   uint64_t stamp = 0;            // the geometry it was built from
 
-  static std::shared_ptr<BuildJob> Start(const Mesh& mesh, uint64_t stamp) {
+  // Copies `mesh` (in parts, with checks of `control` between them: copying 2M triangles into
+  // fresh memory took half a second on the development machine) and starts the build; null when
+  // the control said stop first (`stop` says why).
+  static std::shared_ptr<BuildJob> Start(const Mesh& source, uint64_t stamp,
+                                         const StepControl* control, StopReason* stop) {
+    constexpr size_t kPart = 1 << 16;
+    Mesh mesh;
+    mesh.p_MV.reserve(source.p_MV.size());
+    mesh.triangles.reserve(source.triangles.size());
+    for (size_t at = 0; at < std::max(source.p_MV.size(), source.triangles.size()); at += kPart) {
+      if (control != nullptr && (*stop = control->Check()) != StopReason::kNone) return nullptr;
+      const auto copy = [at](const auto& from, auto& to) {
+        if (at < from.size())
+          to.insert(to.end(), from.begin() + at, from.begin() + std::min(from.size(), at + kPart));
+      };
+      copy(source.p_MV, mesh.p_MV);
+      copy(source.triangles, mesh.triangles);
+    }
     auto job = std::make_shared<BuildJob>();
     job->stamp = stamp;
-    std::vector<fcl::Triangle> triangles;
-    triangles.reserve(mesh.triangles.size());
-    for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
-    std::thread([job, points = Points(mesh), triangles = std::move(triangles)] {
+    // FCL's types are made on the build's thread.
+    std::thread([job, mesh = std::move(mesh)] {
+      std::vector<fcl::Triangle> triangles;
+      triangles.reserve(mesh.triangles.size());
+      for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
       auto model = std::make_shared<Model>();
       model->beginModel();
-      model->addSubModel(points, triangles);
+      model->addSubModel(Points(mesh), triangles);
       model->endModel();
       std::lock_guard lock(job->mutex);
       job->model = std::move(model);
@@ -151,9 +169,11 @@ StopReason FclCollider::Impl::Refresh(const Object& object, const StepControl* c
   if (!entry.model) {
     const SetupScope setup(control);  // one-off: later steps move or refit it
     // A build of other vertices (a deformable object that moved since) is of no use.
-    if (!entry.build || entry.build->stamp != object.geometry_stamp)
-      entry.build = BuildJob::Start(*object.mesh, object.geometry_stamp);
     StopReason stop = StopReason::kNone;
+    if (!entry.build || entry.build->stamp != object.geometry_stamp) {
+      entry.build = BuildJob::Start(*object.mesh, object.geometry_stamp, control, &stop);
+      if (!entry.build) return stop;
+    }
     entry.model = entry.build->Wait(control, &stop);
     if (!entry.model) return stop;
     entry.build.reset();

@@ -159,6 +159,7 @@ Result<GpuCuller::RendererEntry*> GpuCuller::RendererFor(const StepRequest& requ
     const auto gl = LockGl();  // compiles shaders, makes framebuffers
     auto renderer = CullingRenderer::Create(raster);
     if (!renderer.ok()) return renderer.error();
+    (*renderer)->set_batch_ms(batch_ms_);
     it = renderers_.emplace(key, RendererEntry{std::move(*renderer), {}}).first;
   }
   return &it->second;

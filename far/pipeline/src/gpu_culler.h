@@ -30,8 +30,9 @@ namespace far::internal {
 class GpuCuller {
  public:
   /// `counters` gets the piece builds; `pool` builds the pieces of changed objects in
-  /// parallel. Both aliased, must outlive *this.
-  GpuCuller(SceneCounters& counters, ThreadPool& pool) : counters_(counters), pool_(pool) {}
+  /// parallel. Both aliased, must outlive *this. `batch_ms`: CullingRenderer::set_batch_ms.
+  GpuCuller(SceneCounters& counters, ThreadPool& pool, double batch_ms)
+      : counters_(counters), pool_(pool), batch_ms_(batch_ms) {}
   ~GpuCuller();
   GpuCuller(const GpuCuller&) = delete;
   GpuCuller& operator=(const GpuCuller&) = delete;
@@ -79,6 +80,7 @@ class GpuCuller {
 
   SceneCounters& counters_;
   ThreadPool& pool_;
+  double batch_ms_;
   std::map<RendererKeyType, RendererEntry> renderers_;
 };
 

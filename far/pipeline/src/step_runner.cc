@@ -415,8 +415,8 @@ Result<void> Stages::RunStages(StageTimer& timer) {
 
 }  // namespace
 
-StepWorld::StepWorld(ThreadPool& pool, bool with_gpu) : pool(pool) {
-  if (with_gpu) gpu = std::make_unique<GpuCuller>(cache.counters(), pool);
+StepWorld::StepWorld(ThreadPool& pool, bool with_gpu, double gl_batch_ms) : pool(pool) {
+  if (with_gpu) gpu = std::make_unique<GpuCuller>(cache.counters(), pool, gl_batch_ms);
 }
 
 void StepWorld::Apply(SceneUpdate update) {

@@ -129,6 +129,9 @@ class CullingRenderer {
   CullingRenderer& operator=(const CullingRenderer&) = delete;
 
   const RasterFormat& raster() const { return raster_; }
+  /// The GL work one batch of a view's draws aims at (RenderView), ms; <= 0: one instance per
+  /// batch (for tests). Default 8.
+  void set_batch_ms(double batch_ms) { batch_ms_ = batch_ms; }
 
   /// Replaces the instances of `slot` in `set` (uploaded on the next view that draws `set`).
   void SetPieces(PieceSet set, uint32_t slot, std::vector<PieceInstance> pieces);
@@ -148,6 +151,7 @@ class CullingRenderer {
   explicit CullingRenderer(std::unique_ptr<Impl> impl, const RasterFormat& raster);
   std::unique_ptr<Impl> impl_;
   RasterFormat raster_;
+  double batch_ms_ = 8;
 };
 
 }  // namespace far::internal

@@ -34,8 +34,10 @@ class GlLock {
   GlLock& operator=(const GlLock&) = delete;
   ~GlLock();
 
+  /// How many other threads are waiting for the lock now.
+  int waiters() const;
   /// Whether another thread is waiting for the lock now.
-  bool contended() const;
+  bool contended() const { return waiters() > 0; }
   /// Lets every thread that waits for the lock now have its turn, in order, then takes it back
   /// (and returns how long that took, ms); returns 0 at once when none waits, or when this
   /// thread holds the lock more than once (an outer holder, such as the GPU cost probe, keeps

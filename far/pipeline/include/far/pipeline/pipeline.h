@@ -36,6 +36,11 @@ struct PipelineOptions {
   SceneLimits scene_limits;
   /// A budget shared with other pipelines (a daemon's sessions), or null; must outlive this.
   SharedSceneBudget* shared_budget = nullptr;
+  /// The GL work one batch of a GPU view's draws aims at, ms. Between two batches of a view
+  /// that runs longer, the step's control is checked and the GL lock (far/gpu/gl_lock.h) goes to
+  /// the threads waiting for it, so that a view stops within about a batch of its deadline and
+  /// other pipelines' views wait about a batch. <= 0: one piece per batch (tests).
+  double gl_batch_ms = 8;
 };
 
 /// The FAR step pipeline: one scene, its GPU resources and a CPU pool. One call runs one step.
