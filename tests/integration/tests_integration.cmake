@@ -28,7 +28,8 @@ add_executable(far_integration_test
   integration/other_user_client.cc
   integration/user_limits_test.cc
   integration/memory_test.cc
-  integration/cpu_priority_test.cc)
+  integration/cpu_priority_test.cc
+  integration/deadline_test.cc)
 target_link_libraries(far_integration_test PRIVATE far::client far::protocol far::scenes far::io
                       far_server_core
                       far_test_scenes nlohmann_json::nlohmann_json GTest::gtest far_warnings

@@ -25,8 +25,12 @@ uint64_t DrawPacer::Budget(PieceSet set, FragmentRole role) const {
   const double per_instance = costs_.ms_per_instance(set, role);
   if (batch_ms_ <= 0) return 1;
   if (per_instance < 0) return kFirstBatch;
-  if (per_instance == 0) return UINT32_MAX;
-  return static_cast<uint64_t>(std::clamp(batch_ms_ / per_instance, 1.0, double{UINT32_MAX}));
+  const uint64_t by_cost =
+      per_instance == 0
+          ? UINT32_MAX
+          : static_cast<uint64_t>(std::clamp(batch_ms_ / per_instance, 1.0, double{UINT32_MAX}));
+  const uint64_t last = last_batch_[static_cast<size_t>(set)][static_cast<size_t>(role)];
+  return last == 0 ? by_cost : std::min(by_cost, kGrowth * last);
 }
 
 bool DrawPacer::DrawCommands(PieceBuffers& pieces, PieceSet set, FragmentRole role,
@@ -75,6 +79,7 @@ bool DrawPacer::DrawRange(PieceBuffers& pieces, PieceSet set, FragmentRole role,
 
 bool DrawPacer::AfterBatch(PieceSet set, FragmentRole role, uint64_t instances,
                            Clock::time_point start, bool last) {
+  last_batch_[static_cast<size_t>(set)][static_cast<size_t>(role)] = instances;
   // A pass small enough, in a view that has been short so far: no pause. Its work is finished
   // by the next pause or by the view's read-back; a pause per pass would cost a GPU a round
   // trip each, for nothing.

@@ -48,8 +48,13 @@ class DrawPacer {
   using Clock = std::chrono::steady_clock;
   /// The GL work one batch aims at, by default.
   static constexpr double kDefaultBatchMs = 8;
-  /// Instances of a batch whose cost is not known yet.
-  static constexpr uint64_t kFirstBatch = 512;
+  /// Instances of a batch whose cost is not known yet: few, as one piece may cover the whole
+  /// viewport (512 such pieces at 2048^2 took seconds on llvmpipe).
+  static constexpr uint64_t kFirstBatch = 16;
+  /// A batch draws at most this many times the instances of the one before it in the view (of
+  /// its set and role): pieces of one view differ in cost, and a batch sized on cheap ones
+  /// should not meet a long run of dear ones at full size.
+  static constexpr uint64_t kGrowth = 4;
 
   /// Both aliased: must outlive *this. `between` may be empty (no pauses but the measuring).
   /// `batch_ms` <= 0: one instance per batch, each followed by a pause (for tests).
@@ -88,6 +93,8 @@ class DrawPacer {
   int pauses_ = 0;
   Clock::time_point since_pause_ = Clock::now();
   double unfinished_ms_ = 0;  // predicted GL work drawn since the last pause
+  // The instances of the last batch of each set and role in this view (0: none yet).
+  std::array<std::array<uint64_t, kNumRoles>, kNumPieceSets> last_batch_{};
 };
 
 }  // namespace far::internal
