@@ -1,5 +1,6 @@
 #include "deadline_memory.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <tuple>
 
@@ -39,13 +40,20 @@ Result<void> DeadlineMemory::Check(const StepRequest& request, int64_t triangles
           Seconds(recheck_after_) + " after the last one");
 }
 
-void DeadlineMemory::Record(const StepRequest& request, int64_t triangles, bool hit_deadline,
-                            const std::string& why, Clock::time_point now) {
-  if (!hit_deadline) {
+std::chrono::milliseconds DeadlineMemory::blame_after() const {
+  const auto slack = std::max(std::chrono::milliseconds(1000), step_deadline_ / 20);
+  return step_deadline_ - slack;
+}
+
+void DeadlineMemory::Record(const StepRequest& request, int64_t triangles, const StepEnd& end,
+                            Clock::time_point now) {
+  if (!end.hit_deadline) {
     if (last_ && CostKey(request) == CostKey(last_->request)) last_.reset();
     return;
   }
-  last_ = Hit{request, triangles, why, now};
+  // Stopped at the deadline after waiting for most of it: not shown too heavy.
+  if (end.ran < blame_after()) return;
+  last_ = Hit{request, triangles, end.why, now};
 }
 
 }  // namespace far::server

@@ -15,6 +15,7 @@
 #include "step_cpu_meter.h"
 
 #include "far/base/thread_pool.h"
+#include "far/gpu/gl_lock.h"
 #include "far/protocol/convert.h"
 #include "far/protocol/shm_reply.h"
 
@@ -41,8 +42,7 @@ class SessionWorker {
   SessionWorker(std::shared_ptr<Session> session, const WorkerContext& context)
       : session_(std::move(session)),
         context_(context),
-        deadlines_(kRecheckDeadlines * std::chrono::milliseconds(context.config.step_deadline_ms)) {
-  }
+        deadlines_(std::chrono::milliseconds(context.config.step_deadline_ms), kRecheckDeadlines) {}
 
   void Run() {
     if (clockid_t clock; pthread_getcpuclockid(pthread_self(), &clock) == 0) worker_clock_ = clock;
@@ -198,9 +198,27 @@ class SessionWorker {
                  meter.setup_ms(), meter.covered_ms());
   }
 
+  // How the step ended, for the deadline memory: whether it ran into the daemon's own deadline
+  // (not a shorter one the client asked for), and its own running time since `dequeued`: less
+  // what this thread waited for other sessions' GL work since `gl_waited_ms` (GlLockWaitedMs).
+  DeadlineMemory::StepEnd EndOf(const StepJob& job, const Result<StepResult>& result,
+                                Clock::time_point dequeued, double gl_waited_ms) const {
+    const bool daemon_deadline =
+        job.deadline >= job.received + std::chrono::milliseconds(context_.config.step_deadline_ms);
+    DeadlineMemory::StepEnd end;
+    end.hit_deadline = !result && result.error().code == ErrorCode::kTimeout && daemon_deadline;
+    end.ran = std::chrono::milliseconds(static_cast<int64_t>(MsBetween(dequeued, Clock::now()) -
+                                                             (GlLockWaitedMs() - gl_waited_ms)));
+    if (!result) end.why = result.error().message;
+    return end;
+  }
+
   void RunStep(const StepJob& job) {
     const protocol::StepCommand& command = job.command;
     Replier& replier = context_.replier;
+    // The step's own time starts here: its wait in the queue is not its cost.
+    const auto dequeued = Clock::now();
+    const double gl_waited_ms = GlLockWaitedMs();
     if (Clock::now() >= job.deadline) {
       return replier.StepError(
           *session_, command,
@@ -225,13 +243,8 @@ class SessionWorker {
     const auto step_started = Clock::now();
     StepCpuMeter meter(worker_clock_, context_.setup_allowance, session_->uid);
     auto result = session_->pipeline->Step(command.request, ControlFor(job, meter));
-    // Ran into the daemon's own deadline (not a shorter one the client asked for)?
-    const bool daemon_deadline =
-        job.deadline >= job.received + std::chrono::milliseconds(context_.config.step_deadline_ms);
-    const bool hit_deadline =
-        !result && result.error().code == ErrorCode::kTimeout && daemon_deadline;
-    deadlines_.Record(command.request, triangles, hit_deadline,
-                      result ? std::string() : result.error().message, Clock::now());
+    deadlines_.Record(command.request, triangles, EndOf(job, result, dequeued, gl_waited_ms),
+                      Clock::now());
     if (const double step_ms = MsBetween(step_started, Clock::now());
         step_ms > context_.config.heavy_step_ms && HeavyOnCpu(meter)) {
       ThreadPool::MoveCallingThreadToBackground();

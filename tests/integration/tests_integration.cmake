@@ -34,7 +34,8 @@ add_executable(far_integration_test
   integration/lcm_route_error_test.cc
   integration/out_of_descriptors_test.cc
   integration/socket_directory_test.cc
-  integration/lost_datagram_test.cc)
+  integration/lost_datagram_test.cc
+  integration/deadline_test.cc)
 target_link_libraries(far_integration_test PRIVATE far::client far_client_internal far::protocol far::scenes far::io
                       far_server_core
                       far_test_scenes nlohmann_json::nlohmann_json GTest::gtest far_warnings

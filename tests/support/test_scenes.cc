@@ -39,4 +39,15 @@ std::vector<SceneObject> Transformed(std::vector<SceneObject> objects, const Eig
   return objects;
 }
 
+Mesh StackedTriangles(int n, double z0, double dz) {
+  Mesh mesh;
+  for (int i = 0; i < n; ++i) {
+    const double z = z0 + i * dz;
+    const auto first = static_cast<uint32_t>(mesh.p_MV.size());
+    mesh.p_MV.insert(mesh.p_MV.end(), {{0, 0, z}, {1, 0, z}, {0, 1, z}});
+    mesh.triangles.push_back({first, first + 1, first + 2});
+  }
+  return mesh;
+}
+
 }  // namespace far::testing

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <string>
 
+#include "draw_pacer.h"
 #include "gl_program.h"
 #include "piece_buffers.h"
 #include "view_pass.h"
@@ -117,6 +119,7 @@ struct CullingRenderer::Impl {
   std::unique_ptr<CullTargets> targets;
   GLuint object_buffer = 0, alive_buffer = 0;
   GLuint timer_query = 0;  // GL_TIME_ELAPSED of a view's passes
+  BatchCosts batch_costs;  // what a batch of draws costs here, from view to view
 
   ~Impl() {
     GLuint buffers[] = {object_buffer, alive_buffer};
@@ -211,37 +214,63 @@ void CullingRenderer::SetPieces(PieceSet set, uint32_t slot, std::vector<PieceIn
 
 void CullingRenderer::RemoveSlot(uint32_t slot) { impl_->pieces->RemoveSlot(slot); }
 
-Result<std::vector<uint8_t>> CullingRenderer::RenderView(const AxisView& view,
-                                                         QueryMechanism mechanism,
-                                                         RenderCounters* counters) {
+Result<ViewResult> CullingRenderer::RenderView(const AxisView& view, QueryMechanism mechanism,
+                                               RenderCounters* counters,
+                                               const BetweenBatches& between) {
   using Clock = std::chrono::steady_clock;
   const auto ms_since = [](Clock::time_point start) {
     return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   };
-  const Clock::time_point prepare_start = Clock::now();
   Impl& gl = *impl_;
-  for (PieceSet set : view.sets) gl.pieces->Sync(set, counters);
+  // The GPU's time of the passes, without the pauses: the timer stops for each.
+  GLuint64 gpu_ns = 0;
+  bool timing = false;  // the timer query runs (during the passes)
+  const auto read_timer = [&] {
+    if (!timing) return;
+    glEndQuery(GL_TIME_ELAPSED);
+    GLuint64 ns = 0;
+    glGetQueryObjectui64v(gl.timer_query, GL_QUERY_RESULT, &ns);
+    gpu_ns += ns;
+  };
+  double paused_ms = 0;
+  const BetweenBatches pause = [&] {
+    read_timer();
+    const Clock::time_point start = Clock::now();
+    const StopReason stop = between ? between() : StopReason::kNone;
+    paused_ms += ms_since(start);
+    if (timing) glBeginQuery(GL_TIME_ELAPSED, gl.timer_query);
+    return stop;
+  };
+  DrawPacer pacer(gl.batch_costs, pause, batch_ms_);
+  // The pieces' uploads (in parts, with pauses), the view's data and draw commands.
+  const Clock::time_point prepare_start = Clock::now();
+  for (PieceSet set : view.sets) {
+    if (!gl.pieces->Sync(set, pacer, counters)) return ViewResult{{}, pacer.stopped()};
+  }
   gl.UploadViewData(view, counters);
   gl.SetViewState(raster_);
   for (PieceSet set : view.sets)
     gl.pieces->PrepareViewDraws(set, view.objects, view.alive, view.triangles_per_primitive,
                                 &counters->bytes_uploaded);
-  counters->prepare_ms += ms_since(prepare_start);
+  counters->prepare_ms += ms_since(prepare_start) - paused_ms;
   const Clock::time_point passes_start = Clock::now();
+  paused_ms = 0;
+  timing = true;
   glBeginQuery(GL_TIME_ELAPSED, gl.timer_query);
-  ViewPass pass(view, *gl.pieces, *gl.programs, counters);
-  std::vector<uint8_t> stays = mechanism == QueryMechanism::kIdBuffer
-                                   ? CullWithIdBuffer(pass, *gl.targets)
-                                   : CullWithOcclusionQueries(pass, *gl.targets);
-  glEndQuery(GL_TIME_ELAPSED);
+  ViewPass pass(view, *gl.pieces, *gl.programs, pacer, counters);
+  std::optional<std::vector<uint8_t>> stays = mechanism == QueryMechanism::kIdBuffer
+                                                  ? CullWithIdBuffer(pass, *gl.targets)
+                                                  : CullWithOcclusionQueries(pass, *gl.targets);
+  // The mechanism read its result back (or finished at its last pause), so the passes are done
+  // and the timer's result does not wait on them.
+  read_timer();
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  counters->passes_ms += ms_since(passes_start);
-  // The mechanism read its result back, so the passes are done and this does not wait on them.
-  GLuint64 gpu_ns = 0;
-  glGetQueryObjectui64v(gl.timer_query, GL_QUERY_RESULT, &gpu_ns);
+  counters->passes_ms += ms_since(passes_start) - paused_ms;
   counters->gpu_ms += static_cast<double>(gpu_ns) * 1e-6;
+  counters->pauses += pacer.pauses();
   if (auto status = CheckGl("rendering a culling view"); !status.ok()) return status.error();
-  return stays;
+  if (!stays) return ViewResult{{}, pacer.stopped()};
+  return ViewResult{std::move(*stays), StopReason::kNone};
 }
 
 }  // namespace far::internal

@@ -7,14 +7,17 @@
 //     against the second buffer where the primitive's own group does; a passing fragment flags
 //     its primitive. A primitive never flagged is fully visible against the other groups:
 //     the set both occlusion-query passes prune (tests prove both give the same PCS).
+// Each pass is drawn in batches (ViewPass::DrawAll); a view that must stop between two of them
+// returns no answer.
 
+#include <optional>
 #include <vector>
 
 #include "view_pass.h"
 
 namespace far::internal {
 
-std::vector<uint8_t> CullWithIdBuffer(ViewPass& pass, const CullTargets& targets) {
+std::optional<std::vector<uint8_t>> CullWithIdBuffer(ViewPass& pass, const CullTargets& targets) {
   const AxisView& view = pass.view();
   const GLfloat far_depth = 1.f;
   // Pass 1: nearest front face per pixel and the group it belongs to. Depth writes on before
@@ -27,13 +30,13 @@ std::vector<uint8_t> CullWithIdBuffer(ViewPass& pass, const CullTargets& targets
   glClearBufferfv(GL_DEPTH, 0, &far_depth);
   glDepthFunc(GL_LESS);
   pass.CullFaces(GL_BACK);
-  pass.DrawAll(FragmentRole::kWriteId);
+  if (!pass.DrawAll(FragmentRole::kWriteId)) return std::nullopt;
   // Pass 2: nearest front face of any other group.
   glBindFramebuffer(GL_FRAMEBUFFER, targets.fbo_other);
   glClearBufferfv(GL_DEPTH, 0, &far_depth);
   glBindTextureUnit(0, targets.id_texture);
   glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
-  pass.DrawAll(FragmentRole::kOtherDepth);
+  if (!pass.DrawAll(FragmentRole::kOtherDepth)) return std::nullopt;
   // Pass 3: back faces at or behind another group's nearest front face flag their primitive.
   std::vector<uint32_t> flags(static_cast<size_t>(view.num_primitives) + 1, 0);
   glNamedBufferData(targets.flag_buffer, static_cast<GLsizeiptr>(flags.size() * sizeof(uint32_t)),
@@ -50,7 +53,7 @@ std::vector<uint8_t> CullWithIdBuffer(ViewPass& pass, const CullTargets& targets
       const GLuint program = pass.UseProgram(ShapeOf(set), FragmentRole::kFlag);
       glUniform1i(glGetUniformLocation(program, "against_nearest"), against_nearest ? 1 : 0);
     }
-    pass.DrawAll(FragmentRole::kFlag);
+    if (!pass.DrawAll(FragmentRole::kFlag)) return std::nullopt;
   }
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   glGetNamedBufferSubData(targets.flag_buffer, 0,

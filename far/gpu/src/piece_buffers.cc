@@ -2,17 +2,12 @@
 
 #include <algorithm>
 
+#include "draw_pacer.h"
+
 namespace far::internal {
 namespace {
 
-// glMultiDrawElementsIndirect's command layout.
-struct DrawCommand {
-  GLuint count;
-  GLuint instance_count;
-  GLuint first_index;
-  GLint base_vertex;
-  GLuint base_instance;
-};
+using DrawCommand = PieceBuffers::DrawCommand;
 
 GLsizei CornerCount(PieceSet set) {
   return static_cast<GLsizei>(CornerIndices(ShapeOf(set)).size());
@@ -86,45 +81,72 @@ size_t PieceBuffers::num_slots() const {
   return n;
 }
 
-void PieceBuffers::Sync(PieceSet set, RenderCounters* counters) {
+namespace {
+
+// Uploads `count` instances to `buffer` at instance `at`, in parts with the pacer's pauses
+// between them; false when it said stop.
+bool Upload(GLuint buffer, uint64_t at, const PieceInstance* instances, uint64_t count,
+            DrawPacer& pacer, RenderCounters* counters) {
+  constexpr uint64_t kPart = (4u << 20) / sizeof(PieceInstance);  // 4 MiB
+  for (uint64_t done = 0; done < count; done += kPart) {
+    const uint64_t n = std::min(kPart, count - done);
+    glNamedBufferSubData(buffer, static_cast<GLintptr>((at + done) * sizeof(PieceInstance)),
+                         static_cast<GLsizeiptr>(n * sizeof(PieceInstance)), instances + done);
+    counters->bytes_uploaded += static_cast<int64_t>(n * sizeof(PieceInstance));
+    pacer.MaybePause();
+    if (pacer.stopped() != StopReason::kNone) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool PieceBuffers::Sync(PieceSet set, DrawPacer& pacer, RenderCounters* counters) {
   Store& s = store(set);
   if (s.layout_changed) {
+    // New sizes: a new buffer, every slot uploaded. Stopped half-way, the layout stays changed.
     s.first.assign(s.slots.size(), 0);
     s.total = 0;
     for (size_t slot = 0; slot < s.slots.size(); ++slot) {
       s.first[slot] = s.total;
       s.total += s.slots[slot].size();
     }
-    std::vector<PieceInstance> all;
-    all.reserve(s.total);
-    for (const auto& slot : s.slots) all.insert(all.end(), slot.begin(), slot.end());
-    const auto bytes = static_cast<GLsizeiptr>(all.size() * sizeof(PieceInstance));
-    glNamedBufferData(s.buffer, std::max<GLsizeiptr>(bytes, 1), all.data(), GL_STATIC_DRAW);
-    counters->bytes_uploaded += bytes;
+    const auto bytes = static_cast<GLsizeiptr>(s.total * sizeof(PieceInstance));
+    glNamedBufferData(s.buffer, std::max<GLsizeiptr>(bytes, 1), nullptr, GL_STATIC_DRAW);
+    for (size_t slot = 0; slot < s.slots.size(); ++slot) {
+      if (!Upload(s.buffer, s.first[slot], s.slots[slot].data(), s.slots[slot].size(), pacer,
+                  counters)) {
+        return false;
+      }
+    }
   } else {
     for (size_t slot = 0; slot < s.slots.size(); ++slot) {
       if (!s.dirty[slot] || s.slots[slot].empty()) continue;
-      const auto bytes = static_cast<GLsizeiptr>(s.slots[slot].size() * sizeof(PieceInstance));
-      glNamedBufferSubData(s.buffer, static_cast<GLintptr>(s.first[slot] * sizeof(PieceInstance)),
-                           bytes, s.slots[slot].data());
-      counters->bytes_uploaded += bytes;
+      if (!Upload(s.buffer, s.first[slot], s.slots[slot].data(), s.slots[slot].size(), pacer,
+                  counters)) {
+        return false;
+      }
+      s.dirty[slot] = 0;
     }
   }
   std::fill(s.dirty.begin(), s.dirty.end(), 0);
   s.layout_changed = false;
+  return true;
 }
 
 void PieceBuffers::PrepareViewDraws(PieceSet set, std::span<const ViewObject> objects,
                                     std::span<const uint8_t> alive, int triangles_per_primitive,
                                     int64_t* bytes) {
   Store& s = store(set);
-  std::vector<DrawCommand> commands;
-  s.view_instances = 0;
+  std::vector<DrawCommand>& commands = s.commands;
+  commands.clear();
+  // Runs longer than kMaxCommandInstances are cut into several commands.
   const auto add = [&](uint64_t first, uint64_t count) {
-    if (count == 0) return;
-    commands.push_back({static_cast<GLuint>(CornerCount(set)), static_cast<GLuint>(count), 0, 0,
-                        static_cast<GLuint>(first)});
-    s.view_instances += count;
+    for (uint64_t at = first; at < first + count; at += kMaxCommandInstances) {
+      const uint64_t n = std::min(kMaxCommandInstances, first + count - at);
+      commands.push_back({static_cast<GLuint>(CornerCount(set)), static_cast<GLuint>(n), 0, 0,
+                          static_cast<GLuint>(at)});
+    }
   };
   for (const ViewObject& object : objects) {
     if (object.slot >= s.slots.size() || s.slots[object.slot].empty()) continue;
@@ -149,7 +171,6 @@ void PieceBuffers::PrepareViewDraws(PieceSet set, std::span<const ViewObject> ob
       j = end;
     }
   }
-  s.view_commands = commands.size();
   glNamedBufferData(
       s.indirect_buffer,
       static_cast<GLsizeiptr>(std::max<size_t>(commands.size(), 1) * sizeof(DrawCommand)),
@@ -157,15 +178,22 @@ void PieceBuffers::PrepareViewDraws(PieceSet set, std::span<const ViewObject> ob
   *bytes += static_cast<int64_t>(commands.size() * sizeof(DrawCommand));
 }
 
-void PieceBuffers::DrawView(PieceSet set, RenderCounters* counters) {
+std::pair<uint64_t, uint64_t> PieceBuffers::ViewCommand(PieceSet set, size_t i) const {
+  const DrawCommand& command = store(set).commands[i];
+  return {command.base_instance, command.instance_count};
+}
+
+void PieceBuffers::DrawViewCommands(PieceSet set, size_t begin, size_t end,
+                                    RenderCounters* counters) {
   const Store& s = store(set);
-  if (s.view_commands == 0) return;
+  if (begin >= end) return;
   glBindVertexArray(s.vao);
   glBindBuffer(GL_DRAW_INDIRECT_BUFFER, s.indirect_buffer);
-  glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_BYTE, nullptr,
-                              static_cast<GLsizei>(s.view_commands), 0);
+  glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_BYTE,
+                              reinterpret_cast<const void*>(begin * sizeof(DrawCommand)),
+                              static_cast<GLsizei>(end - begin), 0);
   counters->draws++;
-  counters->instances += static_cast<int64_t>(s.view_instances);
+  for (size_t i = begin; i < end; ++i) counters->instances += s.commands[i].instance_count;
 }
 
 void PieceBuffers::Draw(PieceSet set, uint64_t first, uint64_t count, RenderCounters* counters) {

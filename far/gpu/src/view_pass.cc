@@ -101,11 +101,12 @@ GLuint ViewPass::UseProgram(Shape shape, FragmentRole role) const {
   return program;
 }
 
-void ViewPass::DrawAll(FragmentRole role) {
+bool ViewPass::DrawAll(FragmentRole role) {
   for (PieceSet set : view_.sets) {
     UseProgram(ShapeOf(set), role);
-    pieces_.DrawView(set, counters_);
+    if (!pacer_.DrawCommands(pieces_, set, role, counters_)) return false;
   }
+  return true;
 }
 
 void ViewPass::DrawPrimitive(const ViewObject& object, int local, FragmentRole role) {
@@ -116,12 +117,13 @@ void ViewPass::DrawPrimitive(const ViewObject& object, int local, FragmentRole r
   }
 }
 
-void ViewPass::DrawObject(const ViewObject& object, FragmentRole role) {
+bool ViewPass::DrawObject(const ViewObject& object, FragmentRole role) {
   for (PieceSet set : view_.sets) {
     UseProgram(ShapeOf(set), role);
     auto [first, count] = pieces_.PrimitiveRange(set, object, 0, 0);
-    pieces_.Draw(set, first, count, counters_);
+    if (!pacer_.DrawRange(pieces_, set, role, first, count, counters_)) return false;
   }
+  return true;
 }
 
 int ViewPass::PrimitivesOf(const ViewObject& object) const {

@@ -2,9 +2,11 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "culling_shaders.h"
+#include "draw_pacer.h"
 #include "piece_buffers.h"
 #include <epoxy/gl.h>
 
@@ -49,27 +51,30 @@ class CullTargets {
 };
 
 /// One axis view being rendered: draws the view's pieces with the program of a role, with the
-/// face culling the pieces call for. What both mechanisms draw with.
+/// face culling the pieces call for, in batches paced by a DrawPacer. What both mechanisms
+/// draw with. The drawing calls that return bool return false when the view must stop
+/// (pacer().stopped() says why): the mechanism then returns no answer.
 class ViewPass {
  public:
   ViewPass(const AxisView& view, PieceBuffers& pieces, const CullingPrograms& programs,
-           RenderCounters* counters)
-      : view_(view), pieces_(pieces), programs_(programs), counters_(counters) {}
+           DrawPacer& pacer, RenderCounters* counters)
+      : view_(view), pieces_(pieces), programs_(programs), pacer_(pacer), counters_(counters) {}
 
   const AxisView& view() const { return view_; }
   RenderCounters* counters() { return counters_; }
+  DrawPacer& pacer() { return pacer_; }
 
   /// Closed offsets take the nearest depth from front faces and test with back faces (the
   /// paper's face culling); bare triangles (CULLIDE) have no inside: both sides are drawn.
   void CullFaces(GLenum face) const;
   /// Binds the program of `shape` and `role` (and its sub-object size).
   GLuint UseProgram(Shape shape, FragmentRole role) const;
-  /// Draws every piece of the view's objects with `role`.
-  void DrawAll(FragmentRole role);
+  /// Draws every piece of the view's objects with `role`, in batches.
+  bool DrawAll(FragmentRole role);
   /// Draws the pieces of sub-object `local` of `object` (the whole object when k = 0).
   void DrawPrimitive(const ViewObject& object, int local, FragmentRole role);
-  /// Draws every piece of `object`.
-  void DrawObject(const ViewObject& object, FragmentRole role);
+  /// Draws every piece of `object`, in batches.
+  bool DrawObject(const ViewObject& object, FragmentRole role);
   /// Primitives of `object` in this view: its sub-objects, or 1.
   int PrimitivesOf(const ViewObject& object) const;
 
@@ -77,14 +82,16 @@ class ViewPass {
   const AxisView& view_;
   PieceBuffers& pieces_;
   const CullingPrograms& programs_;
+  DrawPacer& pacer_;
   RenderCounters* counters_;
 };
 
-/// The ID-buffer mechanism (a fixed number of draws per view, docs/culling.md). Returns, per
-/// primitive, 1 if it is not fully visible against the other groups.
-std::vector<uint8_t> CullWithIdBuffer(ViewPass& pass, const CullTargets& targets);
+/// The ID-buffer mechanism (a fixed number of passes per view, docs/culling.md). Returns, per
+/// primitive, 1 if it is not fully visible against the other groups; nullopt when the view
+/// stopped (pass.pacer().stopped()).
+std::optional<std::vector<uint8_t>> CullWithIdBuffer(ViewPass& pass, const CullTargets& targets);
 
 /// The paper's mechanism: two passes of per-primitive occlusion queries. Same result.
-std::vector<uint8_t> CullWithOcclusionQueries(ViewPass& pass, CullTargets& targets);
+std::optional<std::vector<uint8_t>> CullWithOcclusionQueries(ViewPass& pass, CullTargets& targets);
 
 }  // namespace far::internal

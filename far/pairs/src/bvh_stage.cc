@@ -574,7 +574,7 @@ BvhResult RunBvhTests(const BvhQuery& query, ThreadPool& pool) {
   // The distance widens the search (candidates within it) even when no distance pair is asked.
   FAR_DEMAND(query.hierarchies.size() == query.objects.size(), "hierarchies indexed by slot");
   const std::vector<ObjectSlot> paired = internal::PairedSlots(query);
-  internal::Stopper stopper(query.control);
+  StepStopper stopper(query.control);
   Wanted wanted;
   wanted.stopper = &stopper;
   const bool within = query.max_distance.has_value() && *query.max_distance >= 0;

@@ -34,7 +34,6 @@ using internal::Merge;
 using internal::PairedSlots;
 using internal::Partial;
 using internal::SlotView;
-using internal::Stopper;
 using internal::TestTrianglePair;
 using internal::TriangleBox;
 using internal::Wanted;
@@ -66,7 +65,7 @@ struct WorkItem {
 // within the slack of its x maximum.
 void RunItem(const WorkItem& item, std::span<const WorldObjectView> objects,
              const std::vector<SortedBoxes>& boxes, const Wanted& wanted, Partial& out,
-             Stopper& stopper) {
+             StepStopper& stopper) {
   const SlotView object_a{item.object_a, objects[Index(item.object_a)]};
   const SlotView object_b{item.object_b, objects[Index(item.object_b)]};
   const SortedBoxes& own = boxes[Index(item.from_b ? item.object_b : item.object_a)];
@@ -102,15 +101,21 @@ void RunItem(const WorkItem& item, std::span<const WorldObjectView> objects,
 // Each side of an object pair is cut into ranges of this many triangles, a work item each.
 constexpr uint32_t kItemTriangles = 512;
 
+// Triangles between two polls of the stopper while boxes are made.
+constexpr uint32_t kBoxesPerPoll = 1 << 15;
+
 // The candidate triangle boxes of the object in slot `o` (its subset, each valid triangle once),
-// sorted by their low x.
-SortedBoxes CandidateBoxes(const ExactQuery& query, size_t o) {
+// sorted by their low x. Empty when the stopper stopped it.
+SortedBoxes CandidateBoxes(const ExactQuery& query, size_t o, StepStopper& stopper) {
   const WorldObjectView& object = query.objects[o];
   const auto num_triangles = static_cast<uint32_t>(object.triangles.size());
   SortedBoxes list;
   if (query.triangle_subsets.empty() || o >= query.triangle_subsets.size()) {
     list.reserve(num_triangles);
-    for (uint32_t t = 0; t < num_triangles; ++t) list.push_back(BoxOf(object, t));
+    for (uint32_t t = 0; t < num_triangles; ++t) {
+      if (t % kBoxesPerPoll == kBoxesPerPoll - 1 && stopper.Poll()) return {};
+      list.push_back(BoxOf(object, t));
+    }
   } else {
     std::vector<uint32_t> subset = query.triangle_subsets[o];
     std::sort(subset.begin(), subset.end());
@@ -121,6 +126,7 @@ SortedBoxes CandidateBoxes(const ExactQuery& query, size_t o) {
       if (t < num_triangles) list.push_back(BoxOf(object, t));
     }
   }
+  if (stopper.Poll()) return {};
   std::sort(list.begin(), list.end(), [](const TriangleBox& x, const TriangleBox& y) {
     return x.lo[0] < y.lo[0] || (x.lo[0] == y.lo[0] && x.triangle < y.triangle);
   });
@@ -158,13 +164,17 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
   // Build and sort the candidate triangle boxes of every object in some pair, once.
   const std::vector<ObjectSlot> used = PairedSlots(query);
   std::vector<SortedBoxes> boxes(objects.size());
+  StepStopper stopper(query.control);
   pool.ParallelFor(used.size(), 1, [&](size_t begin, size_t end) {
-    for (size_t u = begin; u < end; ++u)
-      boxes[Index(used[u])] = CandidateBoxes(query, Index(used[u]));
+    for (size_t u = begin; u < end && !stopper.Poll(); ++u)
+      boxes[Index(used[u])] = CandidateBoxes(query, Index(used[u]), stopper);
   });
+  if (stopper.stopped()) {
+    std::vector<Partial> none;
+    return Merge(none, 0, &stopper);  // stopped: no answer
+  }
 
   // Decide what to compute and the prefilter slack. A negative or NaN max_distance finds nothing.
-  Stopper stopper(query.control);
   Wanted wanted;
   wanted.distance =
       query.want_distance_pairs && query.max_distance.has_value() && *query.max_distance >= 0;
@@ -226,7 +236,7 @@ ExactResult BruteForceReference(std::span<const WorldObjectView> objects,
     }
     magnitude = std::max(magnitude, Magnitude(boxes[o]));
   }
-  Stopper stopper(control);
+  StepStopper stopper(control);
   Wanted wanted;
   wanted.distance = max_distance.has_value() && *max_distance >= 0;
   wanted.stopper = &stopper;

@@ -110,6 +110,19 @@ struct TriangleBvh::Builder {
   std::vector<Box> boxes;                  // per triangle
   std::vector<Eigen::Vector3d> centroids;  // per triangle, of its box
   double area_sum = 0;
+  StepStopper* stopper = nullptr;  // polled every kTrianglesPerPoll triangles sorted
+  uint64_t unpolled = 0;
+
+  // Every level of the tree passes each triangle through Split once: polling by triangles sorted
+  // bounds the time between two polls, whatever the tree's shape.
+  static constexpr uint64_t kTrianglesPerPoll = 1 << 15;
+  bool Stopped(uint32_t triangles) {
+    if (stopper == nullptr) return false;
+    unpolled += triangles;
+    if (unpolled < kTrianglesPerPoll) return stopper->stopped();
+    unpolled = 0;
+    return stopper->Poll();
+  }
 
   // Splits [begin, end) at the best SAH bin boundary along the centroids' longest axis; returns
   // the split index, or `end` for a leaf.
@@ -170,6 +183,7 @@ struct TriangleBvh::Builder {
   }
 
   void Build(uint32_t node, uint32_t begin, uint32_t end) {
+    if (Stopped(end - begin)) return;
     Box box;
     for (uint32_t i = begin; i < end; ++i) box.Extend(boxes[order[i]]);
     SetNodeBox(nodes[node], box);
@@ -190,15 +204,22 @@ struct TriangleBvh::Builder {
   }
 };
 
-void TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
-                        std::span<const TriangleIndices> triangles) {
+bool TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
+                        std::span<const TriangleIndices> triangles, StepStopper* stopper) {
   nodes_.clear();
   slabs_.clear();  // no stale slabs when there are no triangles
   order_.resize(triangles.size());
-  if (triangles.empty()) return;
+  if (triangles.empty()) return true;
+  // Stopped: nothing half built is kept.
+  const auto abandon = [this] {
+    nodes_.clear();
+    order_.clear();
+    slabs_.clear();
+    return false;
+  };
   for (uint32_t t = 0; t < order_.size(); ++t) order_[t] = t;
   nodes_.reserve(2 * triangles.size() / kLeafSize + 2);
-  Builder builder{nodes_, order_, {}, {}, 0};
+  Builder builder{nodes_, order_, {}, {}, 0, stopper, 0};
   builder.boxes.reserve(triangles.size());
   builder.centroids.reserve(triangles.size());
   for (const TriangleIndices& t : triangles) {
@@ -206,22 +227,26 @@ void TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
     const Box& box = builder.boxes.back();
     builder.centroids.emplace_back(0.5 * (box.lo[0] + box.hi[0]), 0.5 * (box.lo[1] + box.hi[1]),
                                    0.5 * (box.lo[2] + box.hi[2]));
+    if (builder.Stopped(1)) return abandon();  // (half a second for 2M triangles)
   }
   nodes_.emplace_back();
   builder.Build(0, 0, static_cast<uint32_t>(triangles.size()));
+  if (stopper != nullptr && (stopper->stopped() || stopper->Poll())) return abandon();
   built_area_ = builder.area_sum;
   slabs_.resize(order_.size());
   for (const Node& node : nodes_) {
     for (uint32_t k = node.first; k < node.first + node.count; ++k) {
       slabs_[k] = SlabOf(p_MV, triangles[order_[k]], node.center);
     }
+    if (builder.Stopped(node.count)) return abandon();
   }
+  return true;
 }
 
 bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,
-                        std::span<const TriangleIndices> triangles) {
+                        std::span<const TriangleIndices> triangles, StepStopper* stopper) {
   if (nodes_.empty() || order_.size() != triangles.size()) {
-    Build(p_MV, triangles);
+    Build(p_MV, triangles, stopper);
     return true;
   }
   // Children come after their parent in nodes_: a backward sweep refits bottom-up.
@@ -242,7 +267,7 @@ bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,
     area += box.Area();
   }
   if (area > kRebuildGrowth * built_area_) {
-    Build(p_MV, triangles);
+    Build(p_MV, triangles, stopper);
     return true;
   }
   slabs_.clear();

@@ -45,7 +45,7 @@ void TestTrianglePair(const SlotView& object_a, const TriangleBox& a, const Slot
   if (out.unreported >= kReportEvery) Report(out, wanted.stopper);
 }
 
-ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered, Stopper* stopper) {
+ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered, StepStopper* stopper) {
   ExactResult result;
   result.pairs_considered = pairs_considered;
   for (Partial& partial : partials) Report(partial, stopper);

@@ -75,46 +75,12 @@ inline double DistanceSlack(double max_distance, double magnitude) {
   return max_distance + 2048 * kEps * magnitude;
 }
 
-/// The stop state one stage run shares among its threads: the caller's StepControl (cancel,
-/// deadline) and its cap on reported pairs. Threads poll it between parts of their work and
-/// add the pairs they found in batches; once stopped, every thread returns at its next check.
-class Stopper {
- public:
-  explicit Stopper(const StepControl* control) : control_(control) {}
-  /// True once the stage must stop (an atomic load).
-  bool stopped() const { return reason_.load(std::memory_order_relaxed) != 0; }
-  /// Re-reads the cancel flag and the clock; true when the stage must stop.
-  bool Poll() {
-    if (stopped()) return true;
-    if (control_ == nullptr) return false;
-    const StopReason reason = control_->Check();
-    if (reason != StopReason::kNone) Stop(reason);
-    return reason != StopReason::kNone;
-  }
-  /// Adds `n` pairs one thread found; stops the stage once the total is over the cap.
-  void AddFound(size_t n) {
-    if (control_ == nullptr || n == 0) return;
-    const size_t total = found_.fetch_add(n, std::memory_order_relaxed) + n;
-    if (total > control_->max_pairs) Stop(StopReason::kPairLimit);
-  }
-  StopReason reason() const { return static_cast<StopReason>(reason_.load()); }
-
- private:
-  void Stop(StopReason reason) {
-    int none = 0;
-    reason_.compare_exchange_strong(none, static_cast<int>(reason));
-  }
-  const StepControl* control_;
-  std::atomic<size_t> found_{0};
-  std::atomic<int> reason_{0};
-};
-
 /// What to compute for one candidate triangle pair.
 struct Wanted {
   bool distance = false;  ///< distance pairs too (contacts always)
   double max_distance = 0;
-  double slack = 0;            ///< the prefilter slack: 0 for contacts only, else DistanceSlack
-  Stopper* stopper = nullptr;  ///< counts the pairs found (the pair cap); may be null
+  double slack = 0;                ///< the prefilter slack: 0 for contacts only, else DistanceSlack
+  StepStopper* stopper = nullptr;  ///< counts the pairs found (the pair cap); may be null
 };
 
 /// One work item's output.
@@ -126,7 +92,7 @@ struct Partial {
 };
 
 /// Adds a partial's unreported pairs to the stopper (at the end of a piece of work).
-inline void Report(Partial& out, Stopper* stopper) {
+inline void Report(Partial& out, StepStopper* stopper) {
   if (stopper != nullptr) stopper->AddFound(out.unreported);
   out.unreported = 0;
 }
@@ -151,6 +117,6 @@ std::vector<ObjectSlot> PairedSlots(const PairQuery& query);
 /// With a stopper, the result says why the stage stopped (an answer over the pair cap counts
 /// as kPairLimit even when no thread stopped early).
 ExactResult Merge(std::vector<Partial>& partials, size_t pairs_considered,
-                  Stopper* stopper = nullptr);
+                  StepStopper* stopper = nullptr);
 
 }  // namespace far::internal

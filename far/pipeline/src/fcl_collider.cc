@@ -1,7 +1,11 @@
 #include "fcl_collider.h"
 
 #include <algorithm>
+#include <chrono>
+#include <condition_variable>
 #include <limits>
+#include <mutex>
+#include <thread>
 #include <unordered_set>
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
@@ -19,6 +23,66 @@ std::vector<fcl::Vector3d> Points(const Mesh& mesh) {
   return std::vector<fcl::Vector3d>(mesh.p_MV.begin(), mesh.p_MV.end());
 }
 
+// A model built on a thread of its own. FCL's build cannot be interrupted, and takes seconds
+// for a large object (10 s for 600K triangles on a loaded 2-core machine): the step waits for it
+// with checks of its control, and a step that must stop returns while the build goes on; the
+// next step takes the model when it is done. The thread holds the only other reference to
+// the job and copies of the mesh, so that neither a removed object nor a closed collider waits
+// for it.
+struct BuildJob {
+  std::mutex mutex;
+  std::condition_variable finished;
+  std::shared_ptr<Model> model;  // set when built
+  uint64_t stamp = 0;            // the geometry it was built from
+
+  // Copies `mesh` (in parts, with checks of `control` between them: copying 2M triangles into
+  // fresh memory took half a second on the development machine) and starts the build; null when
+  // the control said stop first (`stop` says why).
+  static std::shared_ptr<BuildJob> Start(const Mesh& source, uint64_t stamp,
+                                         const StepControl* control, StopReason* stop) {
+    constexpr size_t kPart = 1 << 16;
+    Mesh mesh;
+    mesh.p_MV.reserve(source.p_MV.size());
+    mesh.triangles.reserve(source.triangles.size());
+    for (size_t at = 0; at < std::max(source.p_MV.size(), source.triangles.size()); at += kPart) {
+      if (control != nullptr && (*stop = control->Check()) != StopReason::kNone) return nullptr;
+      const auto copy = [at](const auto& from, auto& to) {
+        if (at < from.size())
+          to.insert(to.end(), from.begin() + at, from.begin() + std::min(from.size(), at + kPart));
+      };
+      copy(source.p_MV, mesh.p_MV);
+      copy(source.triangles, mesh.triangles);
+    }
+    auto job = std::make_shared<BuildJob>();
+    job->stamp = stamp;
+    // FCL's types are made on the build's thread.
+    std::thread([job, mesh = std::move(mesh)] {
+      std::vector<fcl::Triangle> triangles;
+      triangles.reserve(mesh.triangles.size());
+      for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+      auto model = std::make_shared<Model>();
+      model->beginModel();
+      model->addSubModel(Points(mesh), triangles);
+      model->endModel();
+      std::lock_guard lock(job->mutex);
+      job->model = std::move(model);
+      job->finished.notify_all();
+    }).detach();
+    return job;
+  }
+  // Waits for the model, checking `control` every few milliseconds: the model, or null when the
+  // control said stop (`stop` then says why).
+  std::shared_ptr<Model> Wait(const StepControl* control, StopReason* stop) {
+    std::unique_lock lock(mutex);
+    while (
+        !finished.wait_for(lock, std::chrono::milliseconds(5), [&] { return model != nullptr; })) {
+      if (control == nullptr) continue;
+      if ((*stop = control->Check()) != StopReason::kNone) return nullptr;
+    }
+    return model;
+  }
+};
+
 }  // namespace
 
 struct FclCollider::Impl {
@@ -26,8 +90,9 @@ struct FclCollider::Impl {
     std::shared_ptr<Model> model;
     std::unique_ptr<fcl::CollisionObjectd> object;
     uint64_t stamp = 0;
-    ObjectSlot slot{};        // the object's user data points here: entries never move
-    bool registered = false;  // in `manager`
+    ObjectSlot slot{};                // the object's user data points here: entries never move
+    bool registered = false;          // in `manager`
+    std::shared_ptr<BuildJob> build;  // a model being built (no `model` yet)
   };
   std::vector<std::unique_ptr<Entry>> entries;  // by slot; null: no model
   fcl::DynamicAABBTreeCollisionManagerd manager;
@@ -37,7 +102,9 @@ struct FclCollider::Impl {
     if (!entries[Index(slot)]) entries[Index(slot)] = std::make_unique<Entry>();
     return *entries[Index(slot)];
   }
-  Entry& Refresh(const Object& object, const StepControl* control);
+  // Brings the object's model up to date and to its pose; kNone, or why the control stopped
+  // it while it waited for a build.
+  StopReason Refresh(const Object& object, const StepControl* control);
   void SyncBroadphase(const std::vector<Object>& objects);
 };
 
@@ -95,18 +162,21 @@ bool CollidePair(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, CollideDa
 
 }  // namespace
 
-// Builds a new object's model once, refits a deformed one, and moves it to its pose.
-FclCollider::Impl::Entry& FclCollider::Impl::Refresh(const Object& object,
-                                                     const StepControl* control) {
+// Builds a new object's model once (on a thread of its own: BuildJob), refits a deformed one,
+// and moves it to its pose.
+StopReason FclCollider::Impl::Refresh(const Object& object, const StepControl* control) {
   Entry& entry = At(object.slot);
   if (!entry.model) {
     const SetupScope setup(control);  // one-off: later steps move or refit it
-    entry.model = std::make_shared<Model>();
-    entry.model->beginModel();
-    std::vector<fcl::Triangle> triangles;
-    for (const auto& t : object.mesh->triangles) triangles.emplace_back(t[0], t[1], t[2]);
-    entry.model->addSubModel(Points(*object.mesh), triangles);
-    entry.model->endModel();
+    // A build of other vertices (a deformable object that moved since) is of no use.
+    StopReason stop = StopReason::kNone;
+    if (!entry.build || entry.build->stamp != object.geometry_stamp) {
+      entry.build = BuildJob::Start(*object.mesh, object.geometry_stamp, control, &stop);
+      if (!entry.build) return stop;
+    }
+    entry.model = entry.build->Wait(control, &stop);
+    if (!entry.model) return stop;
+    entry.build.reset();
     entry.object = std::make_unique<fcl::CollisionObjectd>(entry.model);
     entry.slot = object.slot;
     entry.stamp = object.geometry_stamp;
@@ -127,7 +197,7 @@ FclCollider::Impl::Entry& FclCollider::Impl::Refresh(const Object& object,
   }
   entry.object->setTransform(object.X_WM.linear(), object.X_WM.translation());
   entry.object->computeAABB();
-  return entry;
+  return StopReason::kNone;
 }
 
 // The broadphase tree is kept across steps, as a simulation using FCL would: objects that came
@@ -163,7 +233,15 @@ void FclCollider::Remove(ObjectSlot slot) {
 
 std::vector<SlotContact> FclCollider::Collide(const std::vector<Object>& objects,
                                               CollideStats* stats, const StepControl* control) {
-  for (const Object& object : objects) impl_->Refresh(object, control);
+  // Each model built or refit is checked for: a new scene's builds take seconds.
+  for (const Object& object : objects) {
+    StopReason stop = impl_->Refresh(object, control);
+    if (stop == StopReason::kNone && control != nullptr) stop = control->Check();
+    if (stop != StopReason::kNone) {
+      if (stats != nullptr) *stats = CollideStats{.stopped = stop};
+      return {};
+    }
+  }
   impl_->SyncBroadphase(objects);
   CollideData data{{}, {}, control};
   impl_->manager.collide(&data,

@@ -17,7 +17,9 @@ namespace far::internal {
 /// deformable object's vertices change), a dynamic AABB tree broadphase kept across calls, and
 /// FCL's mesh-mesh collide reporting every intersecting triangle pair: the answer FCL gives on
 /// fresh models of the same objects. Objects are kept by slot (far/model/object_slot.h). FCL
-/// types stay in the .cc.
+/// types stay in the .cc. A new object's model is built on a thread of its own, which a call
+/// stopped by its control leaves running: FCL's build cannot be interrupted (seconds for a
+/// large object), and the next call takes the model it made.
 class FclCollider {
  public:
   struct Object {
@@ -32,8 +34,9 @@ class FclCollider {
     size_t object_pairs = 0;               ///< object pairs FCL's broadphase passed to collide
     size_t triangle_pairs_considered = 0;  ///< sum over those pairs of n_a * n_b triangles
     size_t triangle_tests = 0;  ///< triangle pairs whose leaf boxes overlapped: FCL's tests
-    /// Why it stopped early (checked between object pairs: FCL's collide of one pair runs to
-    /// its end); the contacts are then incomplete and must not be reported.
+    /// Why it stopped early (checked after each object's model is brought up to date, every
+    /// few milliseconds while a new model is built, and between object pairs: FCL's collide
+    /// of one pair runs to its end); the contacts are then incomplete and must not be reported.
     StopReason stopped = StopReason::kNone;
   };
 

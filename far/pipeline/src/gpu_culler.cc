@@ -6,6 +6,8 @@
 #include <string>
 #include <utility>
 
+#include "stop_error.h"
+
 #include "far/gpu/gl_lock.h"
 #include "far/offsets/bounding_offset.h"
 
@@ -157,6 +159,7 @@ Result<GpuCuller::RendererEntry*> GpuCuller::RendererFor(const StepRequest& requ
     const auto gl = LockGl();  // compiles shaders, makes framebuffers
     auto renderer = CullingRenderer::Create(raster);
     if (!renderer.ok()) return renderer.error();
+    (*renderer)->set_batch_ms(batch_ms_);
     it = renderers_.emplace(key, RendererEntry{std::move(*renderer), {}}).first;
   }
   return &it->second;
@@ -167,8 +170,13 @@ namespace {
 // The renderers' name of an object's slot.
 uint32_t Slot(const CachedObject& object) { return static_cast<uint32_t>(Index(object.slot)); }
 
-// The GPU pieces of one object in one set, in the object's anchored frame.
-std::vector<PieceInstance> BuildPieces(const CachedObject& object, PieceSet set) {
+// Triangles between two polls of the step's stopper while pieces are built.
+constexpr size_t kPiecesPerPoll = 1 << 15;
+
+// The GPU pieces of one object in one set, in the object's anchored frame; nullopt when the
+// stopper stopped it.
+std::optional<std::vector<PieceInstance>> BuildPieces(const CachedObject& object, PieceSet set,
+                                                      StepStopper& stopper) {
   std::vector<PieceInstance> pieces;
   if (set == PieceSet::kProxyBoxes) {
     // @pre the hierarchy is up to date (SceneCache::RefreshHierarchies).
@@ -179,6 +187,7 @@ std::vector<PieceInstance> BuildPieces(const CachedObject& object, PieceSet set)
   }
   pieces.reserve(object.mesh.triangles.size() * InstancesPerTriangle(set));
   for (size_t t = 0; t < object.mesh.triangles.size(); ++t) {
+    if (t % kPiecesPerPoll == kPiecesPerPoll - 1 && stopper.Poll()) return std::nullopt;
     const auto& tri = object.mesh.triangles[t];
     AppendPieces(set, Slot(object), static_cast<uint32_t>(t),
                  object.mesh.p_MV[tri[0]] - object.anchor_M,
@@ -192,9 +201,11 @@ std::vector<PieceInstance> BuildPieces(const CachedObject& object, PieceSet set)
 
 // Builds the GPU pieces of every object that lacks them or whose vertices changed: on the pool
 // (deformable objects change every step: 150 leaves rebuild 19K triangles' pieces), then
-// handed to the renderer on this thread, the GL thread.
-void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
-                             std::span<const PieceSet> sets, const StepControl& control) {
+// handed to the renderer on this thread, the GL thread. Stopped, it hands over those it
+// finished (a later step builds the others) and says why.
+StopReason GpuCuller::EnsurePieces(RendererEntry& entry,
+                                   std::span<const CachedObject* const> objects,
+                                   std::span<const PieceSet> sets, const StepControl& control) {
   // The pieces an object never had here first (one-off: setup), then those whose vertices
   // changed (deformable objects, every step).
   std::vector<std::pair<const CachedObject*, PieceSet>> stale, changed;
@@ -211,11 +222,12 @@ void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject*
   }
   const size_t first_builds = stale.size();
   stale.insert(stale.end(), changed.begin(), changed.end());
-  std::vector<std::vector<PieceInstance>> built(stale.size());
+  std::vector<std::optional<std::vector<PieceInstance>>> built(stale.size());
+  StepStopper stopper(&control);
   const auto build = [&](size_t from, size_t to) {
     pool_.ParallelFor(to - from, 1, [&](size_t begin, size_t end) {
-      for (size_t i = from + begin; i < from + end; ++i)
-        built[i] = BuildPieces(*stale[i].first, stale[i].second);
+      for (size_t i = from + begin; i < from + end && !stopper.Poll(); ++i)
+        built[i] = BuildPieces(*stale[i].first, stale[i].second, stopper);
     });
   };
   if (first_builds > 0) {
@@ -224,12 +236,14 @@ void GpuCuller::EnsurePieces(RendererEntry& entry, std::span<const CachedObject*
   }
   build(first_builds, stale.size());
   for (size_t i = 0; i < stale.size(); ++i) {
+    if (!built[i]) continue;
     const auto [object, set] = stale[i];
     counters_.piece_builds++;
-    counters_.piece_bytes += static_cast<int64_t>(built[i].size() * sizeof(PieceInstance));
-    entry.renderer->SetPieces(set, Slot(*object), std::move(built[i]));
+    counters_.piece_bytes += static_cast<int64_t>(built[i]->size() * sizeof(PieceInstance));
+    entry.renderer->SetPieces(set, Slot(*object), std::move(*built[i]));
     entry.built[{Slot(*object), static_cast<int>(set)}] = object->geometry_stamp;
   }
+  return stopper.reason();
 }
 
 // Culls one level (objects, or sub-objects of k triangles) with three axis views, each with
@@ -239,7 +253,8 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
                                   std::span<const ViewObject> view_objects, int k,
                                   std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
                                   std::vector<uint8_t>& alive, StepStats& stats,
-                                  LevelCertificate& level) {
+                                  LevelCertificate& level, const StepControl& control) {
+  const Stage stage = k == 0 ? Stage::kObjectCull : Stage::kPrimitiveCull;
   const bool proxies = !sets.empty() && sets[0] == PieceSet::kProxyBoxes;
   const bool fattened = sets.empty() || sets[0] != PieceSet::kTriangles;
   for (int axis = 0; axis < 3; ++axis) {
@@ -271,15 +286,23 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
     view.num_primitives = static_cast<int>(alive.size());
     view.alive = alive;
     view.sets = sets;
+    if (const StopReason stop = control.Check(); stop != StopReason::kNone)
+      return StopError(stop, stage, control);
     RenderCounters counters;
-    // The GL lock is held for one view (uploads, passes, read-back), not for the whole stage:
-    // the views of other sessions' stages take turns with this one's.
+    // The GL lock is held for one view (uploads, passes, read-back), not for the whole stage,
+    // and a long view hands it to the threads that wait for it between its batches of draws:
+    // other sessions' views take turns with this one's.
     auto stays = [&] {
-      const auto gl = LockGl();
-      return entry.renderer->RenderView(view, request.mechanism, &counters);
+      auto gl = LockGl();
+      const BetweenBatches between = [&] {
+        if (gl.contended()) gl.Yield();
+        return control.Check();
+      };
+      return entry.renderer->RenderView(view, request.mechanism, &counters, between);
     }();
     if (!stays.ok()) return stays.error();
-    alive = std::move(*stays);
+    if (stays->stopped != StopReason::kNone) return StopError(stays->stopped, stage, control);
+    alive = std::move(stays->stays);
     stats.primitives_rendered += live;
     stats.draws += counters.draws;
     stats.queries += counters.queries;
@@ -309,7 +332,10 @@ Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
   if (!entry.ok()) return entry.error();
   (*entry)->first_step = first_step;
   const std::vector<PieceSet> sets = ObjectLevelSetsFor(request.method);
-  EnsurePieces(**entry, objects, sets, control);
+  if (const StopReason stop = EnsurePieces(**entry, objects, sets, control);
+      stop != StopReason::kNone) {
+    return StopError(stop, Stage::kObjectCull, control);
+  }
   // One primitive per slot (a free slot's is never alive); each object is its own group.
   std::vector<ViewObject> view_objects;
   std::vector<Eigen::AlignedBox3d> boxes(objects.size());
@@ -321,7 +347,8 @@ Result<std::vector<uint8_t>> GpuCuller::CullObjects(const StepRequest& request,
     alive[s] = 1;
   }
   LevelCertificate level{.level = "object"};
-  if (auto ok = CullLevel(**entry, request, sets, view_objects, 0, boxes, alive, stats, level);
+  if (auto ok =
+          CullLevel(**entry, request, sets, view_objects, 0, boxes, alive, stats, level, control);
       !ok.ok()) {
     return ok.error();
   }
@@ -338,7 +365,10 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
   std::optional<SetupScope> setup;  // as in CullObjects
   if (std::exchange((*entry)->first_step, false)) setup.emplace(&control);
   const std::vector<PieceSet> sets = PieceSetsFor(request.method);
-  EnsurePieces(**entry, objects, sets, control);
+  if (const StopReason stop = EnsurePieces(**entry, objects, sets, control);
+      stop != StopReason::kNone) {
+    return StopError(stop, Stage::kPrimitiveCull, control);
+  }
   // Sub-objects of k triangles of the paired objects, each object its own group.
   const int k = request.subobject_size;
   std::vector<ViewObject> view_objects;
@@ -368,7 +398,8 @@ Result<std::vector<std::vector<uint32_t>>> GpuCuller::CullPrimitives(
     }
   }
   LevelCertificate level{.level = "sub-object"};
-  if (auto ok = CullLevel(**entry, request, sets, view_objects, k, boxes, alive, stats, level);
+  if (auto ok =
+          CullLevel(**entry, request, sets, view_objects, k, boxes, alive, stats, level, control);
       !ok.ok()) {
     return ok.error();
   }

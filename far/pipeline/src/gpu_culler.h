@@ -24,11 +24,15 @@ namespace far::internal {
 /// each with the GPU pieces of every object, rebuilt only when the object's vertices change.
 /// Owned by the GL thread (see far::GlContext); its GL work runs under far::LockGl, taken per
 /// view (the pieces are built and dropped on the CPU, and uploaded in the view that draws them).
+/// A long view is drawn in batches: between two, the lock goes to the threads waiting for it
+/// (each gets a turn) and the step's control is checked, so a view stops within a batch of
+/// its deadline (CullingRenderer::RenderView).
 class GpuCuller {
  public:
   /// `counters` gets the piece builds; `pool` builds the pieces of changed objects in
-  /// parallel. Both aliased, must outlive *this.
-  GpuCuller(SceneCounters& counters, ThreadPool& pool) : counters_(counters), pool_(pool) {}
+  /// parallel. Both aliased, must outlive *this. `batch_ms`: CullingRenderer::set_batch_ms.
+  GpuCuller(SceneCounters& counters, ThreadPool& pool, double batch_ms)
+      : counters_(counters), pool_(pool), batch_ms_(batch_ms) {}
   ~GpuCuller();
   GpuCuller(const GpuCuller&) = delete;
   GpuCuller& operator=(const GpuCuller&) = delete;
@@ -66,15 +70,17 @@ class GpuCuller {
   using RendererKeyType = std::tuple<int, int, int>;  // width, height, depth format
   static RendererKeyType RendererKey(const StepRequest& request);
   Result<RendererEntry*> RendererFor(const StepRequest& request);
-  void EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
-                    std::span<const PieceSet> sets, const StepControl& control);
+  StopReason EnsurePieces(RendererEntry& entry, std::span<const CachedObject* const> objects,
+                          std::span<const PieceSet> sets, const StepControl& control);
   Result<void> CullLevel(RendererEntry& entry, const StepRequest& request,
                          std::span<const PieceSet> sets, std::span<const ViewObject> view_objects,
                          int k, std::span<const Eigen::AlignedBox3d> primitive_boxes_W,
-                         std::vector<uint8_t>& alive, StepStats& stats, LevelCertificate& level);
+                         std::vector<uint8_t>& alive, StepStats& stats, LevelCertificate& level,
+                         const StepControl& control);
 
   SceneCounters& counters_;
   ThreadPool& pool_;
+  double batch_ms_;
   std::map<RendererKeyType, RendererEntry> renderers_;
 };
 

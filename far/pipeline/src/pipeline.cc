@@ -26,7 +26,7 @@ struct Pipeline::Impl {
       : options(o),
         pool(o.num_threads),
         model(o.scene_limits, o.shared_budget, o.budget_holder),
-        world(pool, o.use_gl) {}
+        world(pool, o.use_gl, o.gl_batch_ms) {}
 
   Result<void> Apply(std::vector<SceneUpdate> updates,
                      const std::function<std::string(size_t)>& where);

@@ -60,7 +60,10 @@ void SceneCache::RefreshGeometry(CachedObject& object) {
   object.world_dirty = true;
 }
 
-void SceneCache::ComputeGpuGeometry(CachedObject& object) {
+// Triangles or vertices between two polls of a stopper in the long loops below.
+constexpr size_t kPollEvery = 1 << 15;
+
+bool SceneCache::ComputeGpuGeometry(CachedObject& object, StepStopper& stopper) {
   Eigen::AlignedBox3d box_M;
   for (const auto& p : object.mesh.p_MV) box_M.extend(p);
   object.anchor_M = box_M.center();
@@ -72,6 +75,7 @@ void SceneCache::ComputeGpuGeometry(CachedObject& object) {
   object.rect_boxes_M.resize(object.mesh.triangles.size());
   object.rect_box_M.setEmpty();
   for (size_t t = 0; t < object.mesh.triangles.size(); ++t) {
+    if (t % kPollEvery == kPollEvery - 1 && stopper.Poll()) return false;
     const auto& tri = object.mesh.triangles[t];
     const Obb rect = TriangleRectangle(object.mesh.p_MV[tri[0]], object.mesh.p_MV[tri[1]],
                                        object.mesh.p_MV[tri[2]]);
@@ -79,16 +83,19 @@ void SceneCache::ComputeGpuGeometry(CachedObject& object) {
     object.rect_box_M.extend(object.rect_boxes_M[t]);
   }
   object.gpu_stamp = object.geometry_stamp;
+  return true;
 }
 
-void SceneCache::RefreshGpuGeometry(ThreadPool& pool) {
+StopReason SceneCache::RefreshGpuGeometry(ThreadPool& pool, const StepControl& control) {
   std::vector<CachedObject*> stale;
   for (auto& object : slots_) {
     if (object && object->gpu_stamp != object->geometry_stamp) stale.push_back(&*object);
   }
+  StepStopper stopper(&control);
   pool.ParallelFor(stale.size(), 1, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) ComputeGpuGeometry(*stale[i]);
+    for (size_t i = begin; i < end && !stopper.Poll(); ++i) ComputeGpuGeometry(*stale[i], stopper);
   });
+  return stopper.reason();
 }
 
 void SceneCache::RefreshWorld() {
@@ -106,30 +113,37 @@ void SceneCache::RefreshWorld() {
   }
 }
 
-void SceneCache::RefreshHierarchies(std::span<const ObjectSlot> slots, ThreadPool& pool,
-                                    const StepControl& control) {
+StopReason SceneCache::RefreshHierarchies(std::span<const ObjectSlot> slots, ThreadPool& pool,
+                                          const StepControl& control) {
   std::vector<CachedObject*> builds, refits;
   for (ObjectSlot slot : slots) {
     CachedObject& object = *slots_[Index(slot)];
     if (object.bvh_stamp == object.geometry_stamp) continue;
     (object.bvh.empty() ? builds : refits).push_back(&object);
   }
+  // A hierarchy is up to date once built or refit whole; one abandoned is left empty.
+  StepStopper stopper(&control);
+  const auto done = [](CachedObject& object) {
+    if (!object.bvh.empty() || object.mesh.triangles.empty())
+      object.bvh_stamp = object.geometry_stamp;
+  };
   if (!builds.empty()) {
     // One-off work: later steps of these objects do not repeat it.
     SetupScope setup(&control);
     pool.ParallelFor(builds.size(), 1, [&](size_t begin, size_t end) {
-      for (size_t i = begin; i < end; ++i) {
-        builds[i]->bvh.Build(builds[i]->mesh.p_MV, builds[i]->mesh.triangles);
-        builds[i]->bvh_stamp = builds[i]->geometry_stamp;
+      for (size_t i = begin; i < end && !stopper.Poll(); ++i) {
+        builds[i]->bvh.Build(builds[i]->mesh.p_MV, builds[i]->mesh.triangles, &stopper);
+        done(*builds[i]);
       }
     });
   }
   pool.ParallelFor(refits.size(), 1, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) {
-      (void)refits[i]->bvh.Refit(refits[i]->mesh.p_MV, refits[i]->mesh.triangles);
-      refits[i]->bvh_stamp = refits[i]->geometry_stamp;
+    for (size_t i = begin; i < end && !stopper.Poll(); ++i) {
+      (void)refits[i]->bvh.Refit(refits[i]->mesh.p_MV, refits[i]->mesh.triangles, &stopper);
+      done(*refits[i]);
     }
   });
+  return stopper.reason();
 }
 
 std::vector<const CachedObject*> SceneCache::Objects() const {

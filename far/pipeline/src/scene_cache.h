@@ -67,14 +67,18 @@ class SceneCache {
   std::span<const uint32_t> ids() const { return ids_; }
 
   /// Computes the GPU methods' data from the vertices (anchor, piece extent, rectangle boxes)
-  /// of the objects whose vertices changed since, on `pool`.
-  void RefreshGpuGeometry(ThreadPool& pool);
+  /// of the objects whose vertices changed since, on `pool`. Checks `control` every few tens
+  /// of thousands of triangles: when it says stop, returns why (the objects done so far keep
+  /// their data, the others are done again by the next call), else kNone.
+  [[nodiscard]] StopReason RefreshGpuGeometry(ThreadPool& pool, const StepControl& control);
   /// Brings the hierarchies of the objects in `slots` up to date with their vertices on `pool`:
   /// built once for static and rigid objects, refit (rebuilt when loose) for deformed ones.
   /// The builds are the step's setup (`control`'s on_setup_begin and on_setup_end around
-  /// them); the refits are per-step work.
-  void RefreshHierarchies(std::span<const ObjectSlot> slots, ThreadPool& pool,
-                          const StepControl& control);
+  /// them); the refits are per-step work. The builds poll `control` as they go (TriangleBvh::
+  /// Build): when it says stop, returns why; the hierarchies finished so far are kept, and an
+  /// object whose build was abandoned has none until a later call builds it. Else kNone.
+  [[nodiscard]] StopReason RefreshHierarchies(std::span<const ObjectSlot> slots, ThreadPool& pool,
+                                              const StepControl& control);
 
   /// Objects in the scene.
   int size() const { return static_cast<int>(slot_of_id_.size()); }
@@ -88,7 +92,8 @@ class SceneCache {
  private:
   CachedObject& At(uint32_t id) { return *slots_[Index(slot_of_id_.at(id))]; }
   void RefreshGeometry(CachedObject& object);
-  static void ComputeGpuGeometry(CachedObject& object);
+  // False when `stopper` stopped it (the object's data is then stale: gpu_stamp unchanged).
+  static bool ComputeGpuGeometry(CachedObject& object, StepStopper& stopper);
 
   std::vector<std::optional<CachedObject>> slots_;
   std::vector<uint32_t> ids_;  // by slot

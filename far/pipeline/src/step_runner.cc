@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "guarantee.h"
+#include "stop_error.h"
 
 #include "far/base/limits.h"
 #include "far/model/slot_ids.h"
@@ -68,25 +69,6 @@ struct StepState {
   SlotAnswer answer;
   StepStats stats;
 };
-
-// Why a step stopped, as its error: the caller's cancellation, its deadline, the reply cap.
-Error StopError(StopReason reason, Stage stage, const StepControl& control) {
-  const std::string where = " (during " + std::string(ToString(stage)) + ")";
-  switch (reason) {
-    case StopReason::kCancelled:
-      return MakeError(ErrorCode::kUnavailable, "step cancelled by its caller" + where);
-    case StopReason::kDeadline:
-      return MakeError(ErrorCode::kTimeout, "step stopped at its deadline" + where);
-    case StopReason::kPairLimit:
-      return MakeError(ErrorCode::kLimitExceeded,
-                       "the answer has more than " + std::to_string(control.max_pairs) +
-                           " contact and distance pairs, the most a reply may carry" + where +
-                           ": ask for a smaller distance D, or a shallower output (pcs)");
-    case StopReason::kNone:
-      break;
-  }
-  return MakeError(ErrorCode::kInternal, "step stopped for no reason" + where);
-}
 
 // The start of a stage: progress for the caller, and the check that the step may go on.
 Result<void> EnterStage(const StepState& state, Stage stage) {
@@ -250,12 +232,18 @@ Result<void> Stages::RunWholeScene() {
 // Object-level culling -> object PCS (CPU culling: every object goes on to sweep-and-prune).
 Result<void> Stages::CullObjects() {
   if (IsGpuMethod(state_.request.method)) {
-    world_.cache.RefreshGpuGeometry(world_.pool);
+    if (const StopReason stop = world_.cache.RefreshGpuGeometry(world_.pool, state_.control);
+        stop != StopReason::kNone) {
+      return StopError(stop, Stage::kObjectCull, state_.control);
+    }
     std::vector<ObjectSlot> live;
     for (const CachedObject* object : state_.objects) {
       if (object != nullptr) live.push_back(object->slot);
     }
-    world_.cache.RefreshHierarchies(live, world_.pool, state_.control);
+    if (const StopReason stop = world_.cache.RefreshHierarchies(live, world_.pool, state_.control);
+        stop != StopReason::kNone) {
+      return StopError(stop, Stage::kObjectCull, state_.control);
+    }
     auto alive =
         world_.gpu->CullObjects(state_.request, state_.objects, state_.stats, state_.control);
     if (!alive) return alive.error();
@@ -290,7 +278,13 @@ void Stages::PairObjects() {
 // triangle, within D), and the exact answer when `run_exact`.
 BvhResult Stages::DescendHierarchies(bool run_exact) {
   const std::vector<ObjectSlot> paired = SlotsInPairs(state_.answer.object_pairs);
-  world_.cache.RefreshHierarchies(paired, world_.pool, state_.control);
+  if (const StopReason stop = world_.cache.RefreshHierarchies(paired, world_.pool, state_.control);
+      stop != StopReason::kNone) {
+    // An object may be left without a hierarchy: nothing may descend it.
+    BvhResult stopped;
+    stopped.exact.stopped = stop;
+    return stopped;
+  }
   std::vector<ObjectHierarchy> hierarchies(state_.objects.size());
   for (ObjectSlot slot : paired) {
     const CachedObject& object = *state_.objects[Index(slot)];
@@ -421,8 +415,8 @@ Result<void> Stages::RunStages(StageTimer& timer) {
 
 }  // namespace
 
-StepWorld::StepWorld(ThreadPool& pool, bool with_gpu) : pool(pool) {
-  if (with_gpu) gpu = std::make_unique<GpuCuller>(cache.counters(), pool);
+StepWorld::StepWorld(ThreadPool& pool, bool with_gpu, double gl_batch_ms) : pool(pool) {
+  if (with_gpu) gpu = std::make_unique<GpuCuller>(cache.counters(), pool, gl_batch_ms);
 }
 
 void StepWorld::Apply(SceneUpdate update) {

@@ -62,6 +62,44 @@ struct StepControl {
   }
 };
 
+/// The stop state the threads of one stage (or one long piece of work) share: the caller's
+/// StepControl (cancel, deadline) and its cap on reported pairs. Threads poll it between parts
+/// of their work (Poll reads the clock: every few hundred triangle pairs, every few thousand
+/// triangles of a build) and add the pairs they found in batches; once stopped, every thread
+/// returns at its next check. A null control never stops.
+class StepStopper {
+ public:
+  explicit StepStopper(const StepControl* control) : control_(control) {}
+  StepStopper(const StepStopper&) = delete;
+  StepStopper& operator=(const StepStopper&) = delete;
+  /// True once the stage must stop (an atomic load).
+  bool stopped() const { return reason_.load(std::memory_order_relaxed) != 0; }
+  /// Re-reads the cancel flag and the clock; true when the stage must stop.
+  bool Poll() {
+    if (stopped()) return true;
+    if (control_ == nullptr) return false;
+    const StopReason reason = control_->Check();
+    if (reason != StopReason::kNone) Stop(reason);
+    return reason != StopReason::kNone;
+  }
+  /// Adds `n` pairs one thread found; stops the stage once the total is over the cap.
+  void AddFound(size_t n) {
+    if (control_ == nullptr || n == 0) return;
+    const size_t total = found_.fetch_add(n, std::memory_order_relaxed) + n;
+    if (total > control_->max_pairs) Stop(StopReason::kPairLimit);
+  }
+  StopReason reason() const { return static_cast<StopReason>(reason_.load()); }
+
+ private:
+  void Stop(StopReason reason) {
+    int none = 0;
+    reason_.compare_exchange_strong(none, static_cast<int>(reason));
+  }
+  const StepControl* control_;
+  std::atomic<size_t> found_{0};
+  std::atomic<int> reason_{0};
+};
+
 /// Marks the work of a scope as setup (StepControl::on_setup_begin and on_setup_end), from its
 /// construction to End() or its destruction, whichever comes first. A null control: nothing.
 class SetupScope {

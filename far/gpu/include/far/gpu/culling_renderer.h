@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -10,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "far/base/result.h"
+#include "far/base/step_control.h"
 #include "far/model/step_request.h"
 #include "far/offsets/bounding_offset.h"
 
@@ -91,6 +93,7 @@ struct RenderCounters {
   int64_t queries = 0;
   int64_t instances = 0;       ///< piece instances submitted
   int64_t bytes_uploaded = 0;  ///< piece and per-object data sent to the GPU
+  int64_t pauses = 0;          ///< pauses between batches of draws (BetweenBatches calls)
   /// Where the view's time went: the CPU preparing it (uploads, draw commands), the CPU in its
   /// passes (issuing them, then waiting for and reading back the result), and the GPU's own
   /// time for the passes (a GL_TIME_ELAPSED query). passes_ms well above gpu_ms means the
@@ -98,6 +101,19 @@ struct RenderCounters {
   double prepare_ms = 0;
   double passes_ms = 0;
   double gpu_ms = 0;
+};
+
+/// What a long view does between two batches of its draws, with the GL work drawn so far
+/// finished: hand the GL lock to other threads' views (far::GlLock::Yield), check the step's
+/// deadline and cancellation. Returns kNone to go on, or why the view must stop.
+using BetweenBatches = std::function<StopReason()>;
+
+/// One view's answer: per primitive, 1 if it is not fully visible against the other groups
+/// (it stays in the PCS) and 0 if it is (pruned); dead primitives get 0. Empty when the view
+/// stopped early (`stopped` says why): a view stopped half-way has no answer.
+struct ViewResult {
+  std::vector<uint8_t> stays;
+  StopReason stopped = StopReason::kNone;
 };
 
 /// The GL side of culling: persistent piece buffers (src/piece_buffers.h) and the two
@@ -113,22 +129,29 @@ class CullingRenderer {
   CullingRenderer& operator=(const CullingRenderer&) = delete;
 
   const RasterFormat& raster() const { return raster_; }
+  /// The GL work one batch of a view's draws aims at (RenderView), ms; <= 0: one instance per
+  /// batch (for tests). Default 8.
+  void set_batch_ms(double batch_ms) { batch_ms_ = batch_ms; }
 
   /// Replaces the instances of `slot` in `set` (uploaded on the next view that draws `set`).
   void SetPieces(PieceSet set, uint32_t slot, std::vector<PieceInstance> pieces);
   /// Drops `slot` from every set.
   void RemoveSlot(uint32_t slot);
 
-  /// Renders one axis view and returns, per primitive, 1 if it is not fully visible against
-  /// the other groups (it stays in the PCS) and 0 if it is (pruned). Dead primitives get 0.
-  Result<std::vector<uint8_t>> RenderView(const AxisView& view, QueryMechanism mechanism,
-                                          RenderCounters* counters);
+  /// Renders one axis view. Its draws go in batches of a few milliseconds of GL work each
+  /// (src/draw_pacer.h); between two batches, when the view has taken that long since the last
+  /// pause, its work is finished (glFinish) and `between` runs (may be empty): when that says
+  /// stop, the view ends there with no answer (ViewResult::stopped). A view that takes less is
+  /// drawn with one call per pass and no pause.
+  Result<ViewResult> RenderView(const AxisView& view, QueryMechanism mechanism,
+                                RenderCounters* counters, const BetweenBatches& between = {});
 
  private:
   struct Impl;
   explicit CullingRenderer(std::unique_ptr<Impl> impl, const RasterFormat& raster);
   std::unique_ptr<Impl> impl_;
   RasterFormat raster_;
+  double batch_ms_ = 8;
 };
 
 }  // namespace far::internal

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include "far/base/step_control.h"
 #include "far/model/mesh.h"
 
 namespace far {
@@ -62,8 +63,12 @@ class TriangleBvh {
     Eigen::Vector3d Axis(int k) const { return axis[k].cast<double>(); }
   };
 
-  /// Builds the hierarchy of `triangles` over `p_MV` (@pre indices in range, finite).
-  void Build(std::span<const Eigen::Vector3d> p_MV, std::span<const TriangleIndices> triangles);
+  /// Builds the hierarchy of `triangles` over `p_MV` (@pre indices in range, finite). With a
+  /// stopper, polls it every few tens of thousands of triangles sorted into nodes (a build of
+  /// a million triangles takes a second or more): when it says stop, the build is abandoned,
+  /// the hierarchy left empty, and false returned.
+  bool Build(std::span<const Eigen::Vector3d> p_MV, std::span<const TriangleIndices> triangles,
+             StepStopper* stopper = nullptr);
 
   /// Recomputes every box for new vertex positions (same triangles) in O(n), keeping the tree;
   /// rebuilds instead when the refit tree's boxes have grown to kRebuildGrowth times the surface
@@ -71,7 +76,9 @@ class TriangleBvh {
   /// (slabs() is empty until the next Build): a deformable object refits every step, and its
   /// slabs would cost as much again as the refit (far_bvh_benchmark BM_Hierarchy_Refit: 0.33 ms
   /// without, 0.70 ms with the plane alone, 20K triangles) for the one step they would serve.
-  bool Refit(std::span<const Eigen::Vector3d> p_MV, std::span<const TriangleIndices> triangles);
+  /// A rebuild polls `stopper` as Build does (stopped: the hierarchy is left empty).
+  bool Refit(std::span<const Eigen::Vector3d> p_MV, std::span<const TriangleIndices> triangles,
+             StepStopper* stopper = nullptr);
 
   const std::vector<Node>& nodes() const { return nodes_; }
   /// Triangle indices in leaf order.

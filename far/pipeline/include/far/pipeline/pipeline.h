@@ -38,6 +38,11 @@ struct PipelineOptions {
   SharedSceneBudget* shared_budget = nullptr;
   /// This scene's holder in `shared_budget` (a daemon session's id, admitted there already).
   int64_t budget_holder = 0;
+  /// The GL work one batch of a GPU view's draws aims at, ms. Between two batches of a view
+  /// that runs longer, the step's control is checked and the GL lock (far/gpu/gl_lock.h) goes to
+  /// the threads waiting for it, so that a view stops within about a batch of its deadline and
+  /// other pipelines' views wait about a batch. <= 0: one piece per batch (tests).
+  double gl_batch_ms = 8;
 };
 
 /// The FAR step pipeline: one scene, its GPU resources and a CPU pool. One call runs one step.

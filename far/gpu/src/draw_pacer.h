@@ -1,0 +1,100 @@
+#pragma once
+
+// A view's draws in batches of bounded GL work, with a pause between batches: so that a long
+// view (hundreds of thousands of pieces, a large viewport: seconds on llvmpipe) notices a
+// step's deadline within a batch, and hands the GL lock to other threads' views between its
+// batches instead of holding it for the whole view (docs/daemon.md, "Sessions and the GL
+// driver"). Private to far::gpu.
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+
+#include "culling_shaders.h"
+#include "piece_buffers.h"
+
+#include "far/base/step_control.h"
+#include "far/gpu/culling_renderer.h"
+
+namespace far::internal {
+
+/// What one batch of each piece set and role cost: milliseconds of GL work per instance, as
+/// measured (a renderer keeps them from view to view). Batches are sized from them.
+class BatchCosts {
+ public:
+  /// ms per instance of `set` drawn with `role`, or a negative number when not yet measured.
+  double ms_per_instance(PieceSet set, FragmentRole role) const {
+    return ms_[static_cast<size_t>(set)][static_cast<size_t>(role)];
+  }
+  /// Records a batch of `instances` that took `ms`: a dearer batch counts at once, a cheaper one
+  /// half (so that one slow batch shortens the next at once).
+  void Record(PieceSet set, FragmentRole role, uint64_t instances, double ms);
+
+ private:
+  std::array<std::array<double, kNumRoles>, kNumPieceSets> ms_ = [] {
+    std::array<std::array<double, kNumRoles>, kNumPieceSets> all;
+    for (auto& set : all) set.fill(-1.0);
+    return all;
+  }();
+};
+
+/// Draws one view's passes in batches and pauses between them. A pause finishes the GL work
+/// drawn so far (glFinish), measures it and calls the view's BetweenBatches hook, which may
+/// hand the GL lock over and says whether the view must stop. A batch is sized to take about
+/// `batch_ms`; a view small enough to take less than a fraction of that in all is drawn as it
+/// was before, one call per pass and no pause (its read-back waits for it anyway).
+class DrawPacer {
+ public:
+  using Clock = std::chrono::steady_clock;
+  /// The GL work one batch aims at, by default.
+  static constexpr double kDefaultBatchMs = 8;
+  /// Instances of a batch whose cost is not known yet: few, as one piece may cover the whole
+  /// viewport (512 such pieces at 2048^2 took seconds on llvmpipe).
+  static constexpr uint64_t kFirstBatch = 16;
+  /// A batch draws at most this many times the instances of the one before it in the view (of
+  /// its set and role): pieces of one view differ in cost, and a batch sized on cheap ones
+  /// should not meet a long run of dear ones at full size.
+  static constexpr uint64_t kGrowth = 4;
+
+  /// Both aliased: must outlive *this. `between` may be empty (no pauses but the measuring).
+  /// `batch_ms` <= 0: one instance per batch, each followed by a pause (for tests).
+  DrawPacer(BatchCosts& costs, const BetweenBatches& between, double batch_ms = kDefaultBatchMs)
+      : costs_(costs), between_(between), batch_ms_(batch_ms) {}
+
+  /// Draws the view's commands of `set` (PieceBuffers::PrepareViewDraws) with `role`'s program
+  /// bound, in batches. False when the view must stop (stopped() says why).
+  bool DrawCommands(PieceBuffers& pieces, PieceSet set, FragmentRole role,
+                    RenderCounters* counters);
+  /// Draws instances [first, first + count) of `set` in batches. False: stop.
+  bool DrawRange(PieceBuffers& pieces, PieceSet set, FragmentRole role, uint64_t first,
+                 uint64_t count, RenderCounters* counters);
+  /// For work drawn outside the pacer (per-primitive occlusion queries): pauses when the GL
+  /// work since the last pause may have taken a batch's time, judged by the CPU time spent issuing
+  /// it. Returns whether it paused (the work is then finished); stopped() says whether to stop.
+  bool MaybePause();
+  /// Why the view must stop, or kNone.
+  StopReason stopped() const { return stopped_; }
+  /// How many pauses the view made.
+  int pauses() const { return pauses_; }
+
+ private:
+  // The instances the next batch of (set, role) may draw.
+  uint64_t Budget(PieceSet set, FragmentRole role) const;
+  // After a batch drawn since `start`; `last`: it ends the pass. False: stop.
+  bool AfterBatch(PieceSet set, FragmentRole role, uint64_t instances, Clock::time_point start,
+                  bool last);
+  // Finishes the GL work, then the hook. False: stop.
+  bool Pause();
+
+  BatchCosts& costs_;
+  const BetweenBatches& between_;
+  double batch_ms_;
+  StopReason stopped_ = StopReason::kNone;
+  int pauses_ = 0;
+  Clock::time_point since_pause_ = Clock::now();
+  double unfinished_ms_ = 0;  // predicted GL work drawn since the last pause
+  // The instances of the last batch of each set and role in this view (0: none yet).
+  std::array<std::array<uint64_t, kNumRoles>, kNumPieceSets> last_batch_{};
+};
+
+}  // namespace far::internal
