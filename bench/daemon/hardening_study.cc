@@ -525,6 +525,7 @@ void StudyMemoryAttacks(const Settings& settings, Runs runs) {
   if (runs('j'))
     PrintLargeFlood(
         FloodLargeDatagrams(*StartDaemon(settings), settings.flood_bytes, settings.seconds, 3));
+}
 
 void PrintLogRow(const char* flood, const LogFloodReport& sent, const LogGrowth& growth) {
   if (!sent.error.empty()) {
