@@ -43,7 +43,7 @@ class DaemonStats {
     log.last = now;
   }
   static constexpr std::chrono::seconds kDropLogPeriod{10};
-  /// Counts one step served in `ms` (request received to reply published).
+  /// Counts one step served in `ms` (request received to reply ready, counted before it is published).
   void CountStep(double ms) {
     std::lock_guard lock(mutex_);
     latency_.Add(ms);

@@ -255,9 +255,8 @@ class SessionWorker {
                                      session_->applied_sequence.load()};
     auto reply = protocol::MakeStepReply(ids, command.request.output, *result);
     if (!reply) return replier.StepError(*session_, command, reply.error());
-    if (auto sent = replier.StepReply(*session_, *reply); !sent)
-      return replier.StepError(*session_, command, sent.error());
-    // Latency: request received -> reply published.
+    // Latency: request received -> reply ready. Counted before the reply goes out, so that a
+    // client that has its answer finds the step in the daemon's status.
     const double ms = MsBetween(job.received, Clock::now());
     context_.stats.CountStep(ms);
     {
@@ -265,6 +264,8 @@ class SessionWorker {
       session_->latency.Add(ms);
     }
     session_->steps++;
+    if (auto sent = replier.StepReply(*session_, *reply); !sent)
+      return replier.StepError(*session_, command, sent.error());
     LogForClient(spdlog::level::debug, session_->uid, "step",
                  "event=step session={} step={} method={} ms={:.3f} contacts={}", session_->id,
                  command.step_id, result->stats.method, ms, result->contacts.size());
