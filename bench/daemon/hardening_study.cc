@@ -40,9 +40,9 @@
 #include "garbage_flood.h"
 #include "healthy_client.h"
 #include "large_scene.h"
-#include "memory_attacks.h"
 #include "log_flood.h"
 #include "lost_datagrams.h"
+#include "memory_attacks.h"
 #include "slot_exhaustion.h"
 #include "study_daemon.h"
 #include <CLI/CLI.hpp>
@@ -677,7 +677,8 @@ int main(int argc, char** argv) {
   app.add_option("--log-flood-seconds", settings.log_flood_seconds, "length of each flood of (l)")
       ->capture_default_str();
   app.add_option("--parts", settings.parts,
-                 "which parts to run (letters of abcdefghijln; e, f, g: issue 41's fair shares and lost datagrams; h, i, "
+                 "which parts to run (letters of abcdefghijln; e, f, g: issue 41's fair shares and "
+                 "lost datagrams; h, i, "
                  "j: its memory attacks; l, n: its log floods and descriptors)")
       ->capture_default_str();
   app.add_option("--heavy-method", settings.heavy_method, "the heavy client's method in (a)")

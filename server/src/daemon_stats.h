@@ -43,7 +43,8 @@ class DaemonStats {
     log.last = now;
   }
   static constexpr std::chrono::seconds kDropLogPeriod{10};
-  /// Counts one step served in `ms` (request received to reply ready, counted before it is published).
+  /// Counts one step served in `ms` (request received to reply ready; counted before it goes
+  /// out).
   void CountStep(double ms) {
     std::lock_guard lock(mutex_);
     latency_.Add(ms);

@@ -124,13 +124,11 @@ class DaemonUnderTest {
   server::SessionRegistry sessions_{config_, budget_};
   server::SetupAllowance setup_allowance_{config_.setup_allowance_ms};
   server::Replier replier_{*bus_, stats_};
-  server::WorkerContext workers_{config_,
-                                 replier_,
-                                 stats_,
-                                 budget_,
-                                 setup_allowance_,
-                                 /*use_gl=*/false,
-                                 [this](int64_t id, const std::string&) { sessions_.Close(id); }};
+  server::WorkerContext workers_{
+      config_,          replier_,
+      stats_,           budget_,
+      setup_allowance_,
+      /*use_gl=*/false, [this](int64_t id, const std::string&) { sessions_.Close(id); }};
   server::StatusSources status_{config_, stats_, sessions_, "none", "none", Clock::now()};
   std::atomic<bool> stop_{false};
   std::unique_ptr<server::SocketServer> server_;

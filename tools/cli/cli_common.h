@@ -11,8 +11,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "far/client/client.h"
 #include "far/base/result.h"
+#include "far/client/client.h"
 
 namespace far::cli {
 

@@ -133,8 +133,9 @@ void AddFlags(CLI::App& app, SnapshotFlags& flags) {
       ->capture_default_str();
   app.add_option("--gl-platform", flags.gl_platform, "EGL platform: " + GlPlatformNames())
       ->check([](const std::string& name) {
-        return ParseGlPlatform(name) ? std::string()
-                                     : "unknown platform '" + name + "' (" + GlPlatformNames() + ")";
+        return ParseGlPlatform(name)
+                   ? std::string()
+                   : "unknown platform '" + name + "' (" + GlPlatformNames() + ")";
       })
       ->capture_default_str();
   flags.step.Add(&app);

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <vector>
 
-#include "test_scenes.h"
 #include "cpu_pipeline.h"
+#include "test_scenes.h"
 #include <gtest/gtest.h>
 
 #include "far/pipeline/pipeline.h"
