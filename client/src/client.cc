@@ -232,6 +232,7 @@ struct Client::Impl {
   void OnStepReply(std::span<const uint8_t> inner) {
     auto full = protocol::ReceiveStepReply(inner, *replies, &skipped);
     if (!full) return;  // (a stub whose record is gone: the step times out with a clear error)
+    if (full->step_id == protocol::kProbeStepId) return ProbeAnswered();  // an older daemon's
     auto result = protocol::ParseStepReply(*full);
     std::lock_guard lock(mutex);
     auto it = pending.find(full->step_id);
@@ -252,15 +253,16 @@ struct Client::Impl {
     pending.erase(it);
   }
 
-  void OnStepStatus(const wire::step_status_t& status) {
-    if (status.state == protocol::kHeardState) {
-      {
-        std::lock_guard lock(mutex);
-        probe_answered = true;
-      }
-      heard_probe.notify_all();
-      return;
+  void ProbeAnswered() {
+    {
+      std::lock_guard lock(mutex);
+      probe_answered = true;
     }
+    heard_probe.notify_all();
+  }
+
+  void OnStepStatus(const wire::step_status_t& status) {
+    if (status.state == protocol::kHeardState) return ProbeAnswered();
     ProgressCallback callback;
     {
       std::lock_guard lock(mutex);

@@ -260,7 +260,7 @@ far_lcm::step_status_t MakeStepStatus(int64_t session_id, int64_t request_id, in
 }
 
 far_lcm::step_request_t MakeProbeRequest(int64_t session_id, int64_t request_id) {
-  far_lcm::step_request_t message = MakeStepRequest(session_id, request_id, -1, 0, StepRequest{});
+  far_lcm::step_request_t message = MakeStepRequest(session_id, request_id, kProbeStepId, 0, StepRequest{});
   message.output = std::string(kProbeOutput);
   return message;
 }

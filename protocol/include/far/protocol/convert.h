@@ -35,8 +35,12 @@ far_lcm::step_request_t MakeStepRequest(int64_t session_id, int64_t request_id, 
 /// (docs/protocol.md, "Lost datagrams and a daemon that cannot hear").
 inline constexpr std::string_view kProbeOutput = "probe";
 inline constexpr std::string_view kHeardState = "heard";
+/// A probe's step id. A daemon older than probes (protocol 3 before issue 41) answers a probe
+/// with an error step reply of this step id (output "probe" is not an output it knows): it
+/// heard too, and a client takes that answer as "heard".
+inline constexpr int64_t kProbeStepId = -1;
 
-/// Builds a probe request (auth zero: sign it with EncodeSigned); its step_id is -1.
+/// Builds a probe request (auth zero: sign it with EncodeSigned); its step_id is kProbeStepId.
 far_lcm::step_request_t MakeProbeRequest(int64_t session_id, int64_t request_id);
 /// True when `message` is a probe (its output is kProbeOutput).
 bool IsProbe(const far_lcm::step_request_t& message);
