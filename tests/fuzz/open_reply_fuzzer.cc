@@ -29,7 +29,9 @@
 
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -122,16 +124,18 @@ int DescriptorFor(const Answer& answer, const std::vector<uint8_t>& bytes,
   }
 }
 
-// The daemon's end: reads the request, answers it, hangs up. Returns the bytes it sent.
-std::vector<uint8_t> PlayDaemon(protocol::LocalConnection daemon, const Answer& answer) {
+// The daemon's end: reads the request, answers it, hangs up. Returns the bytes it sent. The
+// daemon's segment, when it sent one, goes to *segment: like a real daemon's, it must live as
+// long as the session (its destructor frees the memory, ShmSegment::Release).
+std::vector<uint8_t> PlayDaemon(protocol::LocalConnection daemon, const Answer& answer,
+                                std::unique_ptr<protocol::ShmSegment>* segment) {
   auto request = daemon.Receive(protocol::kMaxControlMessageBytes, std::chrono::seconds(10));
   FAR_FUZZ_CHECK(request);
   std::vector<uint8_t> bytes = answer.bytes;
   if (answer.echo && bytes.size() >= kRequestIdOffset + 8) {
     std::memcpy(bytes.data() + kRequestIdOffset, request->bytes.data() + kRequestIdOffset, 8);
   }
-  std::unique_ptr<protocol::ShmSegment> segment;
-  const int fd = DescriptorFor(answer, bytes, &segment);
+  const int fd = DescriptorFor(answer, bytes, segment);
   (void)daemon.Send(bytes, fd);
   if (fd >= 0 && answer.fd_kind != 1) close(fd);
   return bytes;
@@ -155,16 +159,21 @@ void Run(const Answer& answer) {
   FAR_FUZZ_CHECK(socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, pair) == 0);
   protocol::LocalConnection client(pair[0]);
   std::vector<uint8_t> sent;
+  std::unique_ptr<protocol::ShmSegment> segment;  // the session's, freed once the client is done
   std::thread daemon([&, end = protocol::LocalConnection(pair[1])]() mutable {
-    sent = PlayDaemon(std::move(end), answer);
+    sent = PlayDaemon(std::move(end), answer, &segment);
   });
   const client::ClientOptions options;
   bool ok = false;
+  std::string refusal;  // why the client refused the answer (printed when it was honest)
   if (answer.status) {
-    ok = client::internal::RequestStatus(client, options).ok();
+    auto status = client::internal::RequestStatus(client, options);
+    ok = status.ok();
+    if (!status) refusal = far::ToString(status.error());
   } else {
     auto opened = client::internal::OpenSession(client, options);
     ok = opened.ok();
+    if (!opened) refusal = far::ToString(opened.error());
     if (opened) {
       FAR_FUZZ_CHECK(opened->reply.status == protocol::kWireOk && opened->segment);
       FAR_FUZZ_CHECK(opened->segment->session_id() ==
@@ -172,6 +181,8 @@ void Run(const Answer& answer) {
     }
   }
   daemon.join();
+  if (Honest(answer, sent) && !ok)
+    std::fprintf(stderr, "honest answer refused: %s\n", refusal.c_str());
   if (Honest(answer, sent)) FAR_FUZZ_CHECK(ok);
 }
 

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "daemon_fixture.h"
+#include "healthy_session.h"
 #include "integration_scenes.h"
 #include "other_user_client.h"
 #include "raw_session.h"
@@ -24,36 +25,6 @@ namespace {
 using namespace std::chrono_literals;
 
 constexpr uid_t kOtherUid = 65534;
-
-// A session of the healthy scene (192 triangles) that has stepped once with the reference
-// contacts, or nullptr (and a test failure).
-std::unique_ptr<client::Client> HealthySession(const std::string& name) {
-  auto client = client::Client::Connect(TestClientOptions(name));
-  EXPECT_TRUE(client.ok()) << name << ": " << far::ToString(client.error());
-  if (!client) return nullptr;
-  Scene scene;
-  scene.objects = ContactSoup(kHealthySeed);
-  EXPECT_TRUE((*client)->LoadScene(scene).ok());
-  auto result = (*client)->Step(SmallRequest());
-  EXPECT_TRUE(result.ok()) << name << ": " << far::ToString(result.error());
-  if (!result) return nullptr;
-  EXPECT_EQ(result->contacts, ReferenceContacts(scene.objects)) << name;
-  return std::move(*client);
-}
-
-::testing::AssertionResult StepsWithTheReference(client::Client& client) {
-  static const auto kExpected = ReferenceContacts(ContactSoup(kHealthySeed));
-  auto result = client.Step(SmallRequest());
-  if (!result) return ::testing::AssertionFailure() << far::ToString(result.error());
-  if (result->contacts != kExpected)
-    return ::testing::AssertionFailure() << "contacts " << ToString(result->contacts);
-  return ::testing::AssertionSuccess();
-}
-
-int SessionsOpen() {
-  auto status = client::Client::Status(TestClientOptions("status"));
-  return status ? status->sessions_open : -1;
-}
 
 // uid 65534 holding sessions (HoldingClientMain), in a folder it may enter with the daemon's
 // socket; `go` lets it step its sessions again and say what became of them.

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "daemon_fixture.h"
+#include "healthy_session.h"
 #include "integration_scenes.h"
 #include "other_user_client.h"
 #include "raw_session.h"
@@ -27,36 +28,6 @@ using namespace std::chrono_literals;
 
 // The uid of the other user (Debian's "nobody").
 constexpr uid_t kOtherUid = 65534;
-
-// A session of the healthy scene that has stepped once with the reference contacts.
-std::unique_ptr<client::Client> HealthySession(const std::string& name) {
-  auto client = client::Client::Connect(TestClientOptions(name));
-  EXPECT_TRUE(client.ok()) << name << ": " << far::ToString(client.error());
-  if (!client) return nullptr;
-  Scene scene;
-  scene.objects = ContactSoup(kHealthySeed);
-  EXPECT_TRUE((*client)->LoadScene(scene).ok());
-  auto result = (*client)->Step(SmallRequest());
-  EXPECT_TRUE(result.ok()) << name << ": " << far::ToString(result.error());
-  if (result) {
-    EXPECT_EQ(result->contacts, ReferenceContacts(scene.objects)) << name;
-  }
-  return std::move(*client);
-}
-
-::testing::AssertionResult StepsWithTheReference(client::Client& client) {
-  static const auto kExpected = ReferenceContacts(ContactSoup(kHealthySeed));
-  auto result = client.Step(SmallRequest());
-  if (!result) return ::testing::AssertionFailure() << far::ToString(result.error());
-  if (result->contacts != kExpected)
-    return ::testing::AssertionFailure() << "contacts " << ToString(result->contacts);
-  return ::testing::AssertionSuccess();
-}
-
-int SessionsOpen() {
-  auto status = client::Client::Status(TestClientOptions("status"));
-  return status ? status->sessions_open : -1;
-}
 
 using UserLimitsTest = DaemonTest;
 
