@@ -28,7 +28,7 @@ asan_unit_targets=(far_protocol_test far_server_test far_io_test far_model_test 
 # Integration tests that send the daemon what a hostile or careless client would, and LCM's
 # error path when its multicast group has no route (a use-after-free fixed in far's LCM patch).
 asan_integration='^(BadInputTest|LimitsTest|LcmForgedDatagramTest|LcmRouteErrorTest)\.'
-tsan_unit_targets=(far_protocol_test far_server_test far_pairs_test far-client)
+tsan_unit_targets=(far_protocol_test far_server_test far_pairs_test far-client far-snapshot)
 tsan_integration='^(SessionLifetimeTest|DispatchTest|BadInputTest|LimitsTest)\.'
 
 configure() {
