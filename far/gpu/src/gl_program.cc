@@ -25,9 +25,10 @@ Result<GLuint> Compile(GLenum stage, const std::string& source) {
   if (!ok) {
     std::string log = InfoLog(shader, false);
     glDeleteShader(shader);
-    return MakeError(ErrorCode::kInternal,
-                     std::string(stage == GL_VERTEX_SHADER ? "vertex" : "fragment") +
-                         " shader does not compile: " + log);
+    return MakeError(ErrorCode::kInternal, std::string(stage == GL_VERTEX_SHADER     ? "vertex"
+                                                       : stage == GL_FRAGMENT_SHADER ? "fragment"
+                                                                                     : "compute") +
+                                               " shader does not compile: " + log);
   }
   return shader;
 }
@@ -54,6 +55,23 @@ Result<GLuint> LinkProgram(const std::string& vertex_source, const std::string& 
     std::string log = InfoLog(program, true);
     glDeleteProgram(program);
     return MakeError(ErrorCode::kInternal, "shader program does not link: " + log);
+  }
+  return program;
+}
+
+Result<GLuint> LinkComputeProgram(const std::string& source) {
+  auto shader = Compile(GL_COMPUTE_SHADER, source);
+  if (!shader.ok()) return shader.error();
+  GLuint program = glCreateProgram();
+  glAttachShader(program, *shader);
+  glLinkProgram(program);
+  glDeleteShader(*shader);
+  GLint ok = GL_FALSE;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    std::string log = InfoLog(program, true);
+    glDeleteProgram(program);
+    return MakeError(ErrorCode::kInternal, "compute program does not link: " + log);
   }
   return program;
 }

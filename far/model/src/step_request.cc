@@ -14,9 +14,10 @@ namespace {
 template <typename Enum, size_t N>
 using NameTable = std::array<std::pair<Enum, std::string_view>, N>;
 
-constexpr NameTable<Method, 8> kMethodNames{{{Method::kAuto, "auto"},
+constexpr NameTable<Method, 9> kMethodNames{{{Method::kAuto, "auto"},
                                              {Method::kAabb, "aabb"},
                                              {Method::kBvh, "bvh"},
+                                             {Method::kGpu, "gpu"},
                                              {Method::kCullide, "cullide"},
                                              {Method::kFar, "far"},
                                              {Method::kFarExactOffset, "far-exact-offset"},
@@ -94,6 +95,8 @@ bool IsReliable(Method method) { return method != Method::kCullide && method != 
 bool IsGpuMethod(Method method) {
   return method == Method::kFar || method == Method::kFarExactOffset || method == Method::kCullide;
 }
+
+bool NeedsGl(Method method) { return IsGpuMethod(method) || method == Method::kGpu; }
 
 Result<void> CheckStepRequest(const StepRequest& request) {
   if (request.resolution < kMinResolution || request.resolution > kMaxResolution) {

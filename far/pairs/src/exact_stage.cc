@@ -42,7 +42,7 @@ using internal::Wanted;
 using SortedBoxes = std::vector<TriangleBox>;
 
 // The largest absolute corner coordinate of the given triangles (0 if none).
-double Magnitude(const SortedBoxes& boxes) {
+double Magnitude(std::span<const TriangleBox> boxes) {
   double magnitude = 0;
   for (const TriangleBox& box : boxes) {
     for (int axis = 0; axis < 3; ++axis) {
@@ -198,6 +198,47 @@ ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool) {
       RunItem(items[i], objects, boxes, wanted, out, stopper);
   });
   return Merge(partials, pairs_considered, &stopper);
+}
+
+ExactResult RunExactTestsOnPairs(const TrianglePairQuery& query, ThreadPool& pool) {
+  FAR_ASSERT(query.known_apart.empty() || query.known_apart.size() == query.pairs.size(),
+             "known_apart indexed like the pairs");
+  for (const SlotContact& pair : query.pairs) {
+    FAR_DEMAND(Index(pair.object_a) < query.objects.size() &&
+                   Index(pair.object_b) < query.objects.size() &&
+                   pair.triangle_a < query.objects[Index(pair.object_a)].triangles.size() &&
+                   pair.triangle_b < query.objects[Index(pair.object_b)].triangles.size(),
+               "triangle pairs of the query's objects");
+  }
+  StepStopper stopper(query.control);
+  const bool distance =
+      query.want_distance_pairs && query.max_distance.has_value() && *query.max_distance >= 0;
+  constexpr size_t kGrain = 256;
+  std::vector<Partial> partials((query.pairs.size() + kGrain - 1) / kGrain);
+  pool.ParallelFor(query.pairs.size(), kGrain, [&](size_t begin, size_t end) {
+    Partial& out = partials[begin / kGrain];
+    for (size_t i = begin; i < end && !stopper.Poll(); ++i) {
+      const SlotContact& pair = query.pairs[i];
+      const SlotView a{pair.object_a, query.objects[Index(pair.object_a)]};
+      const SlotView b{pair.object_b, query.objects[Index(pair.object_b)]};
+      const TriangleBox box_a = BoxOf(a.view, pair.triangle_a);
+      const TriangleBox box_b = BoxOf(b.view, pair.triangle_b);
+      // The slack of RunExactTests' prefilter, from these two triangles' coordinates: it
+      // only needs to cover them (DistanceSlack), and TriangleDistanceIfWithin decides.
+      Wanted wanted;
+      wanted.stopper = &stopper;
+      if (distance) {
+        wanted.distance = true;
+        wanted.max_distance = *query.max_distance;
+        const TriangleBox two[] = {box_a, box_b};
+        wanted.slack = DistanceSlack(wanted.max_distance, Magnitude(two));
+      }
+      if (!BoxesWithin(box_a, box_b, wanted.slack)) continue;
+      const bool known_apart = !query.known_apart.empty() && query.known_apart[i] != 0;
+      TestTrianglePair(a, box_a, b, box_b, wanted, out, known_apart);
+    }
+  });
+  return Merge(partials, query.pairs.size(), &stopper);
 }
 
 std::vector<ObjectSlot> SlotsInPairs(std::span<const SlotPair> pairs) {

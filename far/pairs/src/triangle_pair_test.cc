@@ -18,7 +18,8 @@ std::vector<ObjectSlot> PairedSlots(const PairQuery& query) {
 }
 
 void TestTrianglePair(const SlotView& object_a, const TriangleBox& a, const SlotView& object_b,
-                      const TriangleBox& b, const Wanted& wanted, Partial& out) {
+                      const TriangleBox& b, const Wanted& wanted, Partial& out,
+                      bool known_apart) {
   ++out.pairs_tested;
   const TrianglePoints s = Corners(object_a.view, a.triangle);
   const TrianglePoints t = Corners(object_b.view, b.triangle);
@@ -26,7 +27,7 @@ void TestTrianglePair(const SlotView& object_a, const TriangleBox& a, const Slot
   // Intersection needs the boxes to touch; when they do not, only the distance test can pass.
   bool intersects = false;
   const size_t before = out.contacts.size() + out.distance_pairs.size();
-  if (wanted.slack == 0 || BoxesWithin(a, b, 0)) {
+  if (!known_apart && (wanted.slack == 0 || BoxesWithin(a, b, 0))) {
     // The caller's prefilter found the boxes within the slack; here they also touch.
     intersects = TrianglesIntersectWithinBoxes(s, t);
     if (intersects) out.contacts.push_back(pair);

@@ -105,8 +105,10 @@ struct SlotView {
 
 /// Runs the exact tests on triangles `a` of object `object_a` and `b` of `object_b` (slots
 /// object_a.slot < object_b.slot) whose boxes passed the prefilter with wanted.slack.
+/// `known_apart`: the caller knows that they do not intersect (only the distance is computed).
 void TestTrianglePair(const SlotView& object_a, const TriangleBox& a, const SlotView& object_b,
-                      const TriangleBox& b, const Wanted& wanted, Partial& out);
+                      const TriangleBox& b, const Wanted& wanted, Partial& out,
+                      bool known_apart = false);
 
 /// The slots in the query's object pairs, sorted, each once. Checks that each indexes the
 /// query's objects (FAR_DEMAND: a slot past them would read out of bounds) and that pairs put

@@ -26,6 +26,12 @@ std::string GuaranteeBasis(const StepRequest& request) {
              "the partner object's box grown by D; the boxes are taken over the same world "
              "vertices the predicates test, so no pair " +
              within + " is pruned";
+    case Method::kGpu:
+      return "guaranteed: every triangle pair whose boxes (rounded outward to float, with the "
+             "hierarchies refit from them) meet is decided from orientation signs only where "
+             "the float or fp64 filter's proven error bound certifies them, and by the CPU's "
+             "exact predicates otherwise, so no pair " +
+             within + " is pruned (docs/culling.md, 'The gpu method')";
     case Method::kFar:
     case Method::kFarExactOffset:
       return std::string(

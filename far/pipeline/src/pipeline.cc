@@ -77,7 +77,7 @@ Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request,
 Result<StepResult> Pipeline::Impl::Step(const StepRequest& request, const StepControl& control) {
   if (auto ok = CheckStepRequest(request); !ok) return ok.error();
   if (request.method == Method::kAuto) return StepAuto(request, control);
-  if (IsGpuMethod(request.method) && !world.gpu) {
+  if (NeedsGl(request.method) && !world.gpu) {
     return MakeError(ErrorCode::kUnavailable, "method '" + std::string(ToString(request.method)) +
                                                   "' needs the GPU, and this pipeline has no GL "
                                                   "context");

@@ -13,6 +13,7 @@
 #include "far/model/slot_ids.h"
 #include "far/pairs/bvh_stage.h"
 #include "far/pairs/exact_stage.h"
+#include "far/pairs/internal/pair_sort.h"
 #include "far/pipeline/internal/auto_selector.h"
 
 namespace far::internal {
@@ -20,9 +21,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The CPU culling methods: every object goes to sweep-and-prune, the object PCS is the objects
-// in some pair.
-bool IsCpuCulling(Method method) { return method == Method::kAabb || method == Method::kBvh; }
+// The methods that cull by pairs (the CPU ones and gpu): every object goes to sweep-and-prune,
+// the object PCS is the objects in some pair.
+bool IsCpuCulling(Method method) {
+  return method == Method::kAabb || method == Method::kBvh || method == Method::kGpu;
+}
 
 bool WantsExact(Output output) {
   return output == Output::kContacts || output == Output::kDistancePairs;
@@ -66,6 +69,7 @@ struct StepState {
   std::vector<uint8_t> object_alive;           // by slot: in the object PCS
   std::vector<std::vector<uint32_t>> subsets;  // by slot: its triangles in the primitive PCS
   double cull_margin = 0;                      // CullMargin, once the world boxes are known
+  ComputeAnswer computed;                      // gpu: the GPU's filtered pairs
   SlotAnswer answer;
   StepStats stats;
 };
@@ -192,6 +196,8 @@ class Stages {
   Result<void> TestExactly();
   Result<void> DescendHierarchiesStage();
   BvhResult DescendHierarchies(bool run_exact);
+  Result<void> FilterOnGpu();
+  Result<void> DecideUndecided();
 
   StepWorld& world_;
   StepState& state_;
@@ -355,6 +361,62 @@ Result<void> Stages::DescendHierarchiesStage() {
   return {};
 }
 
+// The gpu method after sweep-and-prune: the GPU descends each pair's hierarchies and filters
+// the triangle pairs (compute_stage.h); the primitive PCS is the triangles of the pairs it
+// did not prove apart (a distance query: of every pair within the slack).
+Result<void> Stages::FilterOnGpu() {
+  const StepRequest& request = state_.request;
+  const bool distance = request.distance.has_value() && (request.output == Output::kDistancePairs ||
+                                                         request.output == Output::kPrimitivePcs);
+  StopReason stopped = StopReason::kNone;
+  auto computed = world_.compute->Filter(state_.objects, state_.answer.object_pairs,
+                                         distance ? state_.cull_margin : 0.0, distance,
+                                         state_.control, &stopped);
+  if (stopped != StopReason::kNone)
+    return StopError(stopped, Stage::kPrimitiveCull, state_.control);
+  if (!computed) return computed.error();
+  state_.computed = std::move(*computed);
+  state_.stats.bytes_uploaded += state_.computed.bytes_uploaded;
+  state_.stats.pairs_considered = state_.computed.box_pairs;
+  state_.stats.gpu_filter = {
+      state_.computed.box_pairs, state_.computed.float_decided, state_.computed.double_decided,
+      static_cast<int64_t>(state_.computed.undecided.size()), state_.computed.runs};
+  std::vector<std::vector<uint32_t>> pcs(state_.objects.size());
+  for (const auto* list : {&state_.computed.crossing, &state_.computed.undecided}) {
+    for (const SlotContact& pair : *list) {
+      pcs[Index(pair.object_a)].push_back(pair.triangle_a);
+      pcs[Index(pair.object_b)].push_back(pair.triangle_b);
+    }
+  }
+  for (auto& triangles : pcs) SortUnique(triangles);
+  state_.answer.pcs_primitives = std::move(pcs);
+  return {};
+}
+
+// The gpu method's exact stage: the CPU's exact predicates on the pairs the GPU left undecided,
+// and the pairs it proved crossing (at distance 0 in a distance query).
+Result<void> Stages::DecideUndecided() {
+  TrianglePairQuery query;
+  query.objects = state_.views;
+  query.pairs = state_.computed.undecided;
+  query.known_apart = state_.computed.proven_apart;
+  if (state_.request.output == Output::kDistancePairs) query.max_distance = state_.request.distance;
+  query.want_distance_pairs = state_.request.output == Output::kDistancePairs;
+  query.control = &state_.control;
+  ExactResult exact = RunExactTestsOnPairs(query, world_.pool);
+  if (exact.stopped != StopReason::kNone)
+    return StopError(exact.stopped, Stage::kExact, state_.control);
+  exact.pairs_considered = static_cast<size_t>(state_.computed.box_pairs);
+  for (const SlotContact& pair : state_.computed.crossing) {
+    exact.contacts.push_back(pair);
+    if (query.want_distance_pairs) exact.distance_pairs.push_back({pair, 0.0});
+  }
+  SortPairs(exact.contacts);
+  SortPairs(exact.distance_pairs);
+  TakeExact(std::move(exact), state_);
+  return {};
+}
+
 Result<StepResult> Stages::Run() {
   StageTimer timer(state_.stats);
   if (auto ran = RunStages(timer); !ran) return ran.error();
@@ -401,7 +463,11 @@ Result<void> Stages::RunStages(StageTimer& timer) {
     }
     const bool primitives =
         request.output != Output::kObjectPcs && request.output != Output::kObjectPairs;
-    if (ok && pairs && primitives && request.method == Method::kBvh) {
+    if (ok && pairs && primitives && request.method == Method::kGpu) {
+      ok = stage(Stage::kPrimitiveCull, [&] { return FilterOnGpu(); });
+      if (ok && WantsExact(request.output))
+        ok = stage(Stage::kExact, [&] { return DecideUndecided(); });
+    } else if (ok && pairs && primitives && request.method == Method::kBvh) {
       const Stage name = WantsExact(request.output) ? Stage::kExact : Stage::kPrimitiveCull;
       ok = stage(name, [&] { return DescendHierarchiesStage(); });
     } else if (ok && pairs && primitives) {
@@ -416,13 +482,17 @@ Result<void> Stages::RunStages(StageTimer& timer) {
 }  // namespace
 
 StepWorld::StepWorld(ThreadPool& pool, bool with_gpu, double gl_batch_ms) : pool(pool) {
-  if (with_gpu) gpu = std::make_unique<GpuCuller>(cache.counters(), pool, gl_batch_ms);
+  if (with_gpu) {
+    gpu = std::make_unique<GpuCuller>(cache.counters(), pool, gl_batch_ms);
+    compute = std::make_unique<ComputeStage>(pool);
+  }
 }
 
 void StepWorld::Apply(SceneUpdate update) {
   const std::optional<ObjectSlot> freed = cache.Apply(std::move(update));
   if (!freed) return;
   if (gpu) gpu->RemoveSlot(*freed);
+  if (compute) compute->RemoveSlot(*freed);
   fcl.Remove(*freed);
 }
 

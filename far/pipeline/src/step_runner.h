@@ -2,6 +2,7 @@
 
 #include <memory>
 
+#include "compute_stage.h"
 #include "fcl_collider.h"
 #include "gpu_culler.h"
 #include "scene_cache.h"
@@ -30,7 +31,8 @@ struct StepWorld {
 
   ThreadPool& pool;
   SceneCache cache;
-  std::unique_ptr<GpuCuller> gpu;  // only with GL
+  std::unique_ptr<GpuCuller> gpu;          // only with GL
+  std::unique_ptr<ComputeStage> compute;  // only with GL
   SweepAndPrune sap;
   FclCollider fcl;
 };

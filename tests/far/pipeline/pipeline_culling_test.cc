@@ -92,7 +92,8 @@ TEST_F(PipelineCullingTest, ReliableMethodsNeverMissOnRandomScenes) {
     request.depth_format = kDepths[seed % 3];
     request.subobject_size = 1 + static_cast<int>(seed % 3);
     for (Method method :
-         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kGpu,
+            Method::kAuto}) {
       request.method = method;
       ExpectNoMiss(reference, Run(request),
                    "seed " + std::to_string(seed) + " " + std::string(ToString(method)) + " res " +
@@ -228,7 +229,8 @@ TEST_F(PipelineCullingTest, HardCasesFarFromOriginAndTinyFeatures) {
       StepRequest request;
       request.resolution = kResolutions[seed % 7];
       for (Method method :
-           {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
+           {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kGpu,
+            Method::kAuto}) {
         request.method = method;
         ExpectNoMiss(reference, Run(request),
                      "origin " + std::to_string(origin) + " seed " + std::to_string(seed));
@@ -259,7 +261,8 @@ TEST_F(PipelineCullingTest, ReliableMethodsAgreeAtTheEndsOfTheCoordinateRange) {
     StepRequest request;
     request.resolution = 256;
     for (Method method :
-         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kGpu,
+            Method::kAuto}) {
       request.method = method;
       ExpectNoMiss(reference, Run(request), "scale 2^" + std::to_string(exponent));
     }
@@ -285,7 +288,8 @@ TEST_F(PipelineCullingTest, ReliableMethodsGetEveryHardCaseRight) {
     request.resolution = kResolutions[i % 7];
     request.depth_format = kDepths[i % 3];
     for (Method method :
-         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kGpu,
+            Method::kAuto}) {
       request.method = method;
       const StepResult result = Run(request);
       const bool found = !result.contacts.empty();
@@ -320,7 +324,8 @@ TEST_F(PipelineCullingTest, OneHugeObjectWithManyTinyOnes) {
   const testing::ReferencePairs reference = ReferenceAnswer(objects, std::nullopt, pool_);
   for (int resolution : {64, 512, 2048}) {
     for (Method method :
-         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kGpu,
+            Method::kAuto}) {
       StepRequest request;
       request.method = method;
       request.resolution = resolution;
@@ -393,7 +398,8 @@ TEST_F(PipelineCullingTest, DistanceCullingNeverMissesAPairCloserThanD) {
     request.output = Output::kDistancePairs;
     request.resolution = kResolutions[seed % 7];
     for (Method method :
-         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kAuto}) {
+         {Method::kFar, Method::kFarExactOffset, Method::kAabb, Method::kBvh, Method::kGpu,
+            Method::kAuto}) {
       request.method = method;
       const StepResult result = Run(request);
       EXPECT_EQ(result.distance_pairs, reference.distance_pairs)

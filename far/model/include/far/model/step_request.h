@@ -19,6 +19,10 @@ enum class Method {
   kFarExactOffset,  ///< FAR with bounded exact offsets: reliable, tighter, more vertices
   kFcl,             ///< FCL dynamic AABB tree broadphase + BVHModel<OBBRSS> collide
   kExact,           ///< brute-force exact reference (every cross-object triangle pair)
+  /// GPU-resident exact step in compute shaders: hierarchies refit and descended on the GPU,
+  /// triangle pairs decided by float and fp64 filters with proven bounds, the rest by the
+  /// CPU's exact predicates. Reliable; needs a GL 4.5 context (docs/culling.md).
+  kGpu,
   /// The fastest reliable method for this renderer and scene, chosen per step from measured
   /// costs (never cullide, fcl or exact); the result's stats name what ran and why.
   kAuto,
@@ -51,7 +55,7 @@ struct StepRequest {
   Output output = Output::kContacts;
 };
 
-/// Names used on command lines and in messages: "auto", "aabb", "bvh", "cullide", "far",
+/// Names used on command lines and in messages: "auto", "aabb", "bvh", "gpu", "cullide", "far",
 /// "far-exact-offset", "fcl", "exact"; "occlusion-query", "id-buffer"; "object-pcs", "pairs",
 /// "pcs", "contacts", "distance"; "depth16", "depth24", "depth32f". Parse* return nullopt for
 /// unknown names.
@@ -74,9 +78,10 @@ std::string DepthFormatNames();
 /// unfattened primitives can be pruned, and fcl, whose triangle test is wrong on hard cases).
 bool IsReliable(Method method);
 
-/// True for the methods that cull on the GPU (far, far-exact-offset, cullide): they need a GL
-/// context.
+/// True for the methods that cull on the GPU's rasterizer (far, far-exact-offset, cullide).
 bool IsGpuMethod(Method method);
+/// True for the methods that need a GL context: the raster ones and gpu (compute shaders).
+bool NeedsGl(Method method);
 
 /// Checks a request against the limits of far/base/limits.h: resolution in [kMinResolution,
 /// kMaxResolution], subobject_size in [1, kMaxSubobjectSize], a distance that is finite and in

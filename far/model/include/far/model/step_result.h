@@ -64,6 +64,16 @@ struct DescentCounters {
   bool operator==(const DescentCounters&) const = default;
 };
 
+/// What the gpu method's filters did (zero for other methods).
+struct GpuFilterCounters {
+  int64_t box_pairs = 0;       ///< triangle pairs whose boxes met (the filters' input)
+  int64_t float_decided = 0;   ///< of those, decided by the float filter
+  int64_t double_decided = 0;  ///< decided by the fp64 filter (the float one could not)
+  int64_t sent_to_cpu = 0;     ///< pairs left to the CPU's exact predicates
+  int traversals = 0;          ///< GPU traversals run (more than 1: its output buffers grew)
+  bool operator==(const GpuFilterCounters&) const = default;
+};
+
 /// What a step did and cost.
 struct StepStats {
   /// The configuration that ran: the method's name, and for the GPU methods the mechanism and
@@ -97,6 +107,8 @@ struct StepStats {
   /// bvh: the descent's work (zero for other methods). Not sent over the wire (study
   /// measurements).
   DescentCounters descent;
+  /// gpu: its filters' work (zero for other methods). Not sent over the wire.
+  GpuFilterCounters gpu_filter;
   double object_radius = 0;     ///< offset radius r of the last object-level view
   double primitive_radius = 0;  ///< offset radius r of the last sub-object view
   Certificate certificate;

@@ -57,6 +57,27 @@ std::vector<ObjectSlot> SlotsInPairs(std::span<const SlotPair> pairs);
 /// triangle indices.
 ExactResult RunExactTests(const ExactQuery& query, ThreadPool& pool);
 
+/// Triangle pairs named one by one, for the exact predicates: what a filter in front of them
+/// (the gpu method's) could not decide.
+struct TrianglePairQuery {
+  /// Indexed by slot, as PairQuery::objects.
+  std::span<const WorldObjectView> objects;
+  /// Each with object_a < object_b, slots of `objects` (checked: FAR_DEMAND), valid triangles.
+  std::span<const SlotContact> pairs;
+  /// Empty, or indexed like `pairs`: 1 where the pair is known not to intersect (only its
+  /// distance is computed).
+  std::span<const uint8_t> known_apart;
+  std::optional<double> max_distance;  ///< as PairQuery's
+  bool want_distance_pairs = true;
+  const StepControl* control = nullptr;
+};
+
+/// The exact tests of RunExactTests on the query's triangle pairs: a pair is a contact when its
+/// closed world boxes share a point and TrianglesIntersect accepts it, and a distance pair
+/// (wanted and with a limit) when TriangleDistanceIfWithin accepts it. So for any superset of
+/// the pairs RunExactTests would test, the same answer. Runs on `pool`; sorted output.
+ExactResult RunExactTestsOnPairs(const TrianglePairQuery& query, ThreadPool& pool);
+
 /// The margin a cull in front of the exact tests must grow boxes by for a distance query with
 /// limit `max_distance`, where every world coordinate is at most `magnitude` in absolute value:
 /// TrianglesWithinDistance accepts pairs up to the limit plus its error bound (a few hundred

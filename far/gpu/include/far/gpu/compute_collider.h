@@ -1,0 +1,96 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "far/base/result.h"
+#include "far/model/contact_pair.h"
+#include "far/model/mesh.h"
+
+namespace far {
+
+/// A node of a hierarchy's topology (TriangleBvh's, without its boxes): a leaf when count > 0,
+/// holding the triangles order[first, first + count), else an inner node whose children are
+/// nodes first and first + 1. Node 0 is the root; every node's triangles are a contiguous range
+/// of the order.
+struct ComputeNode {
+  uint32_t first = 0;
+  uint32_t count = 0;
+};
+
+/// One object of a GPU step, by slot (an empty one: a free slot). Aliased: the spans must live
+/// until Run returns.
+struct ComputeObject {
+  std::span<const Eigen::Vector3d> p_WV;  ///< world vertices, what the exact predicates read
+  std::span<const TriangleIndices> triangles;
+  std::span<const ComputeNode> nodes;  ///< the hierarchy's topology over `triangles`
+  std::span<const uint32_t> order;     ///< triangle indices in leaf order
+  /// Changes whenever triangles, nodes or order change (a new object in the slot).
+  uint64_t topology_key = 0;
+  /// Changes whenever p_WV changes.
+  uint64_t world_key = 0;
+};
+
+/// What a GPU step is asked: the triangle pairs of the object pairs whose boxes meet.
+struct ComputeQuery {
+  std::span<const ComputeObject> objects;  ///< by slot
+  std::span<const SlotPair> object_pairs;  ///< object_a < object_b, slots of `objects`
+  /// Triangle boxes within this of each other on every axis meet (0: they share a point).
+  double slack = 0;
+  /// A distance query: every pair whose boxes meet is kept (for the CPU's distance), not only
+  /// those the filters cannot prove apart.
+  bool distance = false;
+};
+
+/// The GPU step's answer, unsorted.
+struct ComputeAnswer {
+  /// Pairs the filters proved to intersect (exactly the exact predicates' answer for them).
+  std::vector<SlotContact> crossing;
+  /// Pairs left to the CPU's exact predicates: not proven apart or crossing (a contact query),
+  /// or every other pair whose boxes meet (a distance query).
+  std::vector<SlotContact> undecided;
+  /// Indexed like `undecided`: 1 where the filters proved the pair apart (a distance query's
+  /// pair that needs only its distance).
+  std::vector<uint8_t> proven_apart;
+  int64_t box_pairs = 0;       ///< triangle pairs whose boxes met
+  int64_t float_decided = 0;   ///< of those, decided by the float filter
+  int64_t double_decided = 0;  ///< decided by the fp64 filter (the float one could not)
+  int64_t bytes_uploaded = 0;
+  int runs = 1;  ///< traversals run: more than one when the output buffers had to grow
+};
+
+/// The GPU-resident part of the `gpu` method, in compute shaders of the current OpenGL 4.5
+/// context: each step uploads the world vertices of the objects that moved (and, when the set
+/// of objects changed, their triangles and hierarchy topologies), computes every triangle's
+/// box, refits every hierarchy, descends each object pair's hierarchies and classifies the
+/// triangle pairs whose boxes meet with a float filter and then an fp64 filter, both with
+/// proven error bounds (docs/culling.md). The pairs are compacted on the GPU and read back
+/// once. Never drops a pair the exact predicates would accept.
+/// Threading: far::GlContext's contract; Run takes far::LockGl for its GL work.
+class ComputeCollider {
+ public:
+  /// Compiles the kernels. @pre an OpenGL 4.5 context is current. Errors: kInternal with the
+  /// driver's log.
+  static Result<std::unique_ptr<ComputeCollider>> Create();
+  ~ComputeCollider();
+  ComputeCollider(const ComputeCollider&) = delete;
+  ComputeCollider& operator=(const ComputeCollider&) = delete;
+
+  /// Runs one step. Errors: kUnavailable when a hierarchy is too deep for the traversal's
+  /// stack or the work is over the kernels' 32-bit counts; kInternal for a GL error.
+  Result<ComputeAnswer> Run(const ComputeQuery& query);
+
+  /// Depth limit of a hierarchy the traversal can descend (root at depth 0).
+  static int MaxDepth();
+
+ private:
+  struct Impl;
+  explicit ComputeCollider(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace far

@@ -1,0 +1,413 @@
+#include "far/gpu/compute_collider.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include "compute_shaders.h"
+#include "gl_program.h"
+#include <epoxy/gl.h>
+
+#include "far/gpu/gl_lock.h"
+
+namespace far {
+
+using internal::CheckGl;
+
+namespace {
+
+static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double), "world vertices upload as they lie");
+
+// Output entries per buffer at first, and at most (16 bytes each): a step with more undecided
+// or crossing triangle pairs than the most is refused (the bvh method answers it).
+constexpr size_t kFirstCapacity = size_t{1} << 16;
+constexpr size_t kMostCapacity = size_t{1} << 25;
+
+// Work groups per dispatch: each invocation loops with the grid's stride past this.
+GLuint Groups(size_t invocations) {
+  const size_t groups =
+      (invocations + internal::kComputeGroupSize - 1) / internal::kComputeGroupSize;
+  return static_cast<GLuint>(std::clamp<size_t>(groups, 1, 65535));
+}
+
+// The least float >= x (x >= 0 and finite).
+float FloatAtLeast(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+
+// A shader storage buffer that grows (its contents are lost when it does).
+struct Buffer {
+  GLuint id = 0;
+  size_t bytes = 0;
+  void Reserve(size_t wanted) {
+    wanted = std::max<size_t>(wanted, 16);
+    if (wanted <= bytes) return;
+    bytes = std::max(wanted, bytes * 3 / 2);
+    glNamedBufferData(id, static_cast<GLsizeiptr>(bytes), nullptr, GL_DYNAMIC_DRAW);
+  }
+};
+
+// Where each slot's data lies in the global arrays.
+struct SlotLayout {
+  uint32_t vertex_base = 0, triangle_base = 0, node_base = 0;
+  uint32_t triangles = 0, nodes = 0;
+  uint64_t topology_key = 0;
+  uint64_t world_key = 0;  // uploaded; 0: not yet
+};
+
+Result<GLuint> CompileCompute(const std::string& source, const char* what) {
+  auto program = internal::LinkComputeProgram(source);
+  if (!program) {
+    return MakeError(ErrorCode::kInternal, std::string("gpu method: the ") + what +
+                                               " kernel: " + program.error().message);
+  }
+  return program;
+}
+
+}  // namespace
+
+struct ComputeCollider::Impl {
+  GLuint boxes_program = 0, refit_program = 0, traverse_program = 0;
+  std::array<Buffer, 11> buffers;
+  std::vector<SlotLayout> layout;
+  uint32_t total_vertices = 0, total_triangles = 0, total_nodes = 0;
+  size_t capacity = kFirstCapacity;
+
+  Buffer& buffer(internal::ComputeBinding binding) { return buffers[binding]; }
+  Result<int64_t> EnsureLayout(std::span<const ComputeObject> objects);
+  int64_t UploadVertices(std::span<const ComputeObject> objects);
+  Result<ComputeAnswer> Traverse(const ComputeQuery& query, uint32_t pairs, uint32_t items);
+};
+
+namespace {
+
+// The global index of every node's first child and its triangles' range in the global order,
+// as the refit and the traversal read them; the depth of the deepest node.
+struct NodeRange {
+  uint32_t lo, hi;
+};
+
+Result<int> AppendNodes(const ComputeObject& object, uint32_t node_base, uint32_t order_base,
+                        std::vector<std::array<uint32_t, 4>>& out) {
+  const size_t n = object.nodes.size();
+  std::vector<NodeRange> range(n);
+  std::vector<int> depth(n, 0);
+  // Children come after their parent (TriangleBvh builds depth first): one pass down for the
+  // depths, one pass up for the ranges.
+  int deepest = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const ComputeNode& node = object.nodes[i];
+    if (node.count > 0) continue;
+    for (uint32_t c : {node.first, node.first + 1}) {
+      if (c <= i || c >= n) {
+        return MakeError(ErrorCode::kInternal,
+                         "gpu method: a hierarchy node's children are not "
+                         "after it");
+      }
+      depth[c] = depth[i] + 1;
+      deepest = std::max(deepest, depth[c]);
+    }
+  }
+  for (size_t k = n; k-- > 0;) {
+    const ComputeNode& node = object.nodes[k];
+    if (node.count > 0) {
+      range[k] = {node.first, node.first + node.count};
+    } else {
+      const NodeRange left = range[node.first], right = range[node.first + 1];
+      if (left.hi != right.lo) {
+        return MakeError(ErrorCode::kInternal,
+                         "gpu method: a hierarchy node's triangles are not contiguous");
+      }
+      range[k] = {left.lo, right.hi};
+    }
+  }
+  for (size_t k = 0; k < n; ++k) {
+    const ComputeNode& node = object.nodes[k];
+    out.push_back({node.count > 0 ? 0u : node_base + node.first, node.count,
+                   order_base + range[k].lo, order_base + range[k].hi});
+  }
+  return deepest;
+}
+
+}  // namespace
+
+// Lays the objects out one after another and uploads their triangles and hierarchies when any
+// slot's topology changed; returns the bytes uploaded.
+Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObject> objects) {
+  bool same = layout.size() == objects.size();
+  for (size_t s = 0; same && s < objects.size(); ++s)
+    same = layout[s].topology_key == objects[s].topology_key;
+  if (same) return int64_t{0};
+
+  std::vector<SlotLayout> next(objects.size());
+  uint64_t vertices = 0, triangles = 0, nodes = 0;
+  for (size_t s = 0; s < objects.size(); ++s) {
+    const ComputeObject& object = objects[s];
+    next[s] = {static_cast<uint32_t>(vertices),
+               static_cast<uint32_t>(triangles),
+               static_cast<uint32_t>(nodes),
+               static_cast<uint32_t>(object.triangles.size()),
+               static_cast<uint32_t>(object.nodes.size()),
+               object.topology_key,
+               0};
+    vertices += object.p_WV.size();
+    triangles += object.triangles.size();
+    nodes += object.nodes.size();
+  }
+  // Indices are 32-bit in the kernels, and 3 * vertices indexes the positions.
+  if (3 * vertices >= std::numeric_limits<uint32_t>::max() ||
+      3 * triangles >= std::numeric_limits<uint32_t>::max() ||
+      2 * nodes >= std::numeric_limits<uint32_t>::max()) {
+    return MakeError(ErrorCode::kUnavailable,
+                     "gpu method: the scene is over the kernels' 32-bit indices (" +
+                         std::to_string(triangles) + " triangles); 'bvh' answers it");
+  }
+  std::vector<uint32_t> triangle_vertices;
+  triangle_vertices.reserve(3 * triangles);
+  std::vector<std::array<uint32_t, 4>> node_data;
+  node_data.reserve(nodes);
+  std::vector<uint32_t> order;
+  order.reserve(triangles);
+  for (size_t s = 0; s < objects.size(); ++s) {
+    const ComputeObject& object = objects[s];
+    const SlotLayout& at = next[s];
+    for (const TriangleIndices& t : object.triangles) {
+      for (int k = 0; k < 3; ++k) triangle_vertices.push_back(at.vertex_base + t[k]);
+    }
+    auto depth = AppendNodes(object, at.node_base, at.triangle_base, node_data);
+    if (!depth) return depth.error();
+    if (*depth > MaxDepth()) {
+      return MakeError(ErrorCode::kUnavailable,
+                       "gpu method: an object's hierarchy is " + std::to_string(*depth) +
+                           " levels deep, over the traversal's " + std::to_string(MaxDepth()) +
+                           "; 'bvh' answers this scene");
+    }
+    for (uint32_t t : object.order) order.push_back(at.triangle_base + t);
+  }
+  using internal::ComputeBinding;
+  buffer(internal::kPositionsBinding).Reserve(3 * vertices * sizeof(double));
+  buffer(internal::kTrianglesBinding).Reserve(triangle_vertices.size() * sizeof(uint32_t));
+  buffer(internal::kTriBoxesBinding).Reserve(2 * triangles * 4 * sizeof(float));
+  buffer(internal::kNodesBinding).Reserve(node_data.size() * 4 * sizeof(uint32_t));
+  buffer(internal::kOrderBinding).Reserve(order.size() * sizeof(uint32_t));
+  buffer(internal::kNodeBoxesBinding).Reserve(2 * nodes * 4 * sizeof(float));
+  const auto upload = [&](ComputeBinding binding, const void* data, size_t bytes) {
+    if (bytes > 0)
+      glNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(bytes), data);
+    return static_cast<int64_t>(bytes);
+  };
+  int64_t uploaded = upload(internal::kTrianglesBinding, triangle_vertices.data(),
+                            triangle_vertices.size() * sizeof(uint32_t));
+  uploaded += upload(internal::kNodesBinding, node_data.data(), node_data.size() * 16);
+  uploaded += upload(internal::kOrderBinding, order.data(), order.size() * sizeof(uint32_t));
+  layout = std::move(next);
+  total_vertices = static_cast<uint32_t>(vertices);
+  total_triangles = static_cast<uint32_t>(triangles);
+  total_nodes = static_cast<uint32_t>(nodes);
+  return uploaded;
+}
+
+// Uploads the world vertices of the objects whose world changed since their last upload.
+int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> objects) {
+  int64_t uploaded = 0;
+  const GLuint positions = buffer(internal::kPositionsBinding).id;
+  for (size_t s = 0; s < objects.size(); ++s) {
+    SlotLayout& at = layout[s];
+    if (at.world_key == objects[s].world_key || objects[s].p_WV.empty()) continue;
+    const size_t bytes = objects[s].p_WV.size() * sizeof(Eigen::Vector3d);
+    glNamedBufferSubData(positions, static_cast<GLintptr>(at.vertex_base) * 3 * sizeof(double),
+                         static_cast<GLsizeiptr>(bytes), objects[s].p_WV.data());
+    at.world_key = objects[s].world_key;
+    uploaded += static_cast<int64_t>(bytes);
+  }
+  return uploaded;
+}
+
+Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query, uint32_t pairs,
+                                                      uint32_t items) {
+  ComputeAnswer answer;
+  answer.runs = 0;
+  std::array<uint32_t, internal::kNumCounters> counters{};
+  for (;;) {
+    ++answer.runs;
+    Buffer& crossing = buffer(internal::kCrossingBinding);
+    Buffer& undecided = buffer(internal::kUndecidedBinding);
+    crossing.Reserve(capacity * 16);
+    undecided.Reserve(capacity * 16);
+    const uint32_t zero = 0;
+    glClearNamedBufferData(buffer(internal::kCountersBinding).id, GL_R32UI, GL_RED_INTEGER,
+                           GL_UNSIGNED_INT, &zero);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kCrossingBinding, crossing.id);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kUndecidedBinding, undecided.id);
+    glUseProgram(traverse_program);
+    glProgramUniform1ui(traverse_program, glGetUniformLocation(traverse_program, "u_count"), items);
+    glProgramUniform1ui(traverse_program, glGetUniformLocation(traverse_program, "u_pairs"), pairs);
+    glProgramUniform1ui(traverse_program, glGetUniformLocation(traverse_program, "u_capacity"),
+                        static_cast<GLuint>(capacity));
+    glProgramUniform1i(traverse_program, glGetUniformLocation(traverse_program, "u_distance"),
+                       query.distance ? 1 : 0);
+    glProgramUniform1f(traverse_program, glGetUniformLocation(traverse_program, "u_slack"),
+                       FloatAtLeast(query.slack));
+    glDispatchCompute(Groups(items), 1, 1);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glGetNamedBufferSubData(buffer(internal::kCountersBinding).id, 0, sizeof(counters),
+                            counters.data());
+    if (auto ok = CheckGl("gpu method: the traversal"); !ok) return ok.error();
+    if (counters[internal::kStackOverflow] != 0) {
+      return MakeError(
+          ErrorCode::kInternal,
+          "gpu method: a traversal ran out of stack (a hierarchy deeper than checked)");
+    }
+    const size_t most =
+        std::max(counters[internal::kCrossingCount], counters[internal::kUndecidedCount]);
+    if (most <= capacity) break;
+    if (most > kMostCapacity) {
+      return MakeError(ErrorCode::kLimitExceeded,
+                       "gpu method: " + std::to_string(most) +
+                           " triangle pairs to read back, over its limit " +
+                           std::to_string(kMostCapacity) + "; 'bvh' answers this scene");
+    }
+    capacity = std::bit_ceil(most);
+  }
+  const uint32_t num_crossing = counters[internal::kCrossingCount];
+  const uint32_t num_undecided = counters[internal::kUndecidedCount];
+  std::vector<std::array<uint32_t, 4>> entries(std::max(num_crossing, num_undecided));
+  const auto read = [&](internal::ComputeBinding binding, uint32_t count) {
+    if (count > 0) {
+      glGetNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(count) * 16,
+                              entries.data());
+    }
+  };
+  read(internal::kCrossingBinding, num_crossing);
+  answer.crossing.reserve(num_crossing);
+  for (uint32_t i = 0; i < num_crossing; ++i) {
+    const auto& e = entries[i];
+    answer.crossing.push_back({SlotAt(e[0]), e[1], SlotAt(e[2]), e[3]});
+  }
+  read(internal::kUndecidedBinding, num_undecided);
+  answer.undecided.reserve(num_undecided);
+  answer.proven_apart.reserve(num_undecided);
+  for (uint32_t i = 0; i < num_undecided; ++i) {
+    const auto& e = entries[i];
+    answer.undecided.push_back({SlotAt(e[0]), e[1], SlotAt(e[2] & 0x7fffffffu), e[3]});
+    answer.proven_apart.push_back((e[2] & 0x80000000u) != 0 ? 1 : 0);
+  }
+  if (auto ok = CheckGl("gpu method: reading the pairs back"); !ok) return ok.error();
+  answer.box_pairs = counters[internal::kBoxPairs];
+  answer.float_decided = counters[internal::kFloatDecided];
+  answer.double_decided = counters[internal::kDoubleDecided];
+  return answer;
+}
+
+ComputeCollider::ComputeCollider(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+ComputeCollider::~ComputeCollider() {
+  const auto lock = LockGl();
+  for (Buffer& b : impl_->buffers) glDeleteBuffers(1, &b.id);
+  for (GLuint program : {impl_->boxes_program, impl_->refit_program, impl_->traverse_program})
+    glDeleteProgram(program);
+}
+
+int ComputeCollider::MaxDepth() { return internal::kTraversalStack - 2; }
+
+Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
+  const auto lock = LockGl();
+  auto impl = std::make_unique<Impl>();
+  auto boxes = CompileCompute(internal::TriangleBoxesSource(), "triangle boxes");
+  if (!boxes) return boxes.error();
+  impl->boxes_program = *boxes;
+  auto refit = CompileCompute(internal::RefitSource(), "refit");
+  if (!refit) return refit.error();
+  impl->refit_program = *refit;
+  auto traverse = CompileCompute(internal::TraverseSource(), "traversal");
+  if (!traverse) return traverse.error();
+  impl->traverse_program = *traverse;
+  for (Buffer& b : impl->buffers) glCreateBuffers(1, &b.id);
+  impl->buffer(internal::kCountersBinding).Reserve(internal::kNumCounters * sizeof(uint32_t));
+  if (auto ok = CheckGl("gpu method: making its buffers"); !ok) return ok.error();
+  return std::unique_ptr<ComputeCollider>(new ComputeCollider(std::move(impl)));
+}
+
+Result<ComputeAnswer> ComputeCollider::Run(const ComputeQuery& query) {
+  // The work: for each object pair, the triangles of the smaller object (the driver) descend
+  // the larger one's hierarchy.
+  std::vector<std::array<uint32_t, 4>> work;
+  std::vector<uint32_t> work_start = {0};
+  uint64_t items = 0;
+  for (const SlotPair& pair : query.object_pairs) {
+    const ComputeObject& a = query.objects[Index(pair.object_a)];
+    const ComputeObject& b = query.objects[Index(pair.object_b)];
+    if (a.nodes.empty() || b.nodes.empty()) continue;
+    const bool a_drives = a.triangles.size() <= b.triangles.size();
+    const ObjectSlot driver = a_drives ? pair.object_a : pair.object_b;
+    const ObjectSlot other = a_drives ? pair.object_b : pair.object_a;
+    work.push_back({static_cast<uint32_t>(Index(driver)), static_cast<uint32_t>(Index(other)),
+                    a_drives ? 1u : 0u, 0u});  // bases filled in below, once laid out
+    items += (a_drives ? a : b).triangles.size();
+    if (items >= std::numeric_limits<uint32_t>::max()) {
+      return MakeError(ErrorCode::kUnavailable,
+                       "gpu method: over 2^32 triangles to descend in one step; 'bvh' answers "
+                       "this scene");
+    }
+    work_start.push_back(static_cast<uint32_t>(items));
+  }
+  if (work.empty()) return ComputeAnswer{};
+
+  const auto lock = LockGl();
+  ComputeAnswer answer;
+  auto laid_out = impl_->EnsureLayout(query.objects);
+  if (!laid_out) return laid_out.error();
+  int64_t uploaded = *laid_out + impl_->UploadVertices(query.objects);
+
+  // Per pair: (driver's first triangle, partner's first triangle, partner's root, 0) and
+  // (driver's slot, partner's slot, driver is object_a, 0).
+  std::vector<std::array<uint32_t, 4>> work_data;
+  work_data.reserve(2 * work.size());
+  for (const auto& w : work) {
+    const SlotLayout& driver = impl_->layout[w[0]];
+    const SlotLayout& other = impl_->layout[w[1]];
+    work_data.push_back({driver.triangle_base, other.triangle_base, other.node_base, 0});
+    work_data.push_back(w);
+  }
+  Buffer& work_buffer = impl_->buffer(internal::kWorkBinding);
+  Buffer& start_buffer = impl_->buffer(internal::kWorkStartBinding);
+  work_buffer.Reserve(work_data.size() * 16);
+  start_buffer.Reserve(work_start.size() * sizeof(uint32_t));
+  glNamedBufferSubData(work_buffer.id, 0, static_cast<GLsizeiptr>(work_data.size() * 16),
+                       work_data.data());
+  glNamedBufferSubData(start_buffer.id, 0,
+                       static_cast<GLsizeiptr>(work_start.size() * sizeof(uint32_t)),
+                       work_start.data());
+  uploaded += static_cast<int64_t>(work_data.size() * 16 + work_start.size() * 4);
+  for (size_t binding = 0; binding < impl_->buffers.size(); ++binding) {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding),
+                     impl_->buffers[binding].id);
+  }
+  // Every triangle's box, then every node's.
+  glUseProgram(impl_->boxes_program);
+  glProgramUniform1ui(impl_->boxes_program, glGetUniformLocation(impl_->boxes_program, "u_count"),
+                      impl_->total_triangles);
+  glDispatchCompute(Groups(impl_->total_triangles), 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  glUseProgram(impl_->refit_program);
+  glProgramUniform1ui(impl_->refit_program, glGetUniformLocation(impl_->refit_program, "u_count"),
+                      impl_->total_nodes);
+  glDispatchCompute(Groups(impl_->total_nodes), 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  if (auto ok = CheckGl("gpu method: boxes and refit"); !ok) return ok.error();
+
+  auto traversed =
+      impl_->Traverse(query, static_cast<uint32_t>(work.size()), static_cast<uint32_t>(items));
+  glUseProgram(0);
+  if (!traversed) return traversed.error();
+  traversed->bytes_uploaded = uploaded;
+  return traversed;
+}
+
+}  // namespace far

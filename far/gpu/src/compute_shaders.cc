@@ -1,0 +1,321 @@
+#include "compute_shaders.h"
+
+#include <string>
+
+namespace far::internal {
+namespace {
+
+// Buffers and helpers every kernel shares. Bindings: compute_shaders.h.
+constexpr const char* kCommon = R"(#version 450
+layout(local_size_x = 64) in;
+
+layout(std430, binding = 0) readonly buffer Positions { double pos[]; };
+layout(std430, binding = 1) readonly buffer Triangles { uint tri_vertex[]; };
+layout(std430, binding = 2) buffer TriBoxes { vec4 tri_box[]; };
+layout(std430, binding = 3) readonly buffer Nodes { uvec4 node[]; };
+layout(std430, binding = 4) readonly buffer Order { uint order[]; };
+layout(std430, binding = 5) buffer NodeBoxes { vec4 node_box[]; };
+layout(std430, binding = 6) readonly buffer Work { uvec4 work[]; };
+layout(std430, binding = 7) readonly buffer WorkStart { uint work_start[]; };
+layout(std430, binding = 8) buffer Counters { uint counters[]; };
+layout(std430, binding = 9) writeonly buffer Crossing { uvec4 crossing[]; };
+layout(std430, binding = 10) writeonly buffer Undecided { uvec4 undecided[]; };
+
+uniform uint u_count;  // invocations with work: triangles, nodes or driver triangles
+
+uint Stride() { return gl_NumWorkGroups.x * 64u; }
+
+dvec3 Vertex(uint v) { return dvec3(pos[3u * v], pos[3u * v + 1u], pos[3u * v + 2u]); }
+)";
+
+constexpr const char* kTriangleBoxes = R"(
+// A float <= x: x rounded, and one float step down when the rounding went up. The comparison is
+// exact (a float is a double), so this holds whatever rounding the conversion used, as long as
+// it is within one float step. -2^-126 stands below every negative x that rounded to zero (a
+// device may flush subnormal floats to zero).
+float FloatBelow(double x) {
+  float f = float(x);
+  if (double(f) > x) {
+    if (f == 0.0) f = uintBitsToFloat(0x80800000u);
+    else if (f > 0.0) f = uintBitsToFloat(floatBitsToUint(f) - 1u);
+    else f = uintBitsToFloat(floatBitsToUint(f) + 1u);
+  }
+  return f;
+}
+float FloatAbove(double x) { return -FloatBelow(-x); }
+
+void main() {
+  for (uint t = gl_GlobalInvocationID.x; t < u_count; t += Stride()) {
+    dvec3 a = Vertex(tri_vertex[3u * t]);
+    dvec3 b = Vertex(tri_vertex[3u * t + 1u]);
+    dvec3 c = Vertex(tri_vertex[3u * t + 2u]);
+    dvec3 lo = min(min(a, b), c);
+    dvec3 hi = max(max(a, b), c);
+    tri_box[2u * t] = vec4(FloatBelow(lo.x), FloatBelow(lo.y), FloatBelow(lo.z), 0.0);
+    tri_box[2u * t + 1u] = vec4(FloatAbove(hi.x), FloatAbove(hi.y), FloatAbove(hi.z), 0.0);
+  }
+}
+)";
+
+constexpr const char* kRefit = R"(
+void main() {
+  float inf = uintBitsToFloat(0x7f800000u);
+  for (uint n = gl_GlobalInvocationID.x; n < u_count; n += Stride()) {
+    uvec4 nd = node[n];
+    vec3 lo = vec3(inf);
+    vec3 hi = vec3(-inf);
+    for (uint k = nd.z; k < nd.w; ++k) {
+      uint t = order[k];
+      lo = min(lo, tri_box[2u * t].xyz);
+      hi = max(hi, tri_box[2u * t + 1u].xyz);
+    }
+    node_box[2u * n] = vec4(lo, 0.0);
+    node_box[2u * n + 1u] = vec4(hi, 0.0);
+  }
+}
+)";
+
+// The traversal. Work entry of object pair p: work[2p] = (driver's first global triangle,
+// partner's first global triangle, partner's root node, 0), work[2p + 1] = (driver's slot,
+// partner's slot, 1 when the driver is the pair's object_a, 0). Every invocation takes one
+// triangle of a driver and descends the partner's hierarchy with it.
+//
+// The filters classify a triangle pair as the exact predicates would (far/geometry's
+// TrianglesIntersect, Guigue and Devillers' orientation tests) from orientation signs that their
+// error bounds certify; where a sign is not certified, the pair is undecided. Every sign is
+// Orient3d(a, b, c, d) = ((b - a) x (c - a)) . (d - a), evaluated as far's PlaneSide evaluates it.
+// Float: the differences in double, rounded to float (each within 2^-23 of itself, relative),
+// then float products and sums; |error| <= 2^-20 P + 2^-84 where P is the permanent computed
+// alongside, as long as every nonzero difference lies in [2^-40, 2^40] (else: not certified).
+// Double: |error| <= 8 2^-53 P + 2^-970 (Shewchuk's orient3d bound, (7 + 56 eps) eps, rounded
+// up, plus what flushing subnormal results to zero may lose). docs/culling.md has the argument.
+constexpr const char* kTraverse = R"(
+uniform uint u_pairs;
+uniform float u_slack;    // triangle boxes within this on every axis meet (0: share a point)
+uniform uint u_capacity;  // entries of each output buffer
+uniform bool u_distance;  // a distance query: every pair within the slack goes to the CPU
+
+const int kApart = 0;
+const int kCross = 1;
+const int kUndecided = 2;
+
+bool Apart(vec3 alo, vec3 ahi, vec3 blo, vec3 bhi) {
+  return any(greaterThan(blo - ahi, vec3(u_slack))) || any(greaterThan(alo - bhi, vec3(u_slack)));
+}
+
+// 0 or a magnitude in [2^-40, 2^40]: the float filter's products neither overflow nor leave
+// the normal range.
+bool FloatSafe(dvec3 v) {
+  double lo = double(uintBitsToFloat(0x2b800000u));  // 2^-40
+  double hi = double(uintBitsToFloat(0x53800000u));  // 2^40
+  dvec3 m = abs(v);
+  bvec3 ok = bvec3((m.x == 0.0LF || (m.x >= lo && m.x <= hi)),
+                   (m.y == 0.0LF || (m.y >= lo && m.y <= hi)),
+                   (m.z == 0.0LF || (m.z >= lo && m.z <= hi)));
+  return all(ok);
+}
+
+// The sign of Orient3d(a, b, c, d) where the float evaluation certifies it, else 0.
+int SideFloat(dvec3 a, dvec3 b, dvec3 c, dvec3 d) {
+  precise dvec3 de = b - a;
+  precise dvec3 df = c - a;
+  precise dvec3 dw = d - a;
+  if (!FloatSafe(de) || !FloatSafe(df) || !FloatSafe(dw)) return 0;
+  vec3 e = vec3(de);
+  vec3 f = vec3(df);
+  vec3 w = vec3(dw);
+  precise float p0 = e.y * f.z;
+  precise float p1 = e.z * f.y;
+  precise float p2 = e.z * f.x;
+  precise float p3 = e.x * f.z;
+  precise float p4 = e.x * f.y;
+  precise float p5 = e.y * f.x;
+  precise float det = w.x * (p0 - p1) + w.y * (p2 - p3) + w.z * (p4 - p5);
+  precise float perm = abs(w.x) * (abs(p0) + abs(p1)) + abs(w.y) * (abs(p2) + abs(p3)) +
+                       abs(w.z) * (abs(p4) + abs(p5));
+  precise float bound = perm * uintBitsToFloat(0x35800000u) + uintBitsToFloat(0x15800000u);
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return 0;
+}
+
+// The sign of Orient3d(a, b, c, d) where the fp64 evaluation certifies it, else 0.
+int SideDouble(dvec3 a, dvec3 b, dvec3 c, dvec3 d) {
+  precise dvec3 e = b - a;
+  precise dvec3 f = c - a;
+  precise dvec3 w = d - a;
+  precise double p0 = e.y * f.z;
+  precise double p1 = e.z * f.y;
+  precise double p2 = e.z * f.x;
+  precise double p3 = e.x * f.z;
+  precise double p4 = e.x * f.y;
+  precise double p5 = e.y * f.x;
+  precise double det = w.x * (p0 - p1) + w.y * (p2 - p3) + w.z * (p4 - p5);
+  precise double perm = abs(w.x) * (abs(p0) + abs(p1)) + abs(w.y) * (abs(p2) + abs(p3)) +
+                        abs(w.z) * (abs(p4) + abs(p5));
+  double rel = packDouble2x32(uvec2(0u, 0x3cd00000u));  // 8 * 2^-53 = 2^-50
+  double tiny = packDouble2x32(uvec2(0u, 0x03500000u));  // 2^-970
+  precise double bound = perm * rel + tiny;
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return 0;
+}
+$CLASSIFY_FLOAT
+$CLASSIFY_DOUBLE
+uint g_box_pairs = 0u;
+uint g_float_decided = 0u;
+uint g_double_decided = 0u;
+
+void Append(bool to_crossing, uvec4 entry) {
+  uint i = atomicAdd(counters[to_crossing ? 0 : 1], 1u);
+  if (i >= u_capacity) return;  // counted: the host grows the buffers and runs again
+  if (to_crossing) crossing[i] = entry;
+  else undecided[i] = entry;
+}
+
+// A triangle pair whose boxes met: classified, then appended where it belongs. Entries are
+// (slot_a, triangle_a, slot_b, triangle_b), triangles local to their objects; an undecided
+// entry of a distance query has bit 31 of slot_b set when the filters proved the two apart
+// (the CPU then computes only the distance).
+void Visit(uint driver_tri, uint other_tri, uvec4 w0, uvec4 w1) {
+  ++g_box_pairs;
+  dvec3 s[3];
+  dvec3 t[3];
+  for (int k = 0; k < 3; ++k) {
+    s[k] = Vertex(tri_vertex[3u * driver_tri + uint(k)]);
+    t[k] = Vertex(tri_vertex[3u * other_tri + uint(k)]);
+  }
+  int c = ClassifyFloat(s, t);
+  if (c != kUndecided) {
+    ++g_float_decided;
+  } else {
+    c = ClassifyDouble(s, t);
+    if (c != kUndecided) ++g_double_decided;
+  }
+  if (c == kApart && !u_distance) return;
+  uint a = driver_tri - w0.x;
+  uint b = other_tri - w0.y;
+  uvec4 entry = w1.z != 0u ? uvec4(w1.x, a, w1.y, b) : uvec4(w1.y, b, w1.x, a);
+  if (c == kApart) entry.z |= 0x80000000u;
+  Append(c == kCross, entry);
+}
+
+// Each invocation's traversal stack, in shared memory: as a private array (uint stack[64]),
+// llvmpipe (Mesa 22.3) ran the descent wrong, dropping and repeating nodes, where the same
+// data descended on the CPU found every pair (ComputeColliderTest caught it).
+shared uint g_stacks[64 * 64];
+
+void main() {
+  uint base = gl_LocalInvocationIndex * 64u;
+  for (uint item = gl_GlobalInvocationID.x; item < u_count; item += Stride()) {
+    // The object pair: the last p with work_start[p] <= item.
+    uint lo = 0u;
+    uint hi = u_pairs;
+    while (hi - lo > 1u) {
+      uint mid = (lo + hi) / 2u;
+      if (work_start[mid] <= item) lo = mid;
+      else hi = mid;
+    }
+    uvec4 w0 = work[2u * lo];
+    uvec4 w1 = work[2u * lo + 1u];
+    uint driver_tri = w0.x + (item - work_start[lo]);
+    vec3 tlo = tri_box[2u * driver_tri].xyz;
+    vec3 thi = tri_box[2u * driver_tri + 1u].xyz;
+    uint top = 1u;
+    g_stacks[base] = w0.z;
+    while (top > 0u) {
+      top -= 1u;
+      uint n = g_stacks[base + top];
+      if (Apart(tlo, thi, node_box[2u * n].xyz, node_box[2u * n + 1u].xyz)) continue;
+      uvec4 nd = node[n];
+      if (nd.y == 0u) {
+        if (top + 2u > 64u) {
+          atomicOr(counters[5], 1u);
+          break;
+        }
+        g_stacks[base + top] = nd.x + 1u;
+        g_stacks[base + top + 1u] = nd.x;
+        top += 2u;
+        continue;
+      }
+      for (uint k = nd.z; k < nd.w; ++k) {
+        uint other_tri = order[k];
+        if (Apart(tlo, thi, tri_box[2u * other_tri].xyz, tri_box[2u * other_tri + 1u].xyz))
+          continue;
+        Visit(driver_tri, other_tri, w0, w1);
+      }
+    }
+  }
+  if (g_box_pairs != 0u) {
+    atomicAdd(counters[2], g_box_pairs);
+    atomicAdd(counters[3], g_float_decided);
+    atomicAdd(counters[4], g_double_decided);
+  }
+}
+)";
+
+// Guigue and Devillers' test on certified signs, as far/geometry's IntersectAfterBoxTest runs
+// it on exact ones: kApart or kCross only where every sign it needs is certified. $SIDE is
+// SideFloat or SideDouble.
+constexpr const char* kClassify = R"(
+int $NAME(dvec3 s[3], dvec3 t[3]) {
+  // s's vertices against t's plane, and t's against s's.
+  int sig0 = $SIDE(t[0], t[1], t[2], s[0]);
+  int sig1 = $SIDE(t[0], t[1], t[2], s[1]);
+  int sig2 = $SIDE(t[0], t[1], t[2], s[2]);
+  if (sig0 != 0 && sig0 == sig1 && sig1 == sig2) return kApart;
+  int tau0 = $SIDE(s[0], s[1], s[2], t[0]);
+  int tau1 = $SIDE(s[0], s[1], s[2], t[1]);
+  int tau2 = $SIDE(s[0], s[1], s[2], t[2]);
+  if (tau0 != 0 && tau0 == tau1 && tau1 == tau2) return kApart;
+  if (sig0 * sig1 * sig2 == 0 || tau0 * tau1 * tau2 == 0) return kUndecided;
+  // General position, every sign certified and nonzero: each triangle has one vertex (the
+  // apex) on its own side of the other's plane.
+  int is = sig0 != sig1 && sig0 != sig2 ? 0 : (sig1 != sig0 && sig1 != sig2 ? 1 : 2);
+  int it = tau0 != tau1 && tau0 != tau2 ? 0 : (tau1 != tau0 && tau1 != tau2 ? 1 : 2);
+  int eps_s = is == 0 ? sig0 : (is == 1 ? sig1 : sig2);
+  int eps_t = it == 0 ? tau0 : (it == 1 ? tau1 : tau2);
+  dvec3 v = s[is];
+  dvec3 w1 = s[(is + 1) % 3];
+  dvec3 w2 = s[(is + 2) % 3];
+  dvec3 u = t[it];
+  dvec3 z1 = t[(it + 1) % 3];
+  dvec3 z2 = t[(it + 2) % 3];
+  if (eps_t < 0) { dvec3 x = w1; w1 = w2; w2 = x; }
+  if (eps_s < 0) { dvec3 x = z1; z1 = z2; z2 = x; }
+  // They meet iff Orient3d(v, w1, u, z1) <= 0 and Orient3d(v, w2, u, z2) >= 0.
+  int r1 = $SIDE(v, w1, u, z1);
+  if (r1 > 0) return kApart;
+  int r2 = $SIDE(v, w2, u, z2);
+  if (r2 < 0) return kApart;
+  if (r1 < 0 && r2 > 0) return kCross;
+  return kUndecided;
+}
+)";
+
+void ReplaceAll(std::string& text, const std::string& from, const std::string& to) {
+  for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+}
+
+std::string Classify(const std::string& name, const std::string& side) {
+  std::string text = kClassify;
+  ReplaceAll(text, "$NAME", name);
+  ReplaceAll(text, "$SIDE", side);
+  return text;
+}
+
+}  // namespace
+
+std::string TriangleBoxesSource() { return std::string(kCommon) + kTriangleBoxes; }
+
+std::string RefitSource() { return std::string(kCommon) + kRefit; }
+
+std::string TraverseSource() {
+  std::string text = std::string(kCommon) + kTraverse;
+  ReplaceAll(text, "$CLASSIFY_FLOAT", Classify("ClassifyFloat", "SideFloat"));
+  ReplaceAll(text, "$CLASSIFY_DOUBLE", Classify("ClassifyDouble", "SideDouble"));
+  return text;
+}
+
+}  // namespace far::internal

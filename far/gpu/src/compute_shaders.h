@@ -1,0 +1,52 @@
+#pragma once
+
+// The compute shaders of the GPU-resident step (ComputeCollider, compute_collider.h): triangle
+// boxes, hierarchy refit and the traversal with the float and fp64 filters. Their error bounds
+// are argued in docs/culling.md, "The gpu method's filters"; the constants here are the ones
+// proven there.
+
+#include <string>
+
+namespace far::internal {
+
+/// Shader storage bindings shared by the three kernels.
+enum ComputeBinding : int {
+  kPositionsBinding = 0,   // double[3 * vertices]: world vertices, every object one after another
+  kTrianglesBinding = 1,   // uint[3 * triangles]: global vertex indices
+  kTriBoxesBinding = 2,    // vec4[2 * triangles]: lo, hi (float, rounded outward)
+  kNodesBinding = 3,       // uvec4[nodes]: first child, leaf count, order range [lo, hi)
+  kOrderBinding = 4,       // uint[triangles]: global triangle ids in leaf order
+  kNodeBoxesBinding = 5,   // vec4[2 * nodes]: lo, hi
+  kWorkBinding = 6,        // uvec4[2 * pairs]: per object pair, see kTraverseSource
+  kWorkStartBinding = 7,   // uint[pairs + 1]: prefix sums of the driver triangles
+  kCountersBinding = 8,    // uint[kNumCounters]
+  kCrossingBinding = 9,    // uvec4[capacity]: certified intersecting pairs
+  kUndecidedBinding = 10,  // uvec4[capacity]: pairs for the CPU's exact predicates
+};
+
+/// The counters the traversal writes (kCountersBinding).
+enum ComputeCounter : int {
+  kCrossingCount = 0,   // certified intersecting pairs written (may exceed the capacity)
+  kUndecidedCount = 1,  // pairs for the CPU written (may exceed the capacity)
+  kBoxPairs = 2,        // triangle pairs whose boxes met (within the slack)
+  kFloatDecided = 3,    // of those, decided by the float filter
+  kDoubleDecided = 4,   // decided by the fp64 filter
+  kStackOverflow = 5,   // nonzero: a traversal ran out of stack (never expected: depth checked)
+  kNumCounters = 6,
+};
+
+/// Threads per work group of every kernel.
+inline constexpr int kComputeGroupSize = 64;
+/// Entries of a traversal's stack: hierarchies deeper than this minus one are refused.
+inline constexpr int kTraversalStack = 64;
+
+/// One triangle per invocation: its world box from its double corners, rounded outward to float.
+std::string TriangleBoxesSource();
+/// One node per invocation: the union of the boxes of its triangles (its order range).
+std::string RefitSource();
+/// One driver triangle of one object pair per invocation: descends the partner's hierarchy,
+/// and classifies each triangle pair whose boxes meet with the float filter, then the fp64
+/// filter, appending the certified intersecting pairs and the undecided ones.
+std::string TraverseSource();
+
+}  // namespace far::internal

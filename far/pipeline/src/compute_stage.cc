@@ -1,0 +1,82 @@
+#include "compute_stage.h"
+
+#include <utility>
+
+#include "far/pairs/triangle_bvh.h"
+
+namespace far::internal {
+
+// Every live object gets its topology once (the layout on the GPU then changes only when
+// objects come or go): TriangleBvh's, built from the vertices it has now, without its boxes.
+StopReason ComputeStage::BuildTopologies(std::span<const CachedObject* const> objects,
+                                         const StepControl& control) {
+  if (slots_.size() < objects.size()) slots_.resize(objects.size());
+  std::vector<size_t> missing;
+  for (size_t s = 0; s < objects.size(); ++s) {
+    if (objects[s] != nullptr && !slots_[s]) missing.push_back(s);
+  }
+  if (missing.empty()) return StopReason::kNone;
+  SetupScope setup(&control);  // one-off work: later steps of these objects do not repeat it
+  StepStopper stopper(&control);
+  std::vector<std::optional<SlotState>> built(missing.size());
+  pool_.ParallelFor(missing.size(), 1, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end && !stopper.Poll(); ++i) {
+      const CachedObject& object = *objects[missing[i]];
+      TriangleBvh bvh;
+      if (!bvh.Build(object.mesh.p_MV, object.mesh.triangles, &stopper)) return;
+      SlotState state;
+      state.nodes.reserve(bvh.nodes().size());
+      for (const TriangleBvh::Node& node : bvh.nodes())
+        state.nodes.push_back({node.first, node.count});
+      state.order = bvh.order();
+      built[i] = std::move(state);
+    }
+  });
+  if (stopper.stopped()) return stopper.reason();
+  for (size_t i = 0; i < missing.size(); ++i) {
+    built[i]->topology_key = next_key_++;
+    slots_[missing[i]] = std::move(built[i]);
+  }
+  return StopReason::kNone;
+}
+
+Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> objects,
+                                           std::span<const SlotPair> object_pairs, double slack,
+                                           bool distance, const StepControl& control,
+                                           StopReason* stopped) {
+  *stopped = BuildTopologies(objects, control);
+  if (*stopped != StopReason::kNone) return ComputeAnswer{};
+  if (!collider_) {
+    SetupScope setup(&control);  // compiling the kernels is one-off work
+    auto made = ComputeCollider::Create();
+    if (!made) return made.error();
+    collider_ = std::move(*made);
+  }
+  std::vector<ComputeObject> views(objects.size());
+  for (size_t s = 0; s < objects.size(); ++s) {
+    if (objects[s] == nullptr) continue;
+    const CachedObject& object = *objects[s];
+    SlotState& state = *slots_[s];
+    const Eigen::Matrix<double, 3, 4> X_WM = object.X_WM.matrix().topRows<3>();
+    if (state.world_key == 0 || state.geometry_stamp != object.geometry_stamp ||
+        state.X_WM != X_WM) {
+      state.geometry_stamp = object.geometry_stamp;
+      state.X_WM = X_WM;
+      state.world_key = next_key_++;
+    }
+    views[s] = {object.p_WV, object.mesh.triangles, state.nodes,
+                state.order, state.topology_key,    state.world_key};
+  }
+  ComputeQuery query;
+  query.objects = views;
+  query.object_pairs = object_pairs;
+  query.slack = slack;
+  query.distance = distance;
+  return collider_->Run(query);
+}
+
+void ComputeStage::RemoveSlot(ObjectSlot slot) {
+  if (Index(slot) < slots_.size()) slots_[Index(slot)].reset();
+}
+
+}  // namespace far::internal

@@ -1,0 +1,58 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "scene_cache.h"
+#include <Eigen/Geometry>
+
+#include "far/base/result.h"
+#include "far/base/step_control.h"
+#include "far/base/thread_pool.h"
+#include "far/gpu/compute_collider.h"
+#include "far/model/contact_pair.h"
+
+namespace far::internal {
+
+/// The gpu method's GPU stage on the pipeline's side: each object's hierarchy topology, built
+/// once on the CPU from its vertices when it first takes part (a deformable object's is then
+/// only refit, on the GPU), and what changed since the last step, handed to far::
+/// ComputeCollider. Owned by the GL thread (far::GlContext's contract).
+class ComputeStage {
+ public:
+  explicit ComputeStage(ThreadPool& pool) : pool_(pool) {}
+
+  /// Filters the triangle pairs of `object_pairs` on the GPU (ComputeCollider::Run): `objects`
+  /// by slot (null: free), world vertices up to date. `slack` and `distance` as ComputeQuery's.
+  /// The topologies built for new objects are setup (`control`'s on_setup_begin/end); their
+  /// builds poll `control` (stopped: returns the stop's reason in `*stopped`, no answer).
+  Result<ComputeAnswer> Filter(std::span<const CachedObject* const> objects,
+                               std::span<const SlotPair> object_pairs, double slack, bool distance,
+                               const StepControl& control, StopReason* stopped);
+
+  /// Forgets a removed object (its slot may hold another one next).
+  void RemoveSlot(ObjectSlot slot);
+
+ private:
+  struct SlotState {
+    std::vector<ComputeNode> nodes;
+    std::vector<uint32_t> order;
+    uint64_t topology_key = 0;
+    // What p_WV was computed from when last handed over, and the key given to it then.
+    uint64_t geometry_stamp = 0;
+    Eigen::Matrix<double, 3, 4> X_WM = Eigen::Matrix<double, 3, 4>::Zero();
+    uint64_t world_key = 0;
+  };
+  StopReason BuildTopologies(std::span<const CachedObject* const> objects,
+                             const StepControl& control);
+
+  ThreadPool& pool_;
+  std::vector<std::optional<SlotState>> slots_;
+  std::unique_ptr<ComputeCollider> collider_;  // made on the first step (a GL context current)
+  uint64_t next_key_ = 1;
+};
+
+}  // namespace far::internal

@@ -1,0 +1,177 @@
+// The gpu method's kernels on their own (label gpu; llvmpipe in CI): the float and fp64 filters
+// against the exact predicates on pairs of single triangles, random and at the bound (a
+// rounding away from touching, far from the origin, slivers), and the traversal against brute
+// force on meshes with hierarchies.
+#include "far/gpu/compute_collider.h"
+
+#include <cmath>
+#include <memory>
+#include <random>
+#include <set>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "far/geometry/triangle_tests.h"
+#include "far/gpu/gl_context.h"
+#include "far/pairs/triangle_bvh.h"
+
+namespace far {
+namespace {
+
+using Eigen::Vector3d;
+
+// One object per triangle: a one-leaf hierarchy.
+struct TriangleObjects {
+  std::vector<std::vector<Vector3d>> vertices;
+  std::vector<TriangleIndices> triangle = {{0, 1, 2}};
+  std::vector<ComputeNode> leaf = {{0, 1}};
+  std::vector<uint32_t> order = {0};
+  std::vector<ComputeObject> objects;
+
+  void Add(const TrianglePoints& t) { vertices.push_back({t.a, t.b, t.c}); }
+  std::span<const ComputeObject> Views(uint64_t world_key) {
+    objects.clear();
+    for (size_t i = 0; i < vertices.size(); ++i)
+      objects.push_back({vertices[i], triangle, leaf, order, i + 1, world_key});
+    return objects;
+  }
+};
+
+class ComputeColliderTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto context = GlContext::Create();
+    ASSERT_TRUE(context.ok()) << ToString(context.error());
+    context_ = std::move(*context).release();
+    auto collider = ComputeCollider::Create();
+    ASSERT_TRUE(collider.ok()) << ToString(collider.error());
+    collider_ = std::move(*collider).release();
+  }
+  static void TearDownTestSuite() {
+    delete collider_;
+    delete context_;
+  }
+
+  // Runs pairs (2i, 2i + 1) of `triangles` and checks each against TrianglesIntersect: a
+  // crossing pair must intersect, and no intersecting pair may be dropped. Returns the answer.
+  ComputeAnswer CheckPairs(TriangleObjects& triangles) {
+    std::vector<SlotPair> pairs;
+    for (size_t i = 0; i + 1 < triangles.vertices.size(); i += 2)
+      pairs.push_back({SlotAt(i), SlotAt(i + 1)});
+    ComputeQuery query;
+    query.objects = triangles.Views(++world_key_);
+    query.object_pairs = pairs;
+    auto answer = collider_->Run(query);
+    EXPECT_TRUE(answer.ok()) << ToString(answer.error());
+    if (!answer.ok()) return {};
+    std::set<size_t> crossing, undecided;
+    for (const SlotContact& c : answer->crossing) crossing.insert(Index(c.object_a) / 2);
+    for (const SlotContact& c : answer->undecided) undecided.insert(Index(c.object_a) / 2);
+    for (size_t p = 0; p < pairs.size(); ++p) {
+      const auto& s = triangles.vertices[2 * p];
+      const auto& t = triangles.vertices[2 * p + 1];
+      const bool exact = TrianglesIntersect({s[0], s[1], s[2]}, {t[0], t[1], t[2]});
+      EXPECT_FALSE(crossing.count(p) && undecided.count(p)) << "pair " << p << " twice";
+      if (exact) {
+        EXPECT_TRUE(crossing.count(p) || undecided.count(p)) << "pair " << p << " dropped";
+      } else {
+        EXPECT_FALSE(crossing.count(p)) << "pair " << p << " called crossing";
+      }
+    }
+    return std::move(*answer);
+  }
+
+  static inline GlContext* context_ = nullptr;
+  static inline ComputeCollider* collider_ = nullptr;
+  uint64_t world_key_ = 0;
+};
+
+Vector3d RandomPoint(std::mt19937_64& rng, double scale) {
+  std::uniform_real_distribution<double> u(-scale, scale);
+  return {u(rng), u(rng), u(rng)};
+}
+
+TEST_F(ComputeColliderTest, FiltersAgreeWithTheExactPredicatesOnRandomPairs) {
+  std::mt19937_64 rng(42);
+  TriangleObjects triangles;
+  for (int i = 0; i < 4000; ++i) {
+    const Vector3d center = RandomPoint(rng, 0.5);
+    triangles.Add(
+        {center + RandomPoint(rng, 1), center + RandomPoint(rng, 1), center + RandomPoint(rng, 1)});
+    triangles.Add(
+        {center + RandomPoint(rng, 1), center + RandomPoint(rng, 1), center + RandomPoint(rng, 1)});
+  }
+  const ComputeAnswer answer = CheckPairs(triangles);
+  EXPECT_GT(answer.crossing.size(), 400u) << "general position: most crossings certified";
+  EXPECT_GT(answer.float_decided, answer.box_pairs * 9 / 10);
+}
+
+// Meshes of random triangles with their hierarchies: every intersecting triangle pair of every
+// object pair is found (crossing or undecided), none twice.
+TEST_F(ComputeColliderTest, TraversalFindsEveryIntersectingPairOfMeshes) {
+  std::mt19937_64 rng(7);
+  int expected = 0;
+  for (int scene = 0; scene < 12; ++scene) {
+    const int num_objects = 2 + scene % 5;
+    std::vector<Mesh> meshes(num_objects);
+    std::vector<std::vector<ComputeNode>> nodes(num_objects);
+    std::vector<std::vector<uint32_t>> orders(num_objects);
+    std::vector<ComputeObject> objects(num_objects);
+    for (int o = 0; o < num_objects; ++o) {
+      const int n = 1 + static_cast<int>(rng() % 300);
+      const Vector3d center = RandomPoint(rng, 1.0);
+      for (int t = 0; t < n; ++t) {
+        const Vector3d c = center + RandomPoint(rng, 0.8);
+        for (int k = 0; k < 3; ++k) meshes[o].p_MV.push_back(c + RandomPoint(rng, 0.15));
+        meshes[o].triangles.push_back({static_cast<uint32_t>(3 * t),
+                                       static_cast<uint32_t>(3 * t + 1),
+                                       static_cast<uint32_t>(3 * t + 2)});
+      }
+      TriangleBvh bvh;
+      ASSERT_TRUE(bvh.Build(meshes[o].p_MV, meshes[o].triangles));
+      for (const auto& node : bvh.nodes()) nodes[o].push_back({node.first, node.count});
+      orders[o] = bvh.order();
+      objects[o] = {meshes[o].p_MV,
+                    meshes[o].triangles,
+                    nodes[o],
+                    orders[o],
+                    static_cast<uint64_t>(100 * scene + o + 1),
+                    ++world_key_};
+    }
+    std::vector<SlotPair> pairs;
+    for (int a = 0; a < num_objects; ++a) {
+      for (int b = a + 1; b < num_objects; ++b) pairs.push_back({SlotAt(a), SlotAt(b)});
+    }
+    ComputeQuery query;
+    query.objects = objects;
+    query.object_pairs = pairs;
+    auto answer = collider_->Run(query);
+    ASSERT_TRUE(answer.ok()) << ToString(answer.error());
+    std::set<SlotContact> found;
+    for (const auto* list : {&answer->crossing, &answer->undecided}) {
+      for (const SlotContact& c : *list) EXPECT_TRUE(found.insert(c).second) << "twice";
+    }
+    for (const SlotPair& pair : pairs) {
+      const Mesh& a = meshes[Index(pair.object_a)];
+      const Mesh& b = meshes[Index(pair.object_b)];
+      for (uint32_t i = 0; i < a.triangles.size(); ++i) {
+        for (uint32_t j = 0; j < b.triangles.size(); ++j) {
+          const auto& s = a.triangles[i];
+          const auto& t = b.triangles[j];
+          if (!TrianglesIntersect({a.p_MV[s[0]], a.p_MV[s[1]], a.p_MV[s[2]]},
+                                  {b.p_MV[t[0]], b.p_MV[t[1]], b.p_MV[t[2]]}))
+            continue;
+          ++expected;
+          EXPECT_TRUE(found.count({pair.object_a, i, pair.object_b, j}))
+              << "scene " << scene << ": " << Index(pair.object_a) << "/" << i << " - "
+              << Index(pair.object_b) << "/" << j << " missed";
+        }
+      }
+    }
+  }
+  EXPECT_GT(expected, 200) << "the scenes should have many intersecting pairs to find";
+}
+
+}  // namespace
+}  // namespace far
