@@ -186,9 +186,10 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   // Both lines come before the socket answers: whoever finds the daemon ready finds them logged.
   spdlog::info(
       "event=daemon_ready name={} socket={} gl_renderer=\"{}\" gl_device=\"{}\" "
-      "lcm_url={} max_sessions={}",
+      "lcm_url={} max_sessions={} cpu_cores={} threads_per_session={}",
       d.config.name, SocketPathOf(d.config), d.renderer, device, d.config.lcm_url,
-      d.config.max_sessions);
+      d.config.max_sessions, CpuCoresOf(d.config),
+      CpuPoolThreads(d.config.exact_threads, CpuCoresOf(d.config)));
   if (protocol::IsInProcessUrl(d.config.lcm_url)) {
     spdlog::warn(
         "event=lcm_in_process lcm_url={} message=\"no client can reach the session channels "

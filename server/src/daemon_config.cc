@@ -4,6 +4,7 @@
 #include <limits>
 #include <set>
 #include <sstream>
+#include <thread>
 #include <type_traits>
 #include <utility>
 
@@ -90,6 +91,7 @@ Result<void> ReadKey(const std::string& key, const nlohmann::json& value, Daemon
   if (key == "heavy_step_ms") return set(config.heavy_step_ms);
   if (key == "setup_allowance_ms") return set(config.setup_allowance_ms);
   if (key == "exact_threads") return set(config.exact_threads);
+  if (key == "cpu_cores") return set(config.cpu_cores);
   if (key == "log_level") return set(config.log_level);
   return Invalid(key, "unknown key");
 }
@@ -168,11 +170,19 @@ Result<void> ValidateDaemonConfig(const DaemonConfig& config) {
   if (!(config.setup_allowance_ms >= 0 && config.setup_allowance_ms <= 3.6e6))
     return Invalid("setup_allowance_ms", "must be in [0, 3600000]");
   if (config.exact_threads < 0) return Invalid("exact_threads", "must be >= 0");
+  if (config.cpu_cores < 0 || config.cpu_cores > kMaxCpuCores)
+    return Invalid("cpu_cores", std::to_string(config.cpu_cores) + " is outside [0, " +
+                                    std::to_string(kMaxCpuCores) + "] (0: all cores)");
   static const std::set<std::string> kLevels = {"trace", "debug", "info", "warn", "error"};
   if (!kLevels.count(config.log_level))
     return Invalid("log_level",
                    "'" + config.log_level + "' is not one of trace, debug, info, warn, error");
   return {};
+}
+
+int CpuCoresOf(const DaemonConfig& config) {
+  if (config.cpu_cores > 0) return config.cpu_cores;
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
 
 std::string SocketPathOf(const DaemonConfig& config) {

@@ -53,7 +53,10 @@ struct DaemonConfig {
   /// step heavy; refilled at a tenth of it per second (setup_allowance.h). 0: every step's
   /// whole CPU time counts.
   double setup_allowance_ms = 1000;
-  int exact_threads = 0;           ///< CPU threads per session for the exact tests (0: all cores)
+  int exact_threads = 0;  ///< CPU threads per session for the exact tests (0: all cores)
+  /// CPU cores the daemon may use in all (0: all, std::thread::hardware_concurrency()): no
+  /// session's pool has more threads, and a heavy session's loops get half of them.
+  int cpu_cores = 0;
   std::string log_level = "info";  ///< trace, debug, info, warn, error
 };
 
@@ -68,6 +71,12 @@ Result<DaemonConfig> ParseDaemonConfig(std::string_view text, std::string_view n
 
 /// Checks ranges. Errors: kInvalidArgument naming the field and value.
 Result<void> ValidateDaemonConfig(const DaemonConfig& config);
+
+/// The most cpu_cores may say.
+inline constexpr int kMaxCpuCores = 4096;
+
+/// The cores the daemon uses: cpu_cores, or the machine's (at least 1) when it is 0.
+int CpuCoresOf(const DaemonConfig& config);
 
 /// The socket path: socket_path, or the default for the name.
 std::string SocketPathOf(const DaemonConfig& config);

@@ -91,6 +91,9 @@ struct CommandLine {
     Add("--step-deadline-ms", &DaemonConfig::step_deadline_ms,
         "the longest a step may wait and run");
     Add("--threads", &DaemonConfig::exact_threads, "CPU threads for exact tests (0: all)");
+    Add("--cpu-cores", &DaemonConfig::cpu_cores,
+        "CPU cores the daemon may use in all (0: all): no session's threads exceed it (nor "
+        "--threads), and a heavy session gets half of it");
     Add("--log-level", &DaemonConfig::log_level, "trace, debug, info, warn, error");
   }
 

@@ -26,11 +26,10 @@ namespace {
 // the session spends at most about 1 / (1 + this) of its time on steps that cannot finish.
 constexpr int kRecheckDeadlines = 6;
 
-// The threads a heavy session's parallel loops may use: half the cores (at least one), so
-// that the other half is left to light sessions even before the scheduler steps in.
-int HeavySessionThreads() {
-  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / 2);
-}
+// The threads a heavy session's parallel loops may use: half the daemon's cores (cpu_cores, at
+// least one), so that the other half is left to light sessions even before the scheduler
+// steps in.
+int HeavySessionThreads(const DaemonConfig& config) { return std::max(1, CpuCoresOf(config) / 2); }
 // How often a step past heavy_step_ms reads the worker's CPU clock.
 constexpr Clock::rep kCpuLookEvery =
     std::chrono::duration_cast<Clock::duration>(std::chrono::milliseconds(1)).count();
@@ -97,6 +96,7 @@ class SessionWorker {
     options.platform = context_.config.gl_platform;
     options.gpu_device = context_.config.gpu;
     options.num_threads = context_.config.exact_threads;
+    options.cpu_cores = CpuCoresOf(context_.config);
     options.scene_limits = SceneLimitsOf(context_.config);
     options.shared_budget = &context_.budget;
     options.budget_holder = session_->id;
@@ -111,7 +111,8 @@ class SessionWorker {
     }
     if (!pipeline) return pipeline.error();
     session_->pipeline = std::move(*pipeline);
-    if (session_->demoted) session_->pipeline->SetCpuBackground(HeavySessionThreads());
+    if (session_->demoted)
+      session_->pipeline->SetCpuBackground(HeavySessionThreads(context_.config));
     return {};
   }
 
@@ -190,7 +191,8 @@ class SessionWorker {
   // its later steps start lowered. Said once.
   void Demote(double ms, const char* step_state, const StepCpuMeter& meter) {
     if (session_->demoted.exchange(true)) return;
-    if (session_->pipeline) session_->pipeline->SetCpuBackground(HeavySessionThreads());
+    if (session_->pipeline)
+      session_->pipeline->SetCpuBackground(HeavySessionThreads(context_.config));
     LogForClient(spdlog::level::info, session_->uid, "session_demoted",
                  "event=session_demoted session={} step_ms={:.1f} step={} nice={} cpu_ms={:.1f} "
                  "setup_ms={:.1f} setup_covered_ms={:.1f}",

@@ -50,6 +50,7 @@ constexpr const char* kKeys[] = {
     "heavy_step_ms",
     "setup_allowance_ms",
     "exact_threads",
+    "cpu_cores",
     "log_level",
     "no_such_key",
 };

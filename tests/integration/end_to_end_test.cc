@@ -216,6 +216,38 @@ TEST_F(EndToEndTest, LoadRunsEveryClientForItsStepsAndTime) {
     EXPECT_GT(client["steps"].get<int>(), 0) << client.dump();
 }
 
+// --client-cpu-ms: each client burns that much of its own thread's CPU before each step, so
+// its run lasts at least steps x ms of wall time (CPU time never outruns it), and the report
+// says how much was burned.
+TEST_F(EndToEndTest, LoadBurnsTheClientCpuItIsToldBeforeEachStep) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  constexpr int kSteps = 5;
+  constexpr double kBurnMs = 20;
+  const ProcessResult load =
+      RunFarClient({"load", "--clients", "2", "--steps", std::to_string(kSteps), "--method", "aabb",
+                    "--client-cpu-ms", "20", "--json"});
+  ASSERT_EQ(load.exit_code, 0) << load.out << load.err;
+  const auto report = nlohmann::json::parse(load.out);
+  const auto& overall = report["overall"];
+  EXPECT_GE(overall["seconds"].get<double>(), kSteps * kBurnMs / 1000) << overall.dump();
+  EXPECT_DOUBLE_EQ(overall["client_cpu_ms_per_step"].get<double>(), kBurnMs);
+  EXPECT_GE(overall["client_cpu_ms_total"].get<double>(), 2 * kSteps * kBurnMs) << overall.dump();
+  ASSERT_EQ(report["per_client"].size(), 2u);
+  for (const auto& client : report["per_client"]) {
+    EXPECT_EQ(client["steps"].get<int>(), kSteps) << client.dump();
+    EXPECT_GE(client["client_cpu_ms_total"].get<double>(), kSteps * kBurnMs) << client.dump();
+  }
+  // The text report says it too; without the flag nothing is burned.
+  const ProcessResult text = RunFarClient(
+      {"load", "--clients", "1", "--steps", "2", "--method", "aabb", "--client-cpu-ms", "20"});
+  ASSERT_EQ(text.exit_code, 0) << text.out << text.err;
+  EXPECT_NE(text.out.find("client CPU burned: 20.0 ms per step"), std::string::npos) << text.out;
+  const ProcessResult none =
+      RunFarClient({"load", "--clients", "1", "--steps", "2", "--method", "aabb", "--json"});
+  ASSERT_EQ(none.exit_code, 0) << none.out << none.err;
+  EXPECT_EQ(nlohmann::json::parse(none.out)["overall"]["client_cpu_ms_total"].get<double>(), 0);
+}
+
 // Sixteen sessions culling on the GL path at once, each on its own thread and context: on
 // llvmpipe (Mesa 22.3.6) this killed far-daemon with SIGSEGV inside swrast_dri.so in 4 of 6
 // six-second runs, because the contexts share one rasterizer; far::LockGl makes their GL stages

@@ -1,9 +1,11 @@
 #include "daemon_config.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include <gtest/gtest.h>
@@ -77,6 +79,28 @@ TEST(DaemonConfigTest, ReadsTheSharedBudgetsAndTheIdleTimeout) {
     EXPECT_EQ(refused.error().code, ErrorCode::kInvalidArgument);
   }
   EXPECT_TRUE(ParseDaemonConfig(R"({"session_idle_timeout_s": 0})", "inline.json").ok());
+}
+
+TEST(DaemonConfigTest, ReadsCpuCoresWithinItsRange) {
+  auto config = ParseDaemonConfig(R"({"cpu_cores": 3, "exact_threads": 8})", "inline.json");
+  ASSERT_TRUE(config.ok()) << ToString(config.error());
+  EXPECT_EQ(config->cpu_cores, 3);
+  EXPECT_EQ(CpuCoresOf(*config), 3);
+  EXPECT_EQ(config->exact_threads, 8);
+  // 0, the default: every core of the machine.
+  const DaemonConfig defaults;
+  EXPECT_EQ(defaults.cpu_cores, 0);
+  EXPECT_EQ(CpuCoresOf(defaults),
+            std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
+  EXPECT_TRUE(ParseDaemonConfig(R"({"cpu_cores": 4096})", "inline.json").ok());
+  for (const char* bad : {R"({"cpu_cores": -1})", R"({"cpu_cores": 4097})", R"({"cpu_cores": 1.5})",
+                          R"({"cpu_cores": "2"})"}) {
+    auto refused = ParseDaemonConfig(bad, "inline.json");
+    ASSERT_FALSE(refused.ok()) << bad;
+    EXPECT_EQ(refused.error().code, ErrorCode::kInvalidArgument) << bad;
+    EXPECT_NE(refused.error().message.find("cpu_cores"), std::string::npos)
+        << refused.error().message;
+  }
 }
 
 TEST(DaemonConfigTest, ParsesTextInMemoryWithTheGivenName) {

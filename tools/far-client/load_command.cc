@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <map>
 #include <thread>
 
 #include "cli_common.h"
 #include "commands.h"
+#include "cpu_burn.h"
 #include "step_flags.h"
 #include <nlohmann/json.hpp>
 
@@ -27,12 +29,14 @@ struct LoadStats {
   std::map<std::string, int> steps_by_method;  // the configuration that answered (auto varies)
   int errors = 0;
   std::string first_error;
+  double cpu_burned_ms = 0;  // --client-cpu-ms, all steps together
 };
 
 // The load command's own flags.
 struct LoadFlags {
   int clients = 4, steps = 100;  // steps 0: no limit (with --seconds)
   double seconds = 0;
+  double client_cpu_ms = 0;  // CPU time each client burns before each step
   std::string scene;
   bool as_json = false;
   StepFlags step;
@@ -87,6 +91,8 @@ void RunOneClient(LoadRun& run, int i, LoadStats& mine) {
   auto backoff = std::chrono::milliseconds(0);
   for (int s = 0; (steps <= 0 || s < steps) && Clock::now() < deadline; ++s) {
     if (backoff.count() > 0) std::this_thread::sleep_for(backoff);
+    // The simulator's own work (--client-cpu-ms), on cores the daemon may share.
+    mine.cpu_burned_ms += BurnThreadCpuMs(run.flags.client_cpu_ms);
     // Rigid objects drift a little every step, as a simulation would move them.
     bool posed = true;
     for (auto& o : objects) {
@@ -125,13 +131,15 @@ struct LoadReport {
   double fairness = 0;
 };
 
-LoadReport Summarize(const std::vector<LoadStats>& stats, double elapsed) {
+LoadReport Summarize(const std::vector<LoadStats>& stats, double elapsed, double client_cpu_ms) {
   LoadReport report;
+  double cpu_burned_ms = 0;
   size_t min_steps = SIZE_MAX, max_steps = 0;
   for (size_t i = 0; i < stats.size(); ++i) {
     const LoadStats& s = stats[i];
     report.all.insert(report.all.end(), s.latency_ms.begin(), s.latency_ms.end());
     report.errors += s.errors;
+    cpu_burned_ms += s.cpu_burned_ms;
     for (const auto& [method, steps] : s.steps_by_method) report.steps_by_method[method] += steps;
     min_steps = std::min(min_steps, s.latency_ms.size());
     max_steps = std::max(max_steps, s.latency_ms.size());
@@ -142,7 +150,8 @@ LoadReport Summarize(const std::vector<LoadStats>& stats, double elapsed) {
                                  {"p90_ms", Quantile(s.latency_ms, 0.9)},
                                  {"p99_ms", Quantile(s.latency_ms, 0.99)},
                                  {"errors", s.errors},
-                                 {"first_error", s.first_error}});
+                                 {"first_error", s.first_error},
+                                 {"client_cpu_ms_total", s.cpu_burned_ms}});
   }
   const std::vector<double>& all = report.all;
   report.fairness =
@@ -157,7 +166,9 @@ LoadReport Summarize(const std::vector<LoadStats>& stats, double elapsed) {
                     {"max_ms", Quantile(all, 1.0)},
                     {"errors", report.errors},
                     {"fairness_max_over_min_steps", report.fairness},
-                    {"steps_by_method", report.steps_by_method}};
+                    {"steps_by_method", report.steps_by_method},
+                    {"client_cpu_ms_per_step", client_cpu_ms},
+                    {"client_cpu_ms_total", cpu_burned_ms}};
   return report;
 }
 
@@ -184,6 +195,11 @@ void PrintTable(const LoadReport& report, double elapsed) {
     methods += (methods.empty() ? "" : ", ") + method + " " + std::to_string(steps);
   }
   std::printf("steps by method: %s\n", methods.empty() ? "none answered" : methods.c_str());
+  if (const double per_step = report.overall["client_cpu_ms_per_step"].get<double>();
+      per_step > 0) {
+    std::printf("client CPU burned: %.1f ms per step before its request, %.1f ms in all\n",
+                per_step, report.overall["client_cpu_ms_total"].get<double>());
+  }
 }
 
 int RunLoad(const client::ClientOptions& base, const LoadFlags& flags, const StepRequest& request) {
@@ -205,7 +221,7 @@ int RunLoad(const client::ClientOptions& base, const LoadFlags& flags, const Ste
   for (auto& t : threads) t.join();
   const double elapsed = std::chrono::duration<double>(Clock::now() - run.start).count();
 
-  const LoadReport report = Summarize(stats, elapsed);
+  const LoadReport report = Summarize(stats, elapsed, flags.client_cpu_ms);
   if (flags.as_json) {
     std::cout << json{{"overall", report.overall}, {"per_client", report.per_client}}.dump(2)
               << "\n";
@@ -239,6 +255,17 @@ Command AddLoadCommand(CLI::App& app, const GlobalFlags& global) {
           ->check(CLI::PositiveNumber);
   load->add_option("--scene", flags->scene,
                    "scene each client uploads (default: a random soup per client)");
+  load->add_option("--client-cpu-ms", flags->client_cpu_ms,
+                   "CPU ms each client burns on its own thread before each step, as a "
+                   "simulator's physics step would (0..10000; default 0: none)")
+      ->check([](const std::string& text) -> std::string {
+        // CLI::Range lets NaN through: every comparison with it is false.
+        char* end = nullptr;
+        const double ms = std::strtod(text.c_str(), &end);
+        if (!text.empty() && *end == '\0' && std::isfinite(ms) && ms >= 0 && ms <= kMaxClientCpuMs)
+          return "";
+        return "'" + text + "' is not a number of milliseconds in [0, 10000]";
+      });
   load->add_flag("--json", flags->as_json, "print JSON");
   flags->step.Add(load);
   flags->step.AddTimeout(load);

@@ -1,8 +1,10 @@
 #include "far/pipeline/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "gpu_probe.h"
 #include "step_runner.h"
@@ -24,7 +26,7 @@ struct Pipeline::Impl {
 
   explicit Impl(const PipelineOptions& o)
       : options(o),
-        pool(o.num_threads),
+        pool(CpuPoolThreads(o.num_threads, o.cpu_cores)),
         model(o.scene_limits, o.shared_budget, o.budget_holder),
         world(pool, o.use_gl, o.gl_batch_ms) {}
 
@@ -83,6 +85,12 @@ Result<StepResult> Pipeline::Impl::Step(const StepRequest& request, const StepCo
                                                   "context");
   }
   return internal::RunStep(world, request, control);
+}
+
+int CpuPoolThreads(int num_threads, int cpu_cores) {
+  if (num_threads > 0 && cpu_cores > 0) return std::min(num_threads, cpu_cores);
+  if (num_threads > 0 || cpu_cores > 0) return std::max(num_threads, cpu_cores);
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
 
 Pipeline::Pipeline(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -145,6 +153,7 @@ Result<StepResult> Pipeline::Step(const StepRequest& request, const StepControl&
 int Pipeline::num_objects() const { return impl_->world.cache.size(); }
 int64_t Pipeline::num_triangles() const { return impl_->model.num_triangles(); }
 void Pipeline::SetCpuBackground(int max_threads) { impl_->pool.SetBackground(max_threads); }
+int Pipeline::cpu_threads() const { return impl_->pool.num_threads(); }
 const SceneCounters& Pipeline::counters() const { return impl_->world.cache.counters(); }
 std::string Pipeline::gl_renderer() const { return impl_->renderer_name; }
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # What far-client says to a command line it cannot run: an unknown command is named and the
 # commands listed; snapshot says where it went (far-snapshot); a duration without a unit is
-# refused, not read as seconds; --help lists the commands there are. Exit status 2, one line.
+# refused, not read as seconds; load's --client-cpu-ms out of range is refused; --help lists the
+# commands there are. Exit status 2, one line.
 #   usage_errors_test.sh FAR_CLIENT
 set -u
 client=${1:?usage: $0 FAR_CLIENT}
@@ -53,6 +54,11 @@ expect 2 "replay --timeout without a unit" "--timeout: '2' has no unit" -- \
 expect 2 "an option's bad value" "--resolution" -- \
   "$client" collide "$tmp/scene.json" --resolution lots
 expect 2 "--clients 0" "--clients" -- "$client" load --clients 0
+# --client-cpu-ms: finite milliseconds in [0, 10000] (CLI11's Range alone let NaN through).
+for bad in nan inf -1 10001 lots; do
+  expect 2 "--client-cpu-ms $bad" "--client-cpu-ms: '$bad' is not a number of milliseconds" -- \
+    "$client" --socket "$tmp/none.sock" load --client-cpu-ms "$bad"
+done
 
 # --help: every command, and no snapshot among them (it is far-snapshot's now; the footer
 # names far-snapshot).

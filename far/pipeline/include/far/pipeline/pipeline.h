@@ -27,7 +27,10 @@ struct PipelineOptions {
   GlPlatform platform = GlPlatform::kAuto;
   int gpu_device = -1;  ///< EGL device index to use (GlContext::Create); -1: by `platform`
   int num_threads = 0;  ///< CPU pool for exact tests (0: hardware concurrency)
-  bool use_gl = true;   ///< false: only the CPU methods (aabb, fcl, exact) are available
+  /// The cores this pipeline may use (0: all); auto's costs are measured under it. The pool
+  /// has CpuPoolThreads(num_threads, cpu_cores) threads.
+  int cpu_cores = 0;
+  bool use_gl = true;  ///< false: only the CPU methods (aabb, fcl, exact) are available
   /// Use the GL context already current on this thread (owned by the caller, who keeps it
   /// current and alive while the pipeline lives) instead of making one: how a daemon serves
   /// many scenes from one context.
@@ -44,6 +47,11 @@ struct PipelineOptions {
   /// other pipelines' views wait about a batch. <= 0: one piece per batch (tests).
   double gl_batch_ms = 8;
 };
+
+/// The threads of a pipeline's CPU pool: the smaller of `num_threads` and `cpu_cores` where
+/// each is > 0; the machine's cores (std::thread::hardware_concurrency(), at least 1) where
+/// neither is.
+int CpuPoolThreads(int num_threads, int cpu_cores);
 
 /// The FAR step pipeline: one scene, its GPU resources and a CPU pool. One call runs one step.
 ///
@@ -86,6 +94,8 @@ class Pipeline {
   /// Makes the pipeline's CPU pool background work on at most `max_threads` threads (see
   /// ThreadPool::SetBackground; one way).
   void SetCpuBackground(int max_threads);
+  /// The threads of the CPU pool's parallel loops (the calling thread included).
+  int cpu_threads() const;
 
   int num_objects() const;
   int64_t num_triangles() const;
