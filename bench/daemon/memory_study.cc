@@ -38,10 +38,7 @@ struct Settings {
   std::string daemon = FAR_DAEMON_PATH;
 };
 
-bool UsesGl(far::Method method) {
-  return method == far::Method::kFar || method == far::Method::kFarExactOffset ||
-         method == far::Method::kCullide;
-}
+bool UsesGl(far::Method method) { return far::NeedsGl(method); }
 
 [[noreturn]] void Die(const std::string& what, const Error& error) {
   std::fprintf(stderr, "far_memory_study: %s: %s\n", what.c_str(), far::ToString(error).c_str());

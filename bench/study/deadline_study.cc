@@ -172,7 +172,7 @@ int main(int argc, char** argv) {
     }
     far::PipelineOptions options;
     options.num_threads = threads;
-    options.use_gl = far::IsGpuMethod(config->request.method);
+    options.use_gl = far::NeedsGl(config->request.method);
     auto pipeline = far::Pipeline::Create(options);
     if (!pipeline) {
       std::fprintf(stderr, "far-deadline-study: %s\n", pipeline.error().message.c_str());

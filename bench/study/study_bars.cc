@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <functional>
+#include <optional>
 #include <sstream>
+#include <utility>
 
 namespace far_study {
 namespace {
@@ -294,6 +296,88 @@ void GlPathBar(const std::vector<SceneReport>& reports, const RunInfo& info, Out
               << (evaluated ? (bar_met ? " met" : " NOT met") : " not evaluated") << "\n";
 }
 
+// The gpu method against bvh (issue 42): exact on every scene, fast on paper-leaves, and where
+// the scaling family crosses over.
+void GpuStepBar(const std::vector<SceneReport>& reports, const RunInfo& info, Out& out) {
+  std::ostringstream md;
+  md << Heading("GPU step (gpu) against bvh", info)
+     << "Per scene, median time per step of `gpu` (compute shaders: boxes, refit, traversal, "
+        "float and fp64 filters on the GPU; the undecided pairs on the CPU) and `bvh`, in the "
+        "same interleaved run, and gpu's missed / spurious contacts and distance pairs against "
+        "`exact`. Bars: gpu exact everywhere; on paper-leaves gpu <= 0.5 ms and bvh / gpu >= 3x; "
+        "on the scaling family gpu at least as fast as bvh from 150K triangles and bvh / gpu >= "
+        "5x at 1M, with the crossover named.\n\n"
+     << "| scene | triangles | bvh ms | gpu ms (p25-p75) | bvh / gpu | gpu missed / spurious | "
+        "gpu distance: ms, missed / spurious | where gpu's time goes (median ms) |\n"
+     << "|---|--:|--:|--:|--:|--:|---|---|\n";
+  bool exact = true, any_checked = false;
+  std::string wrong, leaves_text = "paper-leaves not run with gpu and bvh";
+  std::optional<bool> leaves_met;
+  std::vector<std::pair<int64_t, double>> scaling;  // triangles -> bvh / gpu
+  for (const SceneReport& report : reports) {
+    const Row* gpu = Find(report, "gpu");
+    const Row* bvh = Find(report, "bvh");
+    const Row* gpu_d = Find(report, "gpu", far::Output::kDistancePairs);
+    if (gpu == nullptr || gpu->samples == 0) continue;
+    for (const Row* row : {gpu, gpu_d}) {
+      if (row == nullptr || !row->checked) continue;
+      any_checked = true;
+      if (row->missed + row->false_positives + row->distance_missed + row->distance_spurious > 0) {
+        exact = false;
+        wrong += (wrong.empty() ? "" : ", ") + report.name;
+      }
+    }
+    const double ratio = bvh ? bvh->ms_median / gpu->ms_median : 0;
+    md << "| " << report.name << " | " << report.triangles << " | "
+       << (bvh ? Ms(bvh->ms_median) : "-") << " | " << Ms(gpu->ms_median) << " (" << Ms(gpu->ms_p25)
+       << "-" << Ms(gpu->ms_p75) << ") | " << (bvh ? Ratio(ratio) : "-") << " | " << Misses(*gpu)
+       << " | " << (gpu_d ? Ms(gpu_d->ms_median) + " ms, " + DistanceMisses(*gpu_d) : "not run")
+       << " | " << StageText(*gpu) << " |\n";
+    if (bvh == nullptr) continue;
+    if (report.family == Family::kScaling) scaling.emplace_back(report.triangles, ratio);
+    if (report.name == "paper-leaves") {
+      leaves_met = gpu->ms_median <= 0.5 && ratio >= 3;
+      leaves_text = "paper-leaves: gpu " + Ms(gpu->ms_median) + " ms, bvh " + Ms(bvh->ms_median) +
+                    " ms, bvh / gpu **" + Ratio(ratio) + "**";
+    }
+  }
+  std::sort(scaling.begin(), scaling.end());
+  // The crossover: the smallest scaling size from which gpu is at least as fast at every size.
+  std::optional<int64_t> crossover;
+  for (size_t i = scaling.size(); i-- > 0 && scaling[i].second >= 1;) crossover = scaling[i].first;
+  std::string scaling_text = "scaling family not run with gpu and bvh";
+  std::optional<bool> scaling_met;
+  if (!scaling.empty()) {
+    scaling_text = "crossover: " + (crossover ? std::to_string(*crossover) + " triangles"
+                                              : std::string("none (bvh faster at every size)"));
+    bool from_150k = true, at_1m = false, has_1m = false;
+    for (const auto& [triangles, ratio] : scaling) {
+      scaling_text += "; " + std::to_string(triangles) + ": " + Ratio(ratio);
+      if (triangles >= 150000 && ratio < 1) from_150k = false;
+      if (triangles >= 900000) {
+        has_1m = true;
+        at_1m = ratio >= 5;
+      }
+    }
+    if (has_1m) scaling_met = from_150k && at_1m;
+  }
+  out.sections << md.str() << "\n";
+  const auto verdict = [](std::optional<bool> met) {
+    return met ? Verdict(*met) : std::string("not evaluated");
+  };
+  out.table << "| gpu exact: 0 missed / 0 spurious contacts and distance pairs on every checked "
+               "scene | "
+            << (any_checked ? (exact ? "0 / 0" : "wrong on " + wrong) : "nothing checked")
+            << " | 0 / 0 | " << (any_checked ? Verdict(exact) : "not evaluated") << " |\n"
+            << "| gpu on paper-leaves: <= 0.5 ms per step and >= 3x faster than bvh | "
+            << leaves_text << " | <= 0.5 ms, >= 3x | " << verdict(leaves_met) << " |\n"
+            << "| gpu on the scaling family: >= bvh from 150K triangles, >= 5x at 1M | "
+            << scaling_text << " | >= 1x from 150K, >= 5x at 1M | " << verdict(scaling_met)
+            << " |\n";
+  out.summary << "gpu exact: " << (any_checked ? (exact ? "0 / 0" : "WRONG on " + wrong) : "-")
+              << "; " << leaves_text << "; " << scaling_text << "\n";
+}
+
 // ---------------------------------------------------------------------------------------------
 // The paper's bars, on the small scenes
 
@@ -459,6 +543,7 @@ Bars EvaluateBars(const std::vector<SceneReport>& reports, const RunOptions& opt
   AutoBar(reports, info, out);
   CpuPathBar(reports, info, out);
   GlPathBar(reports, info, out);
+  GpuStepBar(reports, info, out);
   std::vector<const SceneReport*> small;
   for (const SceneReport& report : reports) {
     if (report.family == Family::kSmall) small.push_back(&report);

@@ -395,13 +395,15 @@ int RunOptions::PrimaryResolution() const {
 std::vector<ConfigSpec> ConfigsFor(const StudyScene& scene, const RunOptions& options,
                                    bool* has_reference) {
   using far::Method;
-  std::vector<ConfigSpec> all = {Cpu(Method::kAabb), Cpu(Method::kBvh), Cpu(Method::kAuto)};
+  // gpu has no mechanism or resolution: one configuration per scene, like the CPU methods.
+  std::vector<ConfigSpec> all = {Cpu(Method::kAabb), Cpu(Method::kBvh), Cpu(Method::kGpu),
+                                 Cpu(Method::kAuto)};
   const std::vector<ConfigSpec> gpu = GpuConfigs(scene, options);
   all.insert(all.end(), gpu.begin(), gpu.end());
   all.push_back(Cpu(Method::kFcl));
   const bool distance = RunsDistance(scene, options);
   if (distance) {
-    for (Method method : {Method::kAabb, Method::kBvh})
+    for (Method method : {Method::kAabb, Method::kBvh, Method::kGpu})
       all.push_back(Cpu(method, far::Output::kDistancePairs));
     // FAR's distance pass: the first plain FAR configuration of the scene.
     for (const ConfigSpec& spec : gpu) {

@@ -18,7 +18,7 @@ out=tests/fuzz/corpus
 data=tests/data/scenes/example
 
 cmake --build "$build" --target far_fuzz_make_seeds >/dev/null
-mkdir -p "$out"/{obj_reader,ply_reader,stl_reader,scene_reader,daemon_config,bvh_reference,cpu_methods,gl_methods}
+mkdir -p "$out"/{obj_reader,ply_reader,stl_reader,scene_reader,daemon_config,bvh_reference,cpu_methods,gl_methods,gpu_method}
 "$build"/tests/fuzz/far_fuzz_make_seeds "$out"
 
 cp "$data"/*.obj "$out"/obj_reader/
@@ -100,6 +100,21 @@ hex_seed gl_methods far_tilted_points_beside_unused_vertices \
   "00 00 00  01 01 00 00  00 03 06 f1090200 000000 000000 000000 000000 000010 000000 1000cd \
                           000102 020000 040101 000000 000000 020000 000000 \
                           00 00 00 00000000 000000 000000 000000 000000 000102"
+
+# Seeds of gpu_method: a shift byte (layout at the top of gpu_method_fuzzer.cc), then a
+# cpu_methods scene.
+hex_seed gpu_method static_and_rigid_crossing \
+  "00  06 00 00 00  00 00 00 00000000 000000 000000 100000 001000 000102 \
+                    01 00 00 00000000 000000 0404f8 040408 080408 000102 \
+                    00 01 0a03fc07 010203  03 00  00 02"
+hex_seed gpu_method distance_near_2^-256 \
+  "00  03 be 10 00  02 00 00 00000000 000000 000000 100000 001000 000102 \
+                    01 00 00 05fe0901 000001 000000 100000 001000 000102 \
+                    02 000001 100001 001001  01 00000000 000002"
+hex_seed gpu_method shifted_1e7_static_and_rigid_crossing \
+  "07  06 00 00 00  00 00 00 00000000 000000 000000 100000 001000 000102 \
+                    01 00 00 00000000 000000 0404f8 040408 080408 000102 \
+                    00 01 0a03fc07 010203  03 00  00 02"
 
 for dir in tests/fuzz/regressions/*/; do
   target=$(basename "$dir")

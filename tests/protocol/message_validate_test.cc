@@ -67,7 +67,7 @@ TEST(ValidateStepRequestTest, ChecksNames) {
   auto m = SampleStepRequest();
   m.method = "FAR";
   ExpectInvalid(m,
-                "step_request_t.method: 'FAR' is not one of auto, aabb, bvh, cullide, far, "
+                "step_request_t.method: 'FAR' is not one of auto, aabb, bvh, gpu, cullide, far, "
                 "far-exact-offset, fcl, exact");
   // No method named: the default, auto.
   m = SampleStepRequest();

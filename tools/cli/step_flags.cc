@@ -16,9 +16,11 @@ void StepFlags::AddTimeout(CLI::App* command) {
 
 void StepFlags::Add(CLI::App* command) {
   command
-      ->add_option("--method", method,
-                   "auto (the fastest reliable method for the daemon's renderer and the scene), "
-                   "bvh, aabb, far, far-exact-offset, cullide (not reliable), fcl or exact")
+      ->add_option(
+          "--method", method,
+          "auto (the fastest reliable method for the daemon's renderer and the scene), "
+          "bvh, aabb, gpu (compute shaders), far, far-exact-offset, cullide (not reliable), fcl or "
+          "exact")
       ->capture_default_str();
   command->add_option("--mechanism", mechanism, "GPU methods: id-buffer or occlusion-query")
       ->capture_default_str();

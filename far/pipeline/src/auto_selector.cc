@@ -13,11 +13,12 @@ std::string Ms(double ms) {
   return text;
 }
 
-// The candidates, in the order they are tried: the CPU hierarchy first, then the GPU
-// configurations from the one expected fastest.
+// The candidates, in the order they are tried: the CPU hierarchy first, the GPU step in compute
+// shaders, then the raster configurations from the one expected fastest.
 std::vector<Candidate> AllCandidates(bool has_gpu) {
   std::vector<Candidate> candidates = {{Method::kBvh, QueryMechanism::kIdBuffer, 0}};
   if (!has_gpu) return candidates;
+  candidates.push_back({Method::kGpu, QueryMechanism::kIdBuffer, 0});
   for (int resolution : {256, 1024}) {
     for (QueryMechanism mechanism : {QueryMechanism::kIdBuffer, QueryMechanism::kOcclusionQuery})
       candidates.push_back({Method::kFar, mechanism, resolution});
@@ -56,8 +57,9 @@ std::string Candidate::Name() const {
   return name;
 }
 
-AutoSelector::AutoSelector(bool has_gpu, std::function<std::optional<GpuCost>()> gpu_cost)
-    : has_gpu_(has_gpu), probe_gpu_(std::move(gpu_cost)) {}
+AutoSelector::AutoSelector(bool has_gpu, std::function<std::optional<GpuCost>()> gpu_cost,
+                           int cpu_threads)
+    : has_gpu_(has_gpu), cpu_threads_(cpu_threads), probe_gpu_(std::move(gpu_cost)) {}
 
 void AutoSelector::Calibrate(const SceneSize& scene) {
   if (entries_.empty()) {
@@ -77,6 +79,10 @@ void AutoSelector::Calibrate(const SceneSize& scene) {
   for (Entry& entry : entries_) {
     if (entry.candidate.gpu() && gpu_cost_)
       entry.predicted_ms = gpu_cost_->Predict(scene.triangles);
+    if (entry.candidate.method == Method::kGpu) {
+      if (gpu_cost_) entry.predicted_ms = gpu_cost_->PredictCompute(scene.triangles);
+      if (!entry.predicted_ms) entry.excluded = true;  // its probe did not run: no compute
+    }
   }
   calibrated_for_ = scene;
   calibrated_ = true;
@@ -100,7 +106,8 @@ bool AutoSelector::NeedsRecheck(const SceneSize& scene) const {
 const AutoSelector::Entry* AutoSelector::Fastest() const {
   const Entry* best = nullptr;
   for (const Entry& entry : entries_) {
-    if (entry.measured_ms && (best == nullptr || *entry.measured_ms < *best->measured_ms))
+    if (entry.measured_ms && !entry.excluded &&
+        (best == nullptr || *entry.measured_ms < *best->measured_ms))
       best = &entry;
   }
   return best;
@@ -113,7 +120,7 @@ Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
   std::vector<const Entry*> skipped;
   // The next untried candidate that may be fastest.
   for (Entry& entry : entries_) {
-    if (entry.measured_ms) continue;
+    if (entry.measured_ms || entry.excluded) continue;
     const bool hopeless = best != nullptr && entry.predicted_ms &&
                           *entry.predicted_ms > kTryFactor * *best->measured_ms;
     if (hopeless) {
@@ -135,13 +142,22 @@ Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
   trying_ = false;
   if (chosen_calibration_ms_ == 0) chosen_calibration_ms_ = *best->measured_ms;
   *reason = "auto: " + best->candidate.Name() + " is the fastest measured (" +
-            Ms(*best->measured_ms) + ")";
+            Ms(*best->measured_ms) +
+            (cpu_threads_ > 0 ? ", CPU stages on " + std::to_string(cpu_threads_) + " threads"
+                              : std::string()) +
+            ")";
   for (const Entry& entry : entries_) {
     if (&entry != best && entry.measured_ms)
       *reason += "; " + entry.candidate.Name() + " measured " + Ms(*entry.measured_ms);
   }
   *reason += NotTried(skipped);
   return best->candidate;
+}
+
+void AutoSelector::Exclude(const Candidate& candidate) {
+  for (Entry& entry : entries_) {
+    if (entry.candidate == candidate) entry.excluded = true;
+  }
 }
 
 void AutoSelector::Record(const Candidate& candidate, double ms) {

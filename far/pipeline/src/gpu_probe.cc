@@ -43,10 +43,11 @@ Mesh Ball(double radius, int n) {
   return mesh;
 }
 
-// The time of a FAR step (the second: the first builds shaders and pieces) over 27 overlapping
-// balls of ball_n bands; `triangles` gets their count. The step runs on a world of its own, in
-// the context current on this thread, with the pipeline's own stages (step_runner.h).
-std::optional<double> Measure(int ball_n, int* triangles) {
+// The time of a step of `method` (the second: the first builds shaders, pieces and
+// hierarchies) over 27 overlapping balls of ball_n bands; `triangles` gets their count. The
+// step runs on a world of its own, in the context current on this thread, with the pipeline's
+// own stages (step_runner.h).
+std::optional<double> Measure(Method method, int ball_n, int* triangles) {
   ThreadPool pool(1);
   StepWorld world(pool, /*with_gpu=*/true);
   // 27 balls on a grid, each overlapping its neighbours.
@@ -63,7 +64,7 @@ std::optional<double> Measure(int ball_n, int* triangles) {
     }
   }
   StepRequest request;
-  request.method = Method::kFar;
+  request.method = method;
   request.mechanism = QueryMechanism::kIdBuffer;
   request.resolution = 256;
   if (!RunStep(world, request, {})) return std::nullopt;  // shaders, buffers, pieces
@@ -88,12 +89,21 @@ std::optional<GpuCost> ProbeGpuCost() {
   }
   // Two sizes give the fixed part (clears, reads back, draw calls) and the part per triangle.
   int small_triangles = 0, large_triangles = 0;
-  const std::optional<double> small = Measure(5, &small_triangles);
-  const std::optional<double> large = Measure(9, &large_triangles);
+  const std::optional<double> small = Measure(Method::kFar, 5, &small_triangles);
+  const std::optional<double> large = Measure(Method::kFar, 9, &large_triangles);
   if (!small || !large) return std::nullopt;
   GpuCost cost;
   cost.ms_per_triangle = std::max(0.0, (*large - *small) / (large_triangles - small_triangles));
   cost.fixed_ms = std::max(0.0, *small - cost.ms_per_triangle * small_triangles);
+  // The gpu method on the same scenes (its step is mostly fixed cost on a GPU).
+  const std::optional<double> compute_small = Measure(Method::kGpu, 5, &small_triangles);
+  const std::optional<double> compute_large = Measure(Method::kGpu, 9, &large_triangles);
+  if (compute_small && compute_large) {
+    const double per_triangle =
+        std::max(0.0, (*compute_large - *compute_small) / (large_triangles - small_triangles));
+    cost.compute_ms_per_triangle = per_triangle;
+    cost.compute_fixed_ms = std::max(0.0, *compute_small - per_triangle * small_triangles);
+  }
   std::lock_guard lock(mutex);
   cost_by_renderer[renderer] = cost;
   return cost;

@@ -49,7 +49,8 @@ Result<void> Pipeline::Impl::Apply(std::vector<SceneUpdate> updates,
 Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request,
                                             const StepControl& control) {
   if (!selector) {
-    selector.emplace(world.gpu != nullptr, [] { return internal::ProbeGpuCost(); });
+    selector.emplace(
+        world.gpu != nullptr, [] { return internal::ProbeGpuCost(); }, pool.num_threads());
   }
   const internal::SceneSize size{world.cache.size(), model.num_triangles(),
                                  world.cache.structure()};
@@ -67,10 +68,24 @@ Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request,
   }
   const auto start = std::chrono::steady_clock::now();
   auto result = Step(concrete, control);
+  // A GPU configuration that cannot run this scene (a hierarchy too deep for the kernels' stack,
+  // over their 32-bit counts or read-back limit, a GL error) is not a failed step for auto: it
+  // is left out from now on, and bvh answers.
+  const bool gpu_refused = !result && (chosen.gpu() || chosen.method == Method::kGpu) &&
+                           (result.error().code == ErrorCode::kUnavailable ||
+                            result.error().code == ErrorCode::kLimitExceeded ||
+                            result.error().code == ErrorCode::kInternal);
+  if (gpu_refused) {
+    selector->Exclude(chosen);
+    reason += "; " + chosen.Name() + " failed and is left out (" + result.error().message + ")";
+    concrete.method = Method::kBvh;
+    result = Step(concrete, control);
+  }
   if (!result) return result;
-  selector->Record(
-      chosen,
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  if (!gpu_refused)
+    selector->Record(
+        chosen, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                    .count());
   result->stats.method_reason = std::move(reason);
   return result;
 }

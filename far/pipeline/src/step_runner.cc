@@ -498,7 +498,7 @@ void StepWorld::Apply(SceneUpdate update) {
 
 Result<StepResult> RunStep(StepWorld& world, const StepRequest& request,
                            const StepControl& control) {
-  StepState state{request, control, {}, {}, {}, {}, 0.0, {}, {}};
+  StepState state{request, control, {}, {}, {}, {}, 0.0, {}, {}, {}};
   state.stats.method = ConfigName(request);
   auto result = Stages(world, state).Run();
   if (!result) return result;

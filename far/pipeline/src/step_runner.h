@@ -31,7 +31,7 @@ struct StepWorld {
 
   ThreadPool& pool;
   SceneCache cache;
-  std::unique_ptr<GpuCuller> gpu;          // only with GL
+  std::unique_ptr<GpuCuller> gpu;         // only with GL
   std::unique_ptr<ComputeStage> compute;  // only with GL
   SweepAndPrune sap;
   FclCollider fcl;

@@ -107,6 +107,54 @@ TEST_F(ComputeColliderTest, FiltersAgreeWithTheExactPredicatesOnRandomPairs) {
   EXPECT_GT(answer.float_decided, answer.box_pairs * 9 / 10);
 }
 
+// At the bound: a vertex of t exactly on s's plane (touching), or one double step above or below
+// it, at the origin and 1e6 and 1e11 away from it (the plane z = offset is exact there). Every
+// such pair must come out as the exact predicates say: touching pairs are crossing or undecided,
+// a pair a rounding away from touching is never called crossing unless it crosses.
+TEST_F(ComputeColliderTest, PairsARoundingAwayFromTouching) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  TriangleObjects triangles;
+  for (double offset : {0.0, 1e6, 1e11}) {
+    for (int i = 0; i < 600; ++i) {
+      const double z = offset;
+      const TrianglePoints s{{u(rng), u(rng), z}, {u(rng), u(rng), z}, {u(rng), u(rng), z}};
+      const int step = i % 3 - 1;  // -1, 0, +1 double steps off the plane
+      double apex = z;
+      if (step != 0) apex = std::nextafter(z, step > 0 ? 1e300 : -1e300);
+      const Vector3d top{u(rng) * 0.3, u(rng) * 0.3, apex};
+      const double up = (i % 2 ? 1 : -1) * (0.1 + std::abs(u(rng)));
+      triangles.Add(s);
+      triangles.Add({top, {u(rng), u(rng), z + up}, {u(rng), u(rng), z + up}});
+    }
+  }
+  const ComputeAnswer answer = CheckPairs(triangles);
+  EXPECT_GT(answer.undecided.size(), 0u) << "touching pairs are never certified";
+}
+
+// Slivers (one edge 1e-9 of the others) crossing ordinary triangles, and tiny triangles whose
+// differences are below the float filter's range (2^-40): the fp64 filter decides those.
+TEST_F(ComputeColliderTest, SliversAndTinyTrianglesGoToTheFp64Filter) {
+  std::mt19937_64 rng(12);
+  TriangleObjects triangles;
+  for (int i = 0; i < 1000; ++i) {
+    const Vector3d a = RandomPoint(rng, 1), b = RandomPoint(rng, 1);
+    triangles.Add({a, b, a + 1e-9 * (b - a) + RandomPoint(rng, 1e-9)});
+    const Vector3d c = RandomPoint(rng, 0.5);
+    triangles.Add({c + RandomPoint(rng, 1), c + RandomPoint(rng, 1), c + RandomPoint(rng, 1)});
+  }
+  for (int i = 0; i < 1000; ++i) {
+    const double scale = 1e-13;
+    const Vector3d c = Vector3d(3, -2, 1) + RandomPoint(rng, 0.5 * scale);
+    triangles.Add(
+        {c + RandomPoint(rng, scale), c + RandomPoint(rng, scale), c + RandomPoint(rng, scale)});
+    triangles.Add(
+        {c + RandomPoint(rng, scale), c + RandomPoint(rng, scale), c + RandomPoint(rng, scale)});
+  }
+  const ComputeAnswer answer = CheckPairs(triangles);
+  EXPECT_GT(answer.double_decided, 500) << "the tiny pairs are decided in fp64";
+}
+
 // Meshes of random triangles with their hierarchies: every intersecting triangle pair of every
 // object pair is found (crossing or undecided), none twice.
 TEST_F(ComputeColliderTest, TraversalFindsEveryIntersectingPairOfMeshes) {

@@ -59,7 +59,7 @@ TEST(CheckStepRequestTest, FclWithADistanceNamesEveryMethodThatAnswersDistances)
   request.method = Method::kFcl;
   request.distance = 0.1;
   ExpectInvalid(request,
-                "distance queries need auto, aabb, bvh, cullide, far, far-exact-offset or exact");
+                "distance queries need auto, aabb, bvh, gpu, cullide, far, far-exact-offset or exact");
 }
 
 TEST(QuantileTest, InterpolatesBetweenRanks) {

@@ -93,6 +93,57 @@ TEST(AutoSelectorTest, OneSlowGpuStepRulesOutTheOtherGpuConfigurations) {
       << reason;
 }
 
+// A GPU with the gpu method probed: it is the second candidate, and chosen where it measures
+// fastest; the reason says on how many CPU threads the times were measured.
+TEST(AutoSelectorTest, TheGpuMethodIsTriedSecondAndChosenWhereFastest) {
+  GpuCost probe{5.0, 0.01};
+  probe.compute_fixed_ms = 0.3;
+  probe.compute_ms_per_triangle = 1e-6;
+  AutoSelector selector(
+      true, [&] { return std::optional<GpuCost>(probe); }, 16);
+  std::string reason;
+  const auto chosen = Steps(selector, {150, 40000}, {{"bvh", 2.0}, {"gpu", 0.4}}, 8, &reason);
+  EXPECT_EQ(chosen[0], "bvh");
+  EXPECT_EQ(chosen[2], "gpu");
+  EXPECT_EQ(chosen.back(), "gpu");
+  EXPECT_NE(reason.find("auto: gpu is the fastest measured (0.40 ms, CPU stages on 16 threads); "
+                        "bvh measured 2.00 ms"),
+            std::string::npos)
+      << reason;
+}
+
+// Where the gpu method is predicted far slower (a software renderer, a large scene), it is not
+// tried; where its probe did not run, it is no candidate; where its step failed, it is left out.
+TEST(AutoSelectorTest, TheGpuMethodIsSkippedWhenHopelessUnprobedOrFailed) {
+  GpuCost slow{5.0, 0.03};
+  slow.compute_fixed_ms = 2.0;
+  slow.compute_ms_per_triangle = 1e-3;  // 42 ms predicted for 40K triangles
+  AutoSelector hopeless(true, [&] { return std::optional<GpuCost>(slow); });
+  std::string reason;
+  for (const std::string& name : Steps(hopeless, {150, 40000}, {{"bvh", 5.0}}, 6, &reason))
+    EXPECT_EQ(name, "bvh");
+  EXPECT_NE(reason.find("gpu 42 ms"), std::string::npos) << reason;
+
+  AutoSelector unprobed(true, [] { return std::optional<GpuCost>(GpuCost{5.0, 0.03}); });
+  for (const std::string& name : Steps(unprobed, {150, 40000}, {{"bvh", 5.0}}, 6))
+    EXPECT_NE(name, "gpu");
+
+  GpuCost fast{5.0, 0.03};
+  fast.compute_fixed_ms = 0.1;
+  fast.compute_ms_per_triangle = 0.0;
+  AutoSelector failing(true, [&] { return std::optional<GpuCost>(fast); });
+  std::string first;
+  EXPECT_EQ(failing.Choose({150, 40000}, &first).Name(), "bvh");
+  failing.Record({Method::kBvh, QueryMechanism::kIdBuffer, 0}, 5.0);
+  const Candidate tried = failing.Choose({150, 40000}, &first);
+  failing.Record(tried, 5.0);
+  const Candidate gpu = failing.Choose({150, 40000}, &first);
+  ASSERT_EQ(gpu.Name(), "gpu");
+  failing.Exclude(gpu);
+  for (const std::string& name : Steps(failing, {150, 40000}, {{"bvh", 5.0}}, 6))
+    EXPECT_NE(name, "gpu");
+}
+
 TEST(AutoSelectorTest, RecalibratesWhenTheSceneGrowsOrTheChoiceDrifts) {
   AutoSelector selector(true, [] { return std::optional<GpuCost>(GpuCost{1.0, 0.001}); });
   // Small scene: the GPU (1.1 ms predicted, 1 ms measured) wins over bvh (5 ms).

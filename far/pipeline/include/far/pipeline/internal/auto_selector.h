@@ -18,18 +18,26 @@ struct Candidate {
   QueryMechanism mechanism = QueryMechanism::kIdBuffer;
   int resolution = 256;
 
+  /// A raster configuration (FAR): it has a mechanism and a resolution.
   bool gpu() const { return method == Method::kFar || method == Method::kFarExactOffset; }
   /// "bvh", "far/id-buffer/256".
   std::string Name() const;
   bool operator==(const Candidate&) const = default;
 };
 
-/// A GPU step's predicted cost: fixed + per_triangle * triangles (milliseconds).
+/// A GPU step's predicted cost: fixed + per_triangle * triangles (milliseconds), for the raster
+/// FAR configurations and, when it was measured, for the gpu method (compute shaders).
 struct GpuCost {
   double fixed_ms = 0;
   double ms_per_triangle = 0;
+  std::optional<double> compute_fixed_ms = std::nullopt;
+  std::optional<double> compute_ms_per_triangle = std::nullopt;
   double Predict(int64_t triangles) const {
     return fixed_ms + ms_per_triangle * static_cast<double>(triangles);
+  }
+  std::optional<double> PredictCompute(int64_t triangles) const {
+    if (!compute_fixed_ms || !compute_ms_per_triangle) return std::nullopt;
+    return *compute_fixed_ms + *compute_ms_per_triangle * static_cast<double>(triangles);
   }
 };
 
@@ -51,6 +59,9 @@ struct SceneSize {
 ///    one-off work, hierarchies built or geometry uploaded (bvh's first step on far-client's
 ///    bunnies scene took 85 ms, its next 15 ms), so the candidate runs once more and the faster of
 ///    the two runs counts;
+///  - with a GPU, the gpu method (compute shaders) is the second candidate, predicted from its
+///    own probe (not a candidate when that probe failed); it, too, runs only when its
+///    prediction is within kTryFactor of the best;
 ///  - a GPU candidate runs only when its predicted time (the renderer's fixed cost per step
 ///    plus its cost per triangle times the scene's triangles, both measured once per process
 ///    on two fixed probe scenes) is within kTryFactor of the best measured time: on a software
@@ -69,14 +80,19 @@ class AutoSelector {
   static constexpr double kRecheckDrift = 2.0;
   static constexpr int64_t kRecheckSteps = 1000;
 
-  /// `gpu_cost` measures (once) the renderer's cost of a FAR step, or gives nullopt when it
-  /// cannot; it is only called when there is a GPU.
-  AutoSelector(bool has_gpu, std::function<std::optional<GpuCost>()> gpu_cost);
+  /// `gpu_cost` measures (once) the renderer's cost of a FAR step and of a gpu step, or gives
+  /// nullopt when it cannot; it is only called when there is a GPU. `cpu_threads`: the threads
+  /// the pipeline's CPU stages may use (its cores, PipelineOptions::cpu_cores): every time it
+  /// measures is measured under that budget, and its reasons say so (0: not said).
+  AutoSelector(bool has_gpu, std::function<std::optional<GpuCost>()> gpu_cost, int cpu_threads = 0);
 
   /// The configuration for the next step, and why (filled into the step's stats).
   Candidate Choose(const SceneSize& scene, std::string* reason);
   /// Records the time of a step that ran `candidate` (the one Choose just gave).
   void Record(const Candidate& candidate, double ms);
+  /// Never chooses `candidate` again (its step failed: its GPU resources or limits do not fit
+  /// this scene); the next Choose goes on with the others.
+  void Exclude(const Candidate& candidate);
   /// Whether the last Choose gave a candidate to try (calibrating), not the chosen one.
   bool trying() const { return trying_; }
 
@@ -87,12 +103,14 @@ class AutoSelector {
     std::optional<double> first_ms;      // a first run on the structure, with its one-off work
     std::optional<double> predicted_ms;  // GPU candidates: from the probe
     std::optional<uint64_t> ran_on;      // the structure it last ran on (kept across calibrations)
+    bool excluded = false;               // never chosen: no prediction for gpu, or its step failed
   };
   void Calibrate(const SceneSize& scene);
   bool NeedsRecheck(const SceneSize& scene) const;
   const Entry* Fastest() const;
 
   bool has_gpu_;
+  int cpu_threads_ = 0;
   std::function<std::optional<GpuCost>()> probe_gpu_;
   std::optional<GpuCost> gpu_cost_;  // once probed
   bool probed_ = false;
