@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
 # The GPU run, on a machine with an NVIDIA GPU and its driver (docs/gpu.md). Checks that an
-# OpenGL 4.5 context comes from the GPU through the EGL device platform, then runs the gpu tests,
-# far-study, the culling benchmark and a daemon + client smoke test on it, each under a time
-# limit so that the whole fits one 10-minute device call. Everything it prints also goes to
-# RESULTS_DIR/log.txt, next to the study's CSVs and RESULTS.md sections and the benchmark's JSON.
+# OpenGL 4.5 context comes from the GPU through the EGL device platform, then runs the gpu
+# method's never-miss tests on it, far-study on paper-leaves and on the scaling family to 1M
+# triangles (bvh, gpu, auto and FAR side by side), and 16 daemon clients burning CPU per step,
+# each under a time limit so that the whole fits one device call of about 8 minutes. Everything
+# it prints also goes to RESULTS_DIR/log.txt, next to the study's CSVs and RESULTS.md sections.
 #   bash deploy/gpu-run.sh [--smoke] [BUNDLE_DIR] [RESULTS_DIR]
 # BUNDLE_DIR: made by deploy/gpu-bundle.sh (default gpu-bundle). RESULTS_DIR: default $OUT when
 # set, else gpu-results. --smoke: every stage tiny, on the surfaceless platform, a software
 # renderer allowed: the check of a bundle on a machine without a GPU, never for numbers.
-# Environment: FAR_RUN_BUDGET_S (whole run, default 540), FAR_STUDY_ARGS (the flags of the
-# second, larger far-study run), FAR_BUNDLE_CXX=auto|bundle|system (which libstdc++),
+# Environment: FAR_RUN_BUDGET_S (whole run, default 540), FAR_BUNDLE_CXX=auto|bundle|system
+# (which libstdc++),
 # FAR_GLVND=auto|bundle (bundle: the bundle's unpacked glvnd loader, never the system's).
 set -euo pipefail
 export PATH=$PATH:/usr/sbin:/sbin # ldconfig
@@ -82,44 +83,49 @@ stage() {
   summary+=("$(printf '%-24s %5ss  %s' "$name" "$took" "$what")")
 }
 
-# far-daemon and far-client (the session opened on the daemon's socket, steps over LCM): a scene
-# played step by step through the daemon. Exported and run by a fresh bash (under timeout, maybe
-# in a network namespace).
-daemon_smoke() {
+# Issue 42's load runs: one far-daemon, 16 clients of the paper's leaves, each burning
+# FAR_CLIENT_CPU_MS of its own CPU per step (a simulator's physics), for each method of
+# FAR_LOAD_METHODS; then gpu again with the compute step outside the GL lock
+# (FAR_COMPUTE_GL_LOCK=off). Exported and
+# run by a fresh bash (under timeout, maybe in a network namespace).
+load_runs() {
   set -euo pipefail
-  local bin=$FAR_BUNDLE/bin work daemon rc=0 answered=0
+  local bin=$FAR_BUNDLE/bin work rc=0
   work=$(mktemp -d)
   far() { env LD_LIBRARY_PATH="$FAR_LIB_PATH" "$@"; }
   client() { far "$bin/far-client" --socket "$work/far.sock" "$@"; }
-  # Not through far(): $! must be the daemon itself (env execs it), not a subshell.
-  env LD_LIBRARY_PATH="$FAR_LIB_PATH" "$bin/far-daemon" --gl-platform "$FAR_PLATFORM" \
-    --socket "$work/far.sock" --log-level info >"$work/daemon.log" 2>&1 &
-  daemon=$!
-  # Expanded now: the locals are gone when the EXIT trap runs. Also when a step fails.
-  # shellcheck disable=SC2064
-  trap "kill $daemon 2>/dev/null || true; rm -rf '$work'" EXIT
-  for _ in $(seq 50); do
-    if client --connect-timeout 300ms ping >/dev/null 2>&1; then
-      answered=1
-      break
-    fi
-    kill -0 "$daemon" 2>/dev/null || break
-    sleep 0.2
-  done
-  if [ "$answered" = 0 ]; then
-    echo "far-daemon did not answer on its socket; its log:"
-    cat "$work/daemon.log"
-    return 1
-  fi
-  client ping
-  # shellcheck disable=SC2086 # FAR_SCENE_ARGS is a list of flags
-  client make-scene "$work/scene/scene.json" $FAR_SCENE_ARGS
-  client play "$work/scene/scene.json" --resolution "$FAR_RESOLUTION" || rc=$?
-  client status || rc=$?
-  kill -TERM "$daemon"
-  wait "$daemon" || rc=$?
-  echo "far-daemon log (last lines):"
-  tail -n 4 "$work/daemon.log"
+  # shellcheck disable=SC2086 # FAR_LOAD_SCENE_ARGS is a list of flags
+  client make-scene "$work/leaves/scene.json" $FAR_LOAD_SCENE_ARGS >/dev/null
+  one_daemon() { # LOCK METHOD...: a daemon, then a load run per method
+    local lock=$1 daemon answered=0
+    shift
+    env LD_LIBRARY_PATH="$FAR_LIB_PATH" FAR_COMPUTE_GL_LOCK="$lock" "$bin/far-daemon" \
+      --gl-platform "$FAR_PLATFORM" --socket "$work/far.sock" --log-level warn \
+      >"$work/daemon-$lock.log" 2>&1 &
+    daemon=$!
+    for _ in $(seq 50); do
+      if client --connect-timeout 300ms ping >/dev/null 2>&1; then
+        answered=1
+        break
+      fi
+      sleep 0.2
+    done
+    [ "$answered" = 1 ] || { cat "$work/daemon-$lock.log"; kill "$daemon" || true; return 1; }
+    for method in "$@"; do
+      echo
+      echo "--- load: method $method, GL lock for the compute step: $lock"
+      client load --clients "$FAR_LOAD_CLIENTS" --seconds "$FAR_LOAD_SECONDS" --steps 0 \
+        --method "$method" --scene "$work/leaves/scene.json" \
+        --client-cpu-ms "$FAR_CLIENT_CPU_MS" || rc=$?
+    done
+    client status | grep -i "steps\|renderer\|error" || true
+    kill -TERM "$daemon"
+    wait "$daemon" || rc=$?
+  }
+  # shellcheck disable=SC2086 # FAR_LOAD_METHODS is a list of methods
+  one_daemon on $FAR_LOAD_METHODS
+  one_daemon off gpu
+  rm -rf "$work"
   return "$rc"
 }
 
@@ -247,46 +253,41 @@ main() {
     --plot-script "$bundle/data/plot_study.gp"
     --scaling-plot-script "$bundle/data/plot_scaling.gp")
   local tests_args=(--gtest_brief=1)
-  local bench_args=(--benchmark_repetitions=3 --benchmark_enable_random_interleaving=true
-    --benchmark_report_aggregates_only=true --benchmark_min_time=0.5)
-  # The four small scenes, pinned: far-study's default also has the paper-scale and scaling
-  # scenes, whose brute-force reference alone takes minutes (docs/study.md); a stage that times
-  # out writes nothing. FAR_STUDY_ARGS can ask for them in the larger run (docs/gpu.md).
-  local study_small=(--scenes 'soup,bunnies,leaves,bunnies-fine') study_large
-  study_large=${FAR_STUDY_ARGS:---scenes soup,bunnies,leaves,bunnies-fine --bunny-subdivisions 1 --soup-objects 128 --leaves 150 --leaf-cells 8 --resolutions 256,512,1024,1400,2048 --steps 8}
-  export FAR_SCENE_ARGS="--kind leaves --frames 20" FAR_RESOLUTION=1024
+
+  # Issue 42: the gpu method held to exact on this GPU's own rasterizer and arithmetic, then
+  # timed beside bvh and FAR (far-study, one interleaved run per family), then the shared case
+  # through the daemon (16 clients burning CPU per step).
+  local gpu_tests='ComputeCollider*:PipelineCullingTest.Reliable*:PipelineCullingTest.HardCases*:PipelineCullingTest.DistanceCulling*:PipelineCullingTest.OneHuge*:PipelineCullingTest.TinyContact*:PipelineCullingTest.AutoRuns*'
+  local paper=(--scenes paper-leaves --methods bvh,gpu,auto,far --paper-gpu far/id-buffer/256
+    --steps 8 --distance paper --reference-steps 2)
+  local scaling=(--scenes scaling --scaling-sizes 50000,100000,150000,300000,600000,1000000
+    --methods bvh,gpu,auto --steps 6 --distance none --scaling-reference-max 300000
+    --reference-steps 1)
+  export FAR_LOAD_SCENE_ARGS="--kind leaves --frames 200" FAR_LOAD_CLIENTS=16 \
+    FAR_LOAD_SECONDS=12 FAR_CLIENT_CPU_MS=5 FAR_LOAD_METHODS="bvh gpu auto"
   if [ "$smoke" = 1 ]; then
-    tests_args+=(--gtest_filter='GlContextTest.*:PipelineCullingTest.RejectsBadRequests:SnapshotCommandTest.*')
-    bench_args=(--benchmark_filter=scene:1 --benchmark_repetitions=1 --benchmark_min_time=0.01)
-    study_small=(--scenes 'soup,leaves' --steps 1 --resolutions 64 --soup-objects 8 --leaves 10
-      --leaf-cells 2)
-    study_large=${FAR_STUDY_ARGS:---scenes bunnies,bunnies-fine --steps 1 --fine-steps 1 --fine-subdivisions 0 --resolutions 64}
-    FAR_SCENE_ARGS="--kind demo --frames 3 --leaves 6" FAR_RESOLUTION=128
+    gpu_tests='ComputeCollider*:PipelineCullingTest.RejectsBadRequests'
+    paper=(--scenes leaves --methods bvh,gpu --steps 1 --leaves 10 --leaf-cells 2)
+    scaling=(--scenes scaling --scaling-sizes 5000 --methods bvh,gpu --steps 1 --distance none)
+    FAR_LOAD_SCENE_ARGS="--kind leaves --frames 3 --leaves 6" FAR_LOAD_CLIENTS=2
+    FAR_LOAD_SECONDS=1 FAR_CLIENT_CPU_MS=1 FAR_LOAD_METHODS="bvh gpu"
   fi
 
-  stage "gpu tests" 150 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}"
-  # FAR_SNAPSHOT: the snapshot tests run far-snapshot, from the bundle (not the build tree).
-  stage "snapshot tests" 60 "${far_env[@]}" FAR_SNAPSHOT="$bin/far-snapshot" \
-    "$bin/far_snapshot_test" "${tests_args[@]}"
-  stage "far-study" 200 "${far_env[@]}" "${study[@]}" "${study_small[@]}" \
-    --csv study.csv --results study.md
-  stage "culling benchmark" 120 "${far_env[@]}" "$bin/far_culling_benchmark" \
-    --gl-platform="$platform" "${bench_args[@]}" \
-    --benchmark_out=culling_benchmark.json --benchmark_out_format=json
+  stage "gpu tests" 150 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}" \
+    --gtest_filter="$gpu_tests"
+  stage "far-study paper-leaves" 150 "${far_env[@]}" "${study[@]}" "${paper[@]}" \
+    --csv paper.csv --results paper.md
+  stage "far-study scaling" 170 "${far_env[@]}" "${study[@]}" "${scaling[@]}" \
+    --csv scaling.csv --results scaling.md
 
   # LCM is UDP multicast: in a private network namespace when this machine allows one.
   export FAR_BUNDLE=$bundle FAR_LIB_PATH=$lib_path FAR_PLATFORM=$platform
-  export -f daemon_smoke
+  export -f load_runs
   local netns=()
   if command -v unshare >/dev/null && command -v ip >/dev/null && unshare -n true 2>/dev/null; then
     netns=(bash "$here/netns-run.sh")
   fi
-  stage "daemon + client" 60 "${netns[@]}" bash -c daemon_smoke
-
-  # The larger study last, with whatever time is left: the first run's results stand anyway.
-  # shellcheck disable=SC2086 # study_large is a list of flags
-  stage "far-study (larger)" "$(($(left) - 5))" "${far_env[@]}" "${study[@]}" $study_large \
-    --csv study-large.csv --results study-large.md
+  stage "daemon load (16 clients)" 110 "${netns[@]}" bash -c load_runs
 
   echo
   echo "=== summary ($(($(date +%s) - start))s in all; GL_RENDERER: $renderer)"

@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <string>
 #include <utility>
@@ -58,7 +59,8 @@ struct SlotLayout {
   uint32_t vertex_base = 0, triangle_base = 0, node_base = 0;
   uint32_t triangles = 0, nodes = 0;
   uint64_t topology_key = 0;
-  uint64_t world_key = 0;  // uploaded; 0: not yet
+  uint64_t world_key = 0;                     // uploaded; 0: not yet
+  std::vector<std::vector<uint32_t>> levels;  // global node indices by depth (root: 0)
 };
 
 Result<GLuint> CompileCompute(const std::string& source, const char* what) {
@@ -74,15 +76,28 @@ Result<GLuint> CompileCompute(const std::string& source, const char* what) {
 
 struct ComputeCollider::Impl {
   GLuint boxes_program = 0, refit_program = 0, traverse_program = 0;
-  std::array<Buffer, 11> buffers;
+  std::array<Buffer, internal::kNumBindings> buffers;
   std::vector<SlotLayout> layout;
   uint32_t total_vertices = 0, total_triangles = 0, total_nodes = 0;
   size_t capacity = kFirstCapacity;
+  std::vector<Eigen::Vector3d> staging;  // the vertices of one upload
+  std::vector<size_t> moved;             // slots whose vertices this step uploaded
+  // Uniform locations, looked up once.
+  GLint boxes_count = -1, boxes_ranges = -1, refit_count = -1, refit_first = -1;
+  GLint traverse_count = -1, traverse_pairs = -1, traverse_capacity = -1;
+  GLint traverse_distance = -1, traverse_slack = -1;
 
   Buffer& buffer(internal::ComputeBinding binding) { return buffers[binding]; }
   Result<int64_t> EnsureLayout(std::span<const ComputeObject> objects);
   int64_t UploadVertices(std::span<const ComputeObject> objects);
   Result<ComputeAnswer> Traverse(const ComputeQuery& query, uint32_t pairs, uint32_t items);
+  // The boxes of the moved objects' triangles, then their hierarchies level by level, deepest
+  // first (the other objects' boxes stay as computed before); returns the bytes uploaded.
+  int64_t RefitMoved();
+  // Run's GL work: uploads, the three kernels and the read-back.
+  Result<ComputeAnswer> RunGl(const ComputeQuery& query,
+                              std::span<const std::array<uint32_t, 4>> work,
+                              std::span<const uint32_t> work_start, uint64_t items);
 };
 
 namespace {
@@ -93,8 +108,9 @@ struct NodeRange {
   uint32_t lo, hi;
 };
 
-Result<int> AppendNodes(const ComputeObject& object, uint32_t node_base, uint32_t order_base,
-                        std::vector<std::array<uint32_t, 4>>& out) {
+Result<std::vector<std::vector<uint32_t>>> AppendNodes(const ComputeObject& object,
+                                                       uint32_t node_base, uint32_t order_base,
+                                                       std::vector<std::array<uint32_t, 4>>& out) {
   const size_t n = object.nodes.size();
   std::vector<NodeRange> range(n);
   std::vector<int> depth(n, 0);
@@ -127,12 +143,14 @@ Result<int> AppendNodes(const ComputeObject& object, uint32_t node_base, uint32_
       range[k] = {left.lo, right.hi};
     }
   }
+  std::vector<std::vector<uint32_t>> levels(n > 0 ? deepest + 1 : 0);
   for (size_t k = 0; k < n; ++k) {
     const ComputeNode& node = object.nodes[k];
     out.push_back({node.count > 0 ? 0u : node_base + node.first, node.count,
                    order_base + range[k].lo, order_base + range[k].hi});
+    levels[depth[k]].push_back(node_base + static_cast<uint32_t>(k));
   }
-  return deepest;
+  return levels;
 }
 
 }  // namespace
@@ -155,7 +173,8 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
                static_cast<uint32_t>(object.triangles.size()),
                static_cast<uint32_t>(object.nodes.size()),
                object.topology_key,
-               0};
+               0,
+               {}};
     vertices += object.p_WV.size();
     triangles += object.triangles.size();
     nodes += object.nodes.size();
@@ -176,15 +195,17 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
   order.reserve(triangles);
   for (size_t s = 0; s < objects.size(); ++s) {
     const ComputeObject& object = objects[s];
-    const SlotLayout& at = next[s];
+    SlotLayout& at = next[s];
     for (const TriangleIndices& t : object.triangles) {
       for (int k = 0; k < 3; ++k) triangle_vertices.push_back(at.vertex_base + t[k]);
     }
-    auto depth = AppendNodes(object, at.node_base, at.triangle_base, node_data);
-    if (!depth) return depth.error();
-    if (*depth > MaxDepth()) {
+    auto levels = AppendNodes(object, at.node_base, at.triangle_base, node_data);
+    if (!levels) return levels.error();
+    const int depth = static_cast<int>(levels->size()) - 1;
+    next[s].levels = std::move(*levels);
+    if (depth > MaxDepth()) {
       return MakeError(ErrorCode::kUnavailable,
-                       "gpu method: an object's hierarchy is " + std::to_string(*depth) +
+                       "gpu method: an object's hierarchy is " + std::to_string(depth) +
                            " levels deep, over the traversal's " + std::to_string(MaxDepth()) +
                            "; 'bvh' answers this scene");
     }
@@ -213,20 +234,83 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
   return uploaded;
 }
 
-// Uploads the world vertices of the objects whose world changed since their last upload.
+// Uploads the world vertices of the objects whose world changed since their last upload: one
+// upload per run of such objects in consecutive slots (each call costs the driver some
+// microseconds; a scene of deforming objects is then one upload).
 int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> objects) {
   int64_t uploaded = 0;
+  moved.clear();
   const GLuint positions = buffer(internal::kPositionsBinding).id;
+  std::vector<Eigen::Vector3d>& run = staging;
+  size_t run_first = 0;  // first vertex of the run
+  const auto flush = [&] {
+    if (run.empty()) return;
+    const size_t bytes = run.size() * sizeof(Eigen::Vector3d);
+    glNamedBufferSubData(positions, static_cast<GLintptr>(run_first * sizeof(Eigen::Vector3d)),
+                         static_cast<GLsizeiptr>(bytes), run.data());
+    uploaded += static_cast<int64_t>(bytes);
+    run.clear();
+  };
   for (size_t s = 0; s < objects.size(); ++s) {
     SlotLayout& at = layout[s];
-    if (at.world_key == objects[s].world_key || objects[s].p_WV.empty()) continue;
-    const size_t bytes = objects[s].p_WV.size() * sizeof(Eigen::Vector3d);
-    glNamedBufferSubData(positions, static_cast<GLintptr>(at.vertex_base) * 3 * sizeof(double),
-                         static_cast<GLsizeiptr>(bytes), objects[s].p_WV.data());
+    if (at.world_key == objects[s].world_key || objects[s].p_WV.empty()) {
+      flush();
+      continue;
+    }
+    if (run.empty()) run_first = at.vertex_base;
+    run.insert(run.end(), objects[s].p_WV.begin(), objects[s].p_WV.end());
     at.world_key = objects[s].world_key;
-    uploaded += static_cast<int64_t>(bytes);
+    moved.push_back(s);
   }
+  flush();
   return uploaded;
+}
+
+int64_t ComputeCollider::Impl::RefitMoved() {
+  if (moved.empty()) return 0;
+  std::vector<std::array<uint32_t, 2>> ranges;  // (first triangle, triangles before)
+  uint32_t triangles = 0;
+  size_t levels = 0;
+  for (size_t s : moved) {
+    ranges.push_back({layout[s].triangle_base, triangles});
+    triangles += layout[s].triangles;
+    levels = std::max(levels, layout[s].levels.size());
+  }
+  // The nodes, deepest level first: level d is list[begin[d], end[d]).
+  std::vector<uint32_t> list;
+  std::vector<size_t> begin(levels), end(levels);
+  for (size_t d = levels; d-- > 0;) {
+    begin[d] = list.size();
+    for (size_t s : moved) {
+      if (d < layout[s].levels.size())
+        list.insert(list.end(), layout[s].levels[d].begin(), layout[s].levels[d].end());
+    }
+    end[d] = list.size();
+  }
+  Buffer& range_buffer = buffer(internal::kRangesBinding);
+  Buffer& list_buffer = buffer(internal::kRefitListBinding);
+  range_buffer.Reserve(ranges.size() * 8);
+  list_buffer.Reserve(list.size() * 4);
+  glNamedBufferSubData(range_buffer.id, 0, static_cast<GLsizeiptr>(ranges.size() * 8),
+                       ranges.data());
+  glNamedBufferSubData(list_buffer.id, 0, static_cast<GLsizeiptr>(list.size() * 4), list.data());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kRangesBinding, range_buffer.id);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kRefitListBinding, list_buffer.id);
+
+  glUseProgram(boxes_program);
+  glProgramUniform1ui(boxes_program, boxes_count, triangles);
+  glProgramUniform1ui(boxes_program, boxes_ranges, static_cast<GLuint>(ranges.size()));
+  glDispatchCompute(Groups(triangles), 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  glUseProgram(refit_program);
+  for (size_t d = levels; d-- > 0;) {
+    if (end[d] == begin[d]) continue;
+    glProgramUniform1ui(refit_program, refit_first, static_cast<GLuint>(begin[d]));
+    glProgramUniform1ui(refit_program, refit_count, static_cast<GLuint>(end[d] - begin[d]));
+    glDispatchCompute(Groups(end[d] - begin[d]), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+  return static_cast<int64_t>(ranges.size() * 8 + list.size() * 4);
 }
 
 Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query, uint32_t pairs,
@@ -246,14 +330,11 @@ Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query,
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kCrossingBinding, crossing.id);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kUndecidedBinding, undecided.id);
     glUseProgram(traverse_program);
-    glProgramUniform1ui(traverse_program, glGetUniformLocation(traverse_program, "u_count"), items);
-    glProgramUniform1ui(traverse_program, glGetUniformLocation(traverse_program, "u_pairs"), pairs);
-    glProgramUniform1ui(traverse_program, glGetUniformLocation(traverse_program, "u_capacity"),
-                        static_cast<GLuint>(capacity));
-    glProgramUniform1i(traverse_program, glGetUniformLocation(traverse_program, "u_distance"),
-                       query.distance ? 1 : 0);
-    glProgramUniform1f(traverse_program, glGetUniformLocation(traverse_program, "u_slack"),
-                       FloatAtLeast(query.slack));
+    glProgramUniform1ui(traverse_program, traverse_count, items);
+    glProgramUniform1ui(traverse_program, traverse_pairs, pairs);
+    glProgramUniform1ui(traverse_program, traverse_capacity, static_cast<GLuint>(capacity));
+    glProgramUniform1i(traverse_program, traverse_distance, query.distance ? 1 : 0);
+    glProgramUniform1f(traverse_program, traverse_slack, FloatAtLeast(query.slack));
     glDispatchCompute(Groups(items), 1, 1);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     glGetNamedBufferSubData(buffer(internal::kCountersBinding).id, 0, sizeof(counters),
@@ -328,6 +409,15 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   auto traverse = CompileCompute(internal::TraverseSource(), "traversal");
   if (!traverse) return traverse.error();
   impl->traverse_program = *traverse;
+  impl->boxes_count = glGetUniformLocation(impl->boxes_program, "u_count");
+  impl->boxes_ranges = glGetUniformLocation(impl->boxes_program, "u_ranges");
+  impl->refit_count = glGetUniformLocation(impl->refit_program, "u_count");
+  impl->refit_first = glGetUniformLocation(impl->refit_program, "u_first");
+  impl->traverse_count = glGetUniformLocation(impl->traverse_program, "u_count");
+  impl->traverse_pairs = glGetUniformLocation(impl->traverse_program, "u_pairs");
+  impl->traverse_capacity = glGetUniformLocation(impl->traverse_program, "u_capacity");
+  impl->traverse_distance = glGetUniformLocation(impl->traverse_program, "u_distance");
+  impl->traverse_slack = glGetUniformLocation(impl->traverse_program, "u_slack");
   for (Buffer& b : impl->buffers) glCreateBuffers(1, &b.id);
   impl->buffer(internal::kCountersBinding).Reserve(internal::kNumCounters * sizeof(uint32_t));
   if (auto ok = CheckGl("gpu method: making its buffers"); !ok) return ok.error();
@@ -358,25 +448,37 @@ Result<ComputeAnswer> ComputeCollider::Run(const ComputeQuery& query) {
     work_start.push_back(static_cast<uint32_t>(items));
   }
   if (work.empty()) return ComputeAnswer{};
-
+  // FAR_COMPUTE_GL_LOCK=off: this step's GL work runs without far::LockGl, beside other
+  // sessions' (an experiment for drivers that need no lock between contexts: docs/daemon.md).
+  static const bool unlocked = [] {
+    const char* value = std::getenv("FAR_COMPUTE_GL_LOCK");
+    return value != nullptr && std::string(value) == "off";
+  }();
+  if (unlocked) return impl_->RunGl(query, work, work_start, items);
   const auto lock = LockGl();
-  ComputeAnswer answer;
-  auto laid_out = impl_->EnsureLayout(query.objects);
+  return impl_->RunGl(query, work, work_start, items);
+}
+
+Result<ComputeAnswer> ComputeCollider::Impl::RunGl(const ComputeQuery& query,
+                                                   std::span<const std::array<uint32_t, 4>> work,
+                                                   std::span<const uint32_t> work_start,
+                                                   uint64_t items) {
+  auto laid_out = EnsureLayout(query.objects);
   if (!laid_out) return laid_out.error();
-  int64_t uploaded = *laid_out + impl_->UploadVertices(query.objects);
+  int64_t uploaded = *laid_out + UploadVertices(query.objects);
 
   // Per pair: (driver's first triangle, partner's first triangle, partner's root, 0) and
   // (driver's slot, partner's slot, driver is object_a, 0).
   std::vector<std::array<uint32_t, 4>> work_data;
   work_data.reserve(2 * work.size());
   for (const auto& w : work) {
-    const SlotLayout& driver = impl_->layout[w[0]];
-    const SlotLayout& other = impl_->layout[w[1]];
+    const SlotLayout& driver = layout[w[0]];
+    const SlotLayout& other = layout[w[1]];
     work_data.push_back({driver.triangle_base, other.triangle_base, other.node_base, 0});
     work_data.push_back(w);
   }
-  Buffer& work_buffer = impl_->buffer(internal::kWorkBinding);
-  Buffer& start_buffer = impl_->buffer(internal::kWorkStartBinding);
+  Buffer& work_buffer = buffer(internal::kWorkBinding);
+  Buffer& start_buffer = buffer(internal::kWorkStartBinding);
   work_buffer.Reserve(work_data.size() * 16);
   start_buffer.Reserve(work_start.size() * sizeof(uint32_t));
   glNamedBufferSubData(work_buffer.id, 0, static_cast<GLsizeiptr>(work_data.size() * 16),
@@ -385,25 +487,14 @@ Result<ComputeAnswer> ComputeCollider::Run(const ComputeQuery& query) {
                        static_cast<GLsizeiptr>(work_start.size() * sizeof(uint32_t)),
                        work_start.data());
   uploaded += static_cast<int64_t>(work_data.size() * 16 + work_start.size() * 4);
-  for (size_t binding = 0; binding < impl_->buffers.size(); ++binding) {
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding),
-                     impl_->buffers[binding].id);
+  for (size_t binding = 0; binding < buffers.size(); ++binding) {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding), buffers[binding].id);
   }
-  // Every triangle's box, then every node's.
-  glUseProgram(impl_->boxes_program);
-  glProgramUniform1ui(impl_->boxes_program, glGetUniformLocation(impl_->boxes_program, "u_count"),
-                      impl_->total_triangles);
-  glDispatchCompute(Groups(impl_->total_triangles), 1, 1);
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-  glUseProgram(impl_->refit_program);
-  glProgramUniform1ui(impl_->refit_program, glGetUniformLocation(impl_->refit_program, "u_count"),
-                      impl_->total_nodes);
-  glDispatchCompute(Groups(impl_->total_nodes), 1, 1);
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  uploaded += RefitMoved();
   if (auto ok = CheckGl("gpu method: boxes and refit"); !ok) return ok.error();
 
   auto traversed =
-      impl_->Traverse(query, static_cast<uint32_t>(work.size()), static_cast<uint32_t>(items));
+      Traverse(query, static_cast<uint32_t>(work.size()), static_cast<uint32_t>(items));
   glUseProgram(0);
   if (!traversed) return traversed.error();
   traversed->bytes_uploaded = uploaded;

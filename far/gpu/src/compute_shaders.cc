@@ -20,6 +20,8 @@ layout(std430, binding = 7) readonly buffer WorkStart { uint work_start[]; };
 layout(std430, binding = 8) buffer Counters { uint counters[]; };
 layout(std430, binding = 9) writeonly buffer Crossing { uvec4 crossing[]; };
 layout(std430, binding = 10) writeonly buffer Undecided { uvec4 undecided[]; };
+layout(std430, binding = 11) readonly buffer Ranges { uvec2 ranges[]; };
+layout(std430, binding = 12) readonly buffer RefitList { uint refit_list[]; };
 
 uniform uint u_count;  // invocations with work: triangles, nodes or driver triangles
 
@@ -44,8 +46,20 @@ float FloatBelow(double x) {
 }
 float FloatAbove(double x) { return -FloatBelow(-x); }
 
+// The triangles of the objects that moved: ranges[r] = (first global triangle, invocations
+// before this range), u_ranges of them.
+uniform uint u_ranges;
+
 void main() {
-  for (uint t = gl_GlobalInvocationID.x; t < u_count; t += Stride()) {
+  for (uint item = gl_GlobalInvocationID.x; item < u_count; item += Stride()) {
+    uint r = 0u;
+    uint past = u_ranges;
+    while (past - r > 1u) {
+      uint mid = (r + past) / 2u;
+      if (ranges[mid].y <= item) r = mid;
+      else past = mid;
+    }
+    uint t = ranges[r].x + (item - ranges[r].y);
     dvec3 a = Vertex(tri_vertex[3u * t]);
     dvec3 b = Vertex(tri_vertex[3u * t + 1u]);
     dvec3 c = Vertex(tri_vertex[3u * t + 2u]);
@@ -57,17 +71,30 @@ void main() {
 }
 )";
 
+// One level of the hierarchies of the objects that moved, deepest level first: the nodes
+// refit_list[u_first, u_first + u_count). A leaf's box is the union of its triangles' (at most
+// 8), an inner node's the union of its children's, refit by the dispatch before.
 constexpr const char* kRefit = R"(
+uniform uint u_first;
+
 void main() {
-  float inf = uintBitsToFloat(0x7f800000u);
-  for (uint n = gl_GlobalInvocationID.x; n < u_count; n += Stride()) {
+  for (uint i = gl_GlobalInvocationID.x; i < u_count; i += Stride()) {
+    uint n = refit_list[u_first + i];
     uvec4 nd = node[n];
-    vec3 lo = vec3(inf);
-    vec3 hi = vec3(-inf);
-    for (uint k = nd.z; k < nd.w; ++k) {
-      uint t = order[k];
-      lo = min(lo, tri_box[2u * t].xyz);
-      hi = max(hi, tri_box[2u * t + 1u].xyz);
+    vec3 lo;
+    vec3 hi;
+    if (nd.y == 0u) {
+      lo = min(node_box[2u * nd.x].xyz, node_box[2u * nd.x + 2u].xyz);
+      hi = max(node_box[2u * nd.x + 1u].xyz, node_box[2u * nd.x + 3u].xyz);
+    } else {
+      float inf = uintBitsToFloat(0x7f800000u);
+      lo = vec3(inf);
+      hi = vec3(-inf);
+      for (uint k = nd.z; k < nd.w; ++k) {
+        uint t = order[k];
+        lo = min(lo, tri_box[2u * t].xyz);
+        hi = max(hi, tri_box[2u * t + 1u].xyz);
+      }
     }
     node_box[2u * n] = vec4(lo, 0.0);
     node_box[2u * n + 1u] = vec4(hi, 0.0);

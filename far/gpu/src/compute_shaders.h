@@ -22,6 +22,9 @@ enum ComputeBinding : int {
   kCountersBinding = 8,    // uint[kNumCounters]
   kCrossingBinding = 9,    // uvec4[capacity]: certified intersecting pairs
   kUndecidedBinding = 10,  // uvec4[capacity]: pairs for the CPU's exact predicates
+  kRangesBinding = 11,     // uvec2[ranges]: the moved objects' triangles (first, before)
+  kRefitListBinding = 12,  // uint[]: the moved objects' nodes, level by level, deepest first
+  kNumBindings = 13,
 };
 
 /// The counters the traversal writes (kCountersBinding).
@@ -40,9 +43,10 @@ inline constexpr int kComputeGroupSize = 64;
 /// Entries of a traversal's stack: hierarchies deeper than this minus one are refused.
 inline constexpr int kTraversalStack = 64;
 
-/// One triangle per invocation: its world box from its double corners, rounded outward to float.
+/// One triangle of a moved object per invocation: its world box from its double corners,
+/// rounded outward to float.
 std::string TriangleBoxesSource();
-/// One node per invocation: the union of the boxes of its triangles (its order range).
+/// One node of one level per invocation: the union of its triangles' or its children's boxes.
 std::string RefitSource();
 /// One driver triangle of one object pair per invocation: descends the partner's hierarchy,
 /// and classifies each triangle pair whose boxes meet with the float filter, then the fp64

@@ -221,5 +221,75 @@ TEST_F(ComputeColliderTest, TraversalFindsEveryIntersectingPairOfMeshes) {
   EXPECT_GT(expected, 200) << "the scenes should have many intersecting pairs to find";
 }
 
+// Steps where only some objects move: the others keep the boxes and hierarchies computed when
+// they last moved, and every step still finds every intersecting pair.
+TEST_F(ComputeColliderTest, ObjectsThatDidNotMoveKeepTheirBoxes) {
+  std::mt19937_64 rng(21);
+  constexpr int kObjects = 4;
+  std::vector<Mesh> meshes(kObjects);
+  std::vector<std::vector<ComputeNode>> nodes(kObjects);
+  std::vector<std::vector<uint32_t>> orders(kObjects);
+  std::vector<uint64_t> world(kObjects, 0);
+  for (int o = 0; o < kObjects; ++o) {
+    const int n = 50 + 40 * o;
+    for (int t = 0; t < n; ++t) {
+      const Vector3d c = RandomPoint(rng, 1.0);
+      for (int k = 0; k < 3; ++k) meshes[o].p_MV.push_back(c + RandomPoint(rng, 0.2));
+      meshes[o].triangles.push_back({static_cast<uint32_t>(3 * t), static_cast<uint32_t>(3 * t + 1),
+                                     static_cast<uint32_t>(3 * t + 2)});
+    }
+    TriangleBvh bvh;
+    ASSERT_TRUE(bvh.Build(meshes[o].p_MV, meshes[o].triangles));
+    for (const auto& node : bvh.nodes()) nodes[o].push_back({node.first, node.count});
+    orders[o] = bvh.order();
+  }
+  const std::vector<SlotPair> pairs = {{SlotAt(0), SlotAt(1)},
+                                       {SlotAt(0), SlotAt(2)},
+                                       {SlotAt(1), SlotAt(3)},
+                                       {SlotAt(2), SlotAt(3)}};
+  int found_total = 0;
+  for (int step = 0; step < 8; ++step) {
+    // Object 0 never moves; the others move on some steps (vertices shifted and jittered).
+    for (int o = 1; o < kObjects; ++o) {
+      if (step > 0 && (step + o) % 3 != 0) continue;
+      const Vector3d shift = RandomPoint(rng, 0.3);
+      for (Vector3d& p : meshes[o].p_MV) p += shift + RandomPoint(rng, 0.01);
+      world[o] = 100 * step + o + 1;
+    }
+    if (step == 0) world[0] = 1;
+    std::vector<ComputeObject> objects(kObjects);
+    for (int o = 0; o < kObjects; ++o) {
+      objects[o] = {meshes[o].p_MV, meshes[o].triangles,          nodes[o],
+                    orders[o],      static_cast<uint64_t>(o + 1), world[o]};
+    }
+    ComputeQuery query;
+    query.objects = objects;
+    query.object_pairs = pairs;
+    auto answer = collider_->Run(query);
+    ASSERT_TRUE(answer.ok()) << ToString(answer.error());
+    std::set<SlotContact> found;
+    for (const auto* list : {&answer->crossing, &answer->undecided})
+      found.insert(list->begin(), list->end());
+    for (const SlotPair& pair : pairs) {
+      const Mesh& a = meshes[Index(pair.object_a)];
+      const Mesh& b = meshes[Index(pair.object_b)];
+      for (uint32_t i = 0; i < a.triangles.size(); ++i) {
+        for (uint32_t j = 0; j < b.triangles.size(); ++j) {
+          const auto& s = a.triangles[i];
+          const auto& t = b.triangles[j];
+          if (!TrianglesIntersect({a.p_MV[s[0]], a.p_MV[s[1]], a.p_MV[s[2]]},
+                                  {b.p_MV[t[0]], b.p_MV[t[1]], b.p_MV[t[2]]}))
+            continue;
+          ++found_total;
+          EXPECT_TRUE(found.count({pair.object_a, i, pair.object_b, j}))
+              << "step " << step << ": " << Index(pair.object_a) << "/" << i << " - "
+              << Index(pair.object_b) << "/" << j << " missed";
+        }
+      }
+    }
+  }
+  EXPECT_GT(found_total, 50);
+}
+
 }  // namespace
 }  // namespace far
