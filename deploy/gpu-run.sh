@@ -261,7 +261,7 @@ main() {
   local paper=(--scenes paper-leaves --methods bvh,gpu,auto,far --paper-gpu far/id-buffer/256
     --steps 8 --distance paper --reference-steps 2)
   local scaling=(--scenes scaling --scaling-sizes 50000,100000,150000,300000,600000,1000000
-    --methods bvh,gpu,auto --steps 6 --distance none --scaling-reference-max 300000
+    --methods bvh,gpu,auto --steps 6 --distance none --scaling-reference-max 150000
     --reference-steps 1)
   export FAR_LOAD_SCENE_ARGS="--kind leaves --frames 200" FAR_LOAD_CLIENTS=16 \
     FAR_LOAD_SECONDS=12 FAR_CLIENT_CPU_MS=5 FAR_LOAD_METHODS="bvh gpu auto"
@@ -273,11 +273,11 @@ main() {
     FAR_LOAD_SECONDS=1 FAR_CLIENT_CPU_MS=1 FAR_LOAD_METHODS="bvh gpu"
   fi
 
-  stage "gpu tests" 150 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}" \
+  stage "gpu tests" 90 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}" \
     --gtest_filter="$gpu_tests"
-  stage "far-study paper-leaves" 150 "${far_env[@]}" "${study[@]}" "${paper[@]}" \
+  stage "far-study paper-leaves" 100 "${far_env[@]}" "${study[@]}" "${paper[@]}" \
     --csv paper.csv --results paper.md
-  stage "far-study scaling" 170 "${far_env[@]}" "${study[@]}" "${scaling[@]}" \
+  stage "far-study scaling" 140 "${far_env[@]}" "${study[@]}" "${scaling[@]}" \
     --csv scaling.csv --results scaling.md
 
   # LCM is UDP multicast: in a private network namespace when this machine allows one.
@@ -287,7 +287,7 @@ main() {
   if command -v unshare >/dev/null && command -v ip >/dev/null && unshare -n true 2>/dev/null; then
     netns=(bash "$here/netns-run.sh")
   fi
-  stage "daemon load (16 clients)" 110 "${netns[@]}" bash -c load_runs
+  stage "daemon load (16 clients)" 100 "${netns[@]}" bash -c load_runs
 
   echo
   echo "=== summary ($(($(date +%s) - start))s in all; GL_RENDERER: $renderer)"
