@@ -9,7 +9,8 @@
 # BUNDLE_DIR: made by deploy/gpu-bundle.sh (default gpu-bundle). RESULTS_DIR: default $OUT when
 # set, else gpu-results. --smoke: every stage tiny, on the surfaceless platform, a software
 # renderer allowed: the check of a bundle on a machine without a GPU, never for numbers.
-# Environment: FAR_RUN_BUDGET_S (whole run, default 540), FAR_BUNDLE_CXX=auto|bundle|system
+# Environment: FAR_RUN_BUDGET_S (whole run, default 540), FAR_RUN_STAGES (a list of tests,
+# paper, scaling, load: the stages to run, default all), FAR_BUNDLE_CXX=auto|bundle|system
 # (which libstdc++),
 # FAR_GLVND=auto|bundle (bundle: the bundle's unpacked glvnd loader, never the system's).
 set -euo pipefail
@@ -273,10 +274,15 @@ main() {
     FAR_LOAD_SECONDS=1 FAR_CLIENT_CPU_MS=1 FAR_LOAD_METHODS="bvh gpu"
   fi
 
+  # FAR_RUN_STAGES: which of them run (default all: tests paper scaling load).
+  local stages=" ${FAR_RUN_STAGES:-tests paper scaling load} "
+  [[ "$stages" == *" tests "* ]] &&
   stage "gpu tests" 90 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}" \
     --gtest_filter="$gpu_tests"
+  [[ "$stages" == *" paper "* ]] &&
   stage "far-study paper-leaves" 100 "${far_env[@]}" "${study[@]}" "${paper[@]}" \
     --csv paper.csv --results paper.md
+  [[ "$stages" == *" scaling "* ]] &&
   stage "far-study scaling" 140 "${far_env[@]}" "${study[@]}" "${scaling[@]}" \
     --csv scaling.csv --results scaling.md
 
@@ -287,6 +293,7 @@ main() {
   if command -v unshare >/dev/null && command -v ip >/dev/null && unshare -n true 2>/dev/null; then
     netns=(bash "$here/netns-run.sh")
   fi
+  [[ "$stages" == *" load "* ]] &&
   stage "daemon load (16 clients)" 100 "${netns[@]}" bash -c load_runs
 
   echo

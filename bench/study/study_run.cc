@@ -227,6 +227,7 @@ void Record(far::StepResult& result, const std::map<uint32_t, int64_t>& triangle
   sample.gl_prepare_ms = result.stats.gl_prepare_ms;
   sample.gl_passes_ms = result.stats.gl_passes_ms;
   sample.gl_gpu_ms = result.stats.gl_gpu_ms;
+  sample.gpu_filter = result.stats.gpu_filter;
   sample.contacts = static_cast<int64_t>(result.contacts.size());
   sample.distance_pairs = static_cast<int64_t>(result.distance_pairs.size());
   sample.method_run = result.stats.method;
@@ -327,6 +328,15 @@ void SummarizeCounts(const std::vector<Sample>& s, Row& row) {
   row.gl_prepare_ms = MedianOf(s, [](const Sample& x) { return x.gl_prepare_ms; });
   row.gl_passes_ms = MedianOf(s, [](const Sample& x) { return x.gl_passes_ms; });
   row.gl_gpu_ms = MedianOf(s, [](const Sample& x) { return x.gl_gpu_ms; });
+  const auto filter = [&](auto field) {
+    return MedianOf(s, [&](const Sample& x) { return static_cast<double>(x.gpu_filter.*field); });
+  };
+  row.gpu_box_pairs = filter(&far::GpuFilterCounters::box_pairs);
+  row.gpu_float = filter(&far::GpuFilterCounters::float_decided);
+  row.gpu_double = filter(&far::GpuFilterCounters::double_decided);
+  row.gpu_cpu = filter(&far::GpuFilterCounters::sent_to_cpu);
+  row.gpu_refit_ms = filter(&far::GpuFilterCounters::gpu_refit_ms);
+  row.gpu_traverse_ms = filter(&far::GpuFilterCounters::gpu_traverse_ms);
   row.contacts = SumOf(s, [](const Sample& x) { return x.contacts; });
   row.reference_contacts = SumOf(s, [](const Sample& x) { return x.reference; });
   row.missed = SumOf(s, [](const Sample& x) { return x.missed; });

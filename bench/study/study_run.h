@@ -19,6 +19,7 @@
 #include "far/base/stage.h"
 #include "far/model/scene_update.h"
 #include "far/model/step_request.h"
+#include "far/model/step_result.h"
 
 namespace far_study {
 
@@ -71,6 +72,7 @@ struct Sample {
   int64_t pcs_objects = 0, pcs_primitives = 0, object_pairs = 0, pairs_considered = 0;
   int64_t pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
   double gl_prepare_ms = 0, gl_passes_ms = 0, gl_gpu_ms = 0;  ///< StepStats' GL split
+  far::GpuFilterCounters gpu_filter;                          ///< the gpu method's filters
   int64_t contacts = 0, reference = 0, missed = 0, false_positives = 0;
   int64_t distance_pairs = 0, distance_reference = 0, distance_missed = 0, distance_spurious = 0;
   bool checked = false;  ///< the reference ran at this step: the four counts above are known
@@ -93,6 +95,10 @@ struct Row {
   double pcs_objects = 0, pcs_primitives = 0, object_pairs = 0, pairs_considered = 0;
   double pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
   double gl_prepare_ms = 0, gl_passes_ms = 0, gl_gpu_ms = 0;  ///< medians
+  /// gpu: medians of its filters' pairs (boxes met, float-decided, fp64-decided, to the CPU)
+  /// and of the GPU time of its refit and traversal.
+  double gpu_box_pairs = 0, gpu_float = 0, gpu_double = 0, gpu_cpu = 0;
+  double gpu_refit_ms = 0, gpu_traverse_ms = 0;
   int64_t contacts = 0, reference_contacts = 0, missed = 0, false_positives = 0;
   int64_t distance_pairs = 0, distance_reference = 0, distance_missed = 0, distance_spurious = 0;
   int64_t object_pairs_total = 0, pairs_considered_total = 0;

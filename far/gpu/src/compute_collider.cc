@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -27,6 +28,12 @@ static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double), "world vertices upl
 // or crossing triangle pairs than the most is refused (the bvh method answers it).
 constexpr size_t kFirstCapacity = size_t{1} << 16;
 constexpr size_t kMostCapacity = size_t{1} << 25;
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
 
 // Work groups per dispatch: each invocation loops with the grid's stride past this.
 GLuint Groups(size_t invocations) {
@@ -86,11 +93,14 @@ struct ComputeCollider::Impl {
   GLint boxes_count = -1, boxes_ranges = -1, refit_count = -1, refit_first = -1;
   GLint traverse_count = -1, traverse_pairs = -1, traverse_capacity = -1;
   GLint traverse_distance = -1, traverse_slack = -1;
+  // GL_TIME_ELAPSED queries: uploads, boxes and refit; the traversal.
+  GLuint refit_query = 0, traverse_query = 0;
 
   Buffer& buffer(internal::ComputeBinding binding) { return buffers[binding]; }
   Result<int64_t> EnsureLayout(std::span<const ComputeObject> objects);
   int64_t UploadVertices(std::span<const ComputeObject> objects);
-  Result<ComputeAnswer> Traverse(const ComputeQuery& query, uint32_t pairs, uint32_t items);
+  Result<ComputeAnswer> Traverse(const ComputeQuery& query, uint32_t pairs, uint32_t items,
+                                 Clock::time_point submit_start);
   // The boxes of the moved objects' triangles, then their hierarchies level by level, deepest
   // first (the other objects' boxes stay as computed before); returns the bytes uploaded.
   int64_t RefitMoved();
@@ -314,7 +324,8 @@ int64_t ComputeCollider::Impl::RefitMoved() {
 }
 
 Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query, uint32_t pairs,
-                                                      uint32_t items) {
+                                                      uint32_t items,
+                                                      Clock::time_point submit_start) {
   ComputeAnswer answer;
   answer.runs = 0;
   std::array<uint32_t, internal::kNumCounters> counters{};
@@ -335,10 +346,15 @@ Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query,
     glProgramUniform1ui(traverse_program, traverse_capacity, static_cast<GLuint>(capacity));
     glProgramUniform1i(traverse_program, traverse_distance, query.distance ? 1 : 0);
     glProgramUniform1f(traverse_program, traverse_slack, FloatAtLeast(query.slack));
+    glBeginQuery(GL_TIME_ELAPSED, traverse_query);
     glDispatchCompute(Groups(items), 1, 1);
+    glEndQuery(GL_TIME_ELAPSED);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    if (answer.runs == 1) answer.cpu_submit_ms = MsSince(submit_start);
+    const auto wait_start = Clock::now();
     glGetNamedBufferSubData(buffer(internal::kCountersBinding).id, 0, sizeof(counters),
                             counters.data());
+    answer.cpu_wait_ms += MsSince(wait_start);
     if (auto ok = CheckGl("gpu method: the traversal"); !ok) return ok.error();
     if (counters[internal::kStackOverflow] != 0) {
       return MakeError(
@@ -356,6 +372,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query,
     }
     capacity = std::bit_ceil(most);
   }
+  const auto read_start = Clock::now();
   const uint32_t num_crossing = counters[internal::kCrossingCount];
   const uint32_t num_undecided = counters[internal::kUndecidedCount];
   std::vector<std::array<uint32_t, 4>> entries(std::max(num_crossing, num_undecided));
@@ -380,6 +397,12 @@ Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query,
     answer.proven_apart.push_back((e[2] & 0x80000000u) != 0 ? 1 : 0);
   }
   if (auto ok = CheckGl("gpu method: reading the pairs back"); !ok) return ok.error();
+  GLuint64 refit_ns = 0, traverse_ns = 0;
+  glGetQueryObjectui64v(refit_query, GL_QUERY_RESULT, &refit_ns);
+  glGetQueryObjectui64v(traverse_query, GL_QUERY_RESULT, &traverse_ns);
+  answer.gpu_refit_ms = 1e-6 * static_cast<double>(refit_ns);
+  answer.gpu_traverse_ms = 1e-6 * static_cast<double>(traverse_ns);
+  answer.cpu_wait_ms += MsSince(read_start);
   answer.box_pairs = counters[internal::kBoxPairs];
   answer.float_decided = counters[internal::kFloatDecided];
   answer.double_decided = counters[internal::kDoubleDecided];
@@ -391,6 +414,8 @@ ComputeCollider::ComputeCollider(std::unique_ptr<Impl> impl) : impl_(std::move(i
 ComputeCollider::~ComputeCollider() {
   const auto lock = LockGl();
   for (Buffer& b : impl_->buffers) glDeleteBuffers(1, &b.id);
+  glDeleteQueries(1, &impl_->refit_query);
+  glDeleteQueries(1, &impl_->traverse_query);
   for (GLuint program : {impl_->boxes_program, impl_->refit_program, impl_->traverse_program})
     glDeleteProgram(program);
 }
@@ -419,6 +444,8 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   impl->traverse_distance = glGetUniformLocation(impl->traverse_program, "u_distance");
   impl->traverse_slack = glGetUniformLocation(impl->traverse_program, "u_slack");
   for (Buffer& b : impl->buffers) glCreateBuffers(1, &b.id);
+  glCreateQueries(GL_TIME_ELAPSED, 1, &impl->refit_query);
+  glCreateQueries(GL_TIME_ELAPSED, 1, &impl->traverse_query);
   impl->buffer(internal::kCountersBinding).Reserve(internal::kNumCounters * sizeof(uint32_t));
   if (auto ok = CheckGl("gpu method: making its buffers"); !ok) return ok.error();
   return std::unique_ptr<ComputeCollider>(new ComputeCollider(std::move(impl)));
@@ -463,8 +490,13 @@ Result<ComputeAnswer> ComputeCollider::Impl::RunGl(const ComputeQuery& query,
                                                    std::span<const std::array<uint32_t, 4>> work,
                                                    std::span<const uint32_t> work_start,
                                                    uint64_t items) {
+  const auto submit_start = Clock::now();
+  glBeginQuery(GL_TIME_ELAPSED, refit_query);
   auto laid_out = EnsureLayout(query.objects);
-  if (!laid_out) return laid_out.error();
+  if (!laid_out) {
+    glEndQuery(GL_TIME_ELAPSED);
+    return laid_out.error();
+  }
   int64_t uploaded = *laid_out + UploadVertices(query.objects);
 
   // Per pair: (driver's first triangle, partner's first triangle, partner's root, 0) and
@@ -491,10 +523,11 @@ Result<ComputeAnswer> ComputeCollider::Impl::RunGl(const ComputeQuery& query,
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding), buffers[binding].id);
   }
   uploaded += RefitMoved();
+  glEndQuery(GL_TIME_ELAPSED);
   if (auto ok = CheckGl("gpu method: boxes and refit"); !ok) return ok.error();
 
-  auto traversed =
-      Traverse(query, static_cast<uint32_t>(work.size()), static_cast<uint32_t>(items));
+  auto traversed = Traverse(query, static_cast<uint32_t>(work.size()), static_cast<uint32_t>(items),
+                            submit_start);
   glUseProgram(0);
   if (!traversed) return traversed.error();
   traversed->bytes_uploaded = uploaded;

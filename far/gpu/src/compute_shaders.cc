@@ -180,8 +180,8 @@ int SideDouble(dvec3 a, dvec3 b, dvec3 c, dvec3 d) {
   precise double det = w.x * (p0 - p1) + w.y * (p2 - p3) + w.z * (p4 - p5);
   precise double perm = abs(w.x) * (abs(p0) + abs(p1)) + abs(w.y) * (abs(p2) + abs(p3)) +
                         abs(w.z) * (abs(p4) + abs(p5));
-  double rel = packDouble2x32(uvec2(0u, 0x3cd00000u));  // 8 * 2^-53 = 2^-50
-  double tiny = packDouble2x32(uvec2(0u, 0x03500000u));  // 2^-970
+  double rel = ldexp(1.0lf, -50);    // 8 * 2^-53
+  double tiny = ldexp(1.0lf, -970);
   precise double bound = perm * rel + tiny;
   if (det > bound) return 1;
   if (-det > bound) return -1;

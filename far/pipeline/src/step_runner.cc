@@ -378,9 +378,15 @@ Result<void> Stages::FilterOnGpu() {
   state_.computed = std::move(*computed);
   state_.stats.bytes_uploaded += state_.computed.bytes_uploaded;
   state_.stats.pairs_considered = state_.computed.box_pairs;
-  state_.stats.gpu_filter = {
-      state_.computed.box_pairs, state_.computed.float_decided, state_.computed.double_decided,
-      static_cast<int64_t>(state_.computed.undecided.size()), state_.computed.runs};
+  const ComputeAnswer& answer = state_.computed;
+  state_.stats.gpu_filter = {answer.box_pairs,      answer.float_decided,
+                             answer.double_decided, static_cast<int64_t>(answer.undecided.size()),
+                             answer.runs,           answer.gpu_refit_ms,
+                             answer.gpu_traverse_ms};
+  // As the raster methods report their views: CPU issuing, CPU waiting and reading, GPU time.
+  state_.stats.gl_prepare_ms += answer.cpu_submit_ms;
+  state_.stats.gl_passes_ms += answer.cpu_wait_ms;
+  state_.stats.gl_gpu_ms += answer.gpu_refit_ms + answer.gpu_traverse_ms;
   std::vector<std::vector<uint32_t>> pcs(state_.objects.size());
   for (const auto* list : {&state_.computed.crossing, &state_.computed.undecided}) {
     for (const SlotContact& pair : *list) {

@@ -496,16 +496,23 @@ TEST_F(PipelineCullingTest, AutoRunsTheFastestReliableConfigurationAndSaysWhy) {
   Load(RandomSoup(77, 40, 200, 3.0, 0.3));  // 8000 triangles
   StepRequest request;                      // auto: the default
   StepResult result;
-  for (int step = 0; step < 4; ++step) result = Run(request);
-  EXPECT_EQ(result.stats.method, "bvh");
-  EXPECT_NE(result.stats.method_reason.find("auto: bvh is the fastest measured"), std::string::npos)
-      << result.stats.method_reason;
-  // llvmpipe: the gpu method and FAR are predicted far slower than bvh, and not tried.
-  EXPECT_NE(result.stats.method_reason.find("not tried (predicted over 3x the best): gpu"),
-            std::string::npos)
-      << result.stats.method_reason;
-  EXPECT_NE(result.stats.method_reason.find("far/id-buffer/256"), std::string::npos)
-      << result.stats.method_reason;
+  for (int step = 0; step < 8; ++step) result = Run(request);
+  const std::string& reason = result.stats.method_reason;
+  EXPECT_NE(reason.find("auto: "), std::string::npos) << reason;
+  if (pipeline_->gl_renderer().find("llvmpipe") != std::string::npos) {
+    // A software renderer: bvh wins; gpu was measured slower or predicted hopeless (its
+    // probe's scenes are small: the prediction varies), FAR is predicted hopeless.
+    EXPECT_EQ(result.stats.method, "bvh");
+    EXPECT_NE(reason.find("auto: bvh is the fastest measured"), std::string::npos) << reason;
+    EXPECT_TRUE(reason.find("gpu measured") != std::string::npos ||
+                reason.find("not tried (predicted over 3x the best): gpu") != std::string::npos)
+        << reason;
+    EXPECT_NE(reason.find("far/id-buffer/256"), std::string::npos) << reason;
+  } else {
+    // A GPU: whichever is fastest there, a reliable one, with what it measured.
+    EXPECT_TRUE(result.stats.certificate.guaranteed) << result.stats.method;
+    EXPECT_NE(reason.find("measured"), std::string::npos) << reason;
+  }
   // The configuration of any other method is named too.
   request.method = Method::kFar;
   request.resolution = 128;

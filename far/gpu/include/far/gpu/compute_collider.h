@@ -61,6 +61,11 @@ struct ComputeAnswer {
   int64_t double_decided = 0;  ///< decided by the fp64 filter (the float one could not)
   int64_t bytes_uploaded = 0;
   int runs = 1;  ///< traversals run: more than one when the output buffers had to grow
+  // Where the time went (milliseconds). CPU: issuing the uploads and kernels, then waiting for
+  // the GPU and reading the pairs back. GPU (timer queries): the uploads with the boxes and
+  // refit, and the (last) traversal.
+  double cpu_submit_ms = 0, cpu_wait_ms = 0;
+  double gpu_refit_ms = 0, gpu_traverse_ms = 0;
 };
 
 /// The GPU-resident part of the `gpu` method, in compute shaders of the current OpenGL 4.5

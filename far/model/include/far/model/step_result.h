@@ -71,6 +71,8 @@ struct GpuFilterCounters {
   int64_t double_decided = 0;  ///< decided by the fp64 filter (the float one could not)
   int64_t sent_to_cpu = 0;     ///< pairs left to the CPU's exact predicates
   int traversals = 0;          ///< GPU traversals run (more than 1: its output buffers grew)
+  double gpu_refit_ms = 0;     ///< GPU time of the uploads, triangle boxes and refit
+  double gpu_traverse_ms = 0;  ///< GPU time of the traversal with the filters
   bool operator==(const GpuFilterCounters&) const = default;
 };
 
