@@ -1,10 +1,32 @@
 #include "compute_stage.h"
 
+#include <map>
+#include <mutex>
+#include <string>
 #include <utility>
 
+#include "compute_self_check.h"
+
+#include "far/gpu/culling_renderer.h"
 #include "far/pairs/triangle_bvh.h"
 
 namespace far::internal {
+namespace {
+
+// The self-check's verdict, once per renderer and process: the driver, not the session,
+// decides it.
+Result<void> CheckedOnThisDriver(ComputeCollider& collider) {
+  static std::mutex mutex;
+  static std::map<std::string, Result<void>> verdicts;
+  const std::string renderer = CurrentGlRenderer();
+  std::lock_guard lock(mutex);
+  if (auto it = verdicts.find(renderer); it != verdicts.end()) return it->second;
+  Result<void> verdict = SelfCheckComputeCollider(collider);
+  verdicts.emplace(renderer, verdict);
+  return verdict;
+}
+
+}  // namespace
 
 // Every live object gets its topology once (the layout on the GPU then changes only when
 // objects come or go): TriangleBvh's, built from the vertices it has now, without its boxes.
@@ -47,11 +69,13 @@ Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> 
   *stopped = BuildTopologies(objects, control);
   if (*stopped != StopReason::kNone) return ComputeAnswer{};
   if (!collider_) {
-    SetupScope setup(&control);  // compiling the kernels is one-off work
+    SetupScope setup(&control);  // compiling the kernels and checking them is one-off work
     auto made = ComputeCollider::Create();
     if (!made) return made.error();
     collider_ = std::move(*made);
+    trusted_ = CheckedOnThisDriver(*collider_);
   }
+  if (!trusted_) return trusted_.error();
   std::vector<ComputeObject> views(objects.size());
   for (size_t s = 0; s < objects.size(); ++s) {
     if (objects[s] == nullptr) continue;

@@ -20,7 +20,10 @@ namespace far::internal {
 /// The gpu method's GPU stage on the pipeline's side: each object's hierarchy topology, built
 /// once on the CPU from its vertices when it first takes part (a deformable object's is then
 /// only refit, on the GPU), and what changed since the last step, handed to far::
-/// ComputeCollider. Owned by the GL thread (far::GlContext's contract).
+/// ComputeCollider. Its first step holds the collider to the exact predicates on this driver
+/// (SelfCheckComputeCollider, once per renderer and process): a driver that fails it gets
+/// kUnavailable for every gpu step (auto then runs bvh). Owned by the GL thread
+/// (far::GlContext's contract).
 class ComputeStage {
  public:
   explicit ComputeStage(ThreadPool& pool) : pool_(pool) {}
@@ -52,6 +55,7 @@ class ComputeStage {
   ThreadPool& pool_;
   std::vector<std::optional<SlotState>> slots_;
   std::unique_ptr<ComputeCollider> collider_;  // made on the first step (a GL context current)
+  Result<void> trusted_;                       // the driver's self-check (compute_self_check.h)
   uint64_t next_key_ = 1;
 };
 

@@ -10,6 +10,7 @@
 #include <set>
 #include <vector>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include "far/geometry/triangle_tests.h"
@@ -130,6 +131,27 @@ TEST_F(ComputeColliderTest, PairsARoundingAwayFromTouching) {
   }
   const ComputeAnswer answer = CheckPairs(triangles);
   EXPECT_GT(answer.undecided.size(), 0u) << "touching pairs are never certified";
+}
+
+// A vertex of t a hair (1e-5 to 1e-15) off the tilted plane of s, inside s, the rest of t on
+// one side: the side of the hair decides, and float cannot tell below about 1e-7: a filter
+// whose bound were too small would answer these at random (the self-check holds every driver
+// to the same cases: far/pipeline/src/compute_self_check.cc).
+TEST_F(ComputeColliderTest, AVertexAHairOffATiltedPlane) {
+  std::mt19937_64 rng(13);
+  constexpr double kHairs[] = {1e-5, 1e-7, 1e-9, 1e-11, 1e-13, 1e-15};
+  TriangleObjects triangles;
+  for (int i = 0; i < 2400; ++i) {
+    const Vector3d a = RandomPoint(rng, 1), b = RandomPoint(rng, 1), c = RandomPoint(rng, 1);
+    const Vector3d n = (b - a).cross(c - a).normalized();
+    const double hair = (i % 2 ? 1 : -1) * kHairs[(i / 2) % 6];
+    const Vector3d p = a + 0.3 * (b - a) + 0.3 * (c - a) + hair * n;
+    const Vector3d side = 0.5 * n + RandomPoint(rng, 0.3);
+    triangles.Add({a, b, c});
+    triangles.Add({p, p + side + RandomPoint(rng, 0.2), p + side + RandomPoint(rng, 0.2)});
+  }
+  const ComputeAnswer answer = CheckPairs(triangles);
+  EXPECT_GT(answer.double_decided, 100) << "the hairs below float's reach are decided in fp64";
 }
 
 // Slivers (one edge 1e-9 of the others) crossing ordinary triangles, and tiny triangles whose

@@ -1,0 +1,194 @@
+#include "compute_self_check.h"
+
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "far/geometry/triangle_tests.h"
+#include "far/pairs/triangle_bvh.h"
+
+namespace far::internal {
+namespace {
+
+using Eigen::Vector3d;
+
+// Objects of the check: meshes in world frame with their hierarchy topologies.
+struct CheckObject {
+  Mesh mesh;
+  std::vector<ComputeNode> nodes;
+  std::vector<uint32_t> order;
+};
+
+CheckObject MakeObject(Mesh mesh) {
+  CheckObject object;
+  object.mesh = std::move(mesh);
+  TriangleBvh bvh;
+  bvh.Build(object.mesh.p_MV, object.mesh.triangles);
+  for (const TriangleBvh::Node& node : bvh.nodes())
+    object.nodes.push_back({node.first, node.count});
+  object.order = bvh.order();
+  return object;
+}
+
+Mesh OneTriangle(const TrianglePoints& t) { return Mesh{{t.a, t.b, t.c}, {{0, 1, 2}}}; }
+
+Vector3d Random(std::mt19937_64& rng, double scale) {
+  std::uniform_real_distribution<double> u(-scale, scale);
+  return {u(rng), u(rng), u(rng)};
+}
+
+// Pairs (2i, 2i + 1) of single triangles where the filters work hardest.
+std::vector<CheckObject> FilterCases() {
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<CheckObject> objects;
+  const auto add = [&](const TrianglePoints& s, const TrianglePoints& t) {
+    objects.push_back(MakeObject(OneTriangle(s)));
+    objects.push_back(MakeObject(OneTriangle(t)));
+  };
+  for (int i = 0; i < 1500; ++i) {  // general position
+    const Vector3d c = Random(rng, 0.5);
+    add({c + Random(rng, 1), c + Random(rng, 1), c + Random(rng, 1)},
+        {c + Random(rng, 1), c + Random(rng, 1), c + Random(rng, 1)});
+  }
+  for (double offset : {0.0, 1e6}) {  // a vertex on the plane z = offset, or a double step off
+    for (int i = 0; i < 600; ++i) {
+      const double z = offset;
+      double apex = z;
+      if (i % 3 != 1) apex = std::nextafter(z, i % 3 == 0 ? -1e300 : 1e300);
+      const double up = (i % 2 ? 1 : -1) * (0.1 + std::abs(u(rng)));
+      add({{u(rng), u(rng), z}, {u(rng), u(rng), z}, {u(rng), u(rng), z}},
+          {{u(rng) * 0.3, u(rng) * 0.3, apex}, {u(rng), u(rng), z + up}, {u(rng), u(rng), z + up}});
+    }
+  }
+  // A vertex of t a hair off a tilted plane of s, inside s, the rest of t on one side: which
+  // side the hair is on decides the answer, and no float evaluation can tell at 1e-9 (a filter
+  // whose bound is too small answers at random here).
+  constexpr double kHairs[] = {1e-5, 1e-7, 1e-9, 1e-11, 1e-13, 1e-15};
+  for (int i = 0; i < 1200; ++i) {
+    const Vector3d a = Random(rng, 1), b = Random(rng, 1), c = Random(rng, 1);
+    const Vector3d n = (b - a).cross(c - a).normalized();
+    if (!n.allFinite()) continue;
+    const double hair = (i % 2 ? 1 : -1) * kHairs[(i / 2) % 6];
+    const Vector3d on_plane = a + 0.3 * (b - a) + 0.3 * (c - a);
+    const Vector3d p = on_plane + hair * n;
+    const Vector3d side = 0.5 * n + Random(rng, 0.3);
+    add({a, b, c}, {p, p + side + Random(rng, 0.2), p + side + Random(rng, 0.2)});
+  }
+  for (int i = 0; i < 500; ++i) {  // slivers
+    const Vector3d a = Random(rng, 1), b = Random(rng, 1), c = Random(rng, 0.5);
+    add({a, b, a + 1e-9 * (b - a) + Random(rng, 1e-9)},
+        {c + Random(rng, 1), c + Random(rng, 1), c + Random(rng, 1)});
+  }
+  for (int i = 0; i < 500; ++i) {  // below the float filter's range: the fp64 one decides
+    const Vector3d c = Vector3d(3, -2, 1) + Random(rng, 5e-14);
+    add({c + Random(rng, 1e-13), c + Random(rng, 1e-13), c + Random(rng, 1e-13)},
+        {c + Random(rng, 1e-13), c + Random(rng, 1e-13), c + Random(rng, 1e-13)});
+  }
+  return objects;
+}
+
+// Meshes of random triangles, each a few hundred, overlapping: the traversal's case.
+std::vector<CheckObject> TraversalCases() {
+  std::mt19937_64 rng(7);
+  std::vector<CheckObject> objects;
+  for (int o = 0; o < 4; ++o) {
+    Mesh mesh;
+    const Vector3d center = Random(rng, 0.5);
+    const int n = 200 + 150 * o;
+    for (int t = 0; t < n; ++t) {
+      const Vector3d c = center + Random(rng, 0.8);
+      for (int k = 0; k < 3; ++k) mesh.p_MV.push_back(c + Random(rng, 0.12));
+      mesh.triangles.push_back({static_cast<uint32_t>(3 * t), static_cast<uint32_t>(3 * t + 1),
+                                static_cast<uint32_t>(3 * t + 2)});
+    }
+    objects.push_back(MakeObject(std::move(mesh)));
+  }
+  return objects;
+}
+
+TrianglePoints Corners(const Mesh& mesh, uint32_t t) {
+  const TriangleIndices& v = mesh.triangles[t];
+  return {mesh.p_MV[v[0]], mesh.p_MV[v[1]], mesh.p_MV[v[2]]};
+}
+
+std::string Name(const SlotContact& c) {
+  return std::to_string(Index(c.object_a)) + "/" + std::to_string(c.triangle_a) + " - " +
+         std::to_string(Index(c.object_b)) + "/" + std::to_string(c.triangle_b);
+}
+
+// Runs `pairs` of `objects` and compares with the exact predicates; "" when they agree.
+Result<std::string> Compare(ComputeCollider& collider, const std::vector<CheckObject>& objects,
+                            const std::vector<SlotPair>& pairs, uint64_t key_base) {
+  std::vector<ComputeObject> views;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const CheckObject& object = objects[i];
+    views.push_back({object.mesh.p_MV, object.mesh.triangles, object.nodes, object.order,
+                     key_base + i, key_base + i});
+  }
+  ComputeQuery query;
+  query.objects = views;
+  query.object_pairs = pairs;
+  auto answer = collider.Run(query);
+  if (!answer) return answer.error();
+  std::set<SlotContact> crossing, kept;
+  for (const SlotContact& c : answer->crossing) {
+    if (!crossing.insert(c).second || !kept.insert(c).second) return "pair " + Name(c) + " twice";
+  }
+  for (const SlotContact& c : answer->undecided) {
+    if (!kept.insert(c).second) return "pair " + Name(c) + " twice";
+  }
+  for (const SlotContact& c : crossing) {
+    if (!TrianglesIntersect(Corners(objects[Index(c.object_a)].mesh, c.triangle_a),
+                            Corners(objects[Index(c.object_b)].mesh, c.triangle_b)))
+      return "pair " + Name(c) + " certified crossing, and it does not intersect";
+  }
+  for (const SlotPair& pair : pairs) {
+    const Mesh& a = objects[Index(pair.object_a)].mesh;
+    const Mesh& b = objects[Index(pair.object_b)].mesh;
+    for (uint32_t i = 0; i < a.triangles.size(); ++i) {
+      for (uint32_t j = 0; j < b.triangles.size(); ++j) {
+        const SlotContact c{pair.object_a, i, pair.object_b, j};
+        if (!kept.count(c) && TrianglesIntersect(Corners(a, i), Corners(b, j)))
+          return "pair " + Name(c) + " intersects, and was dropped";
+      }
+    }
+  }
+  return std::string();
+}
+
+}  // namespace
+
+Result<void> SelfCheckComputeCollider(ComputeCollider& collider) {
+  // Keys far above the pipeline's own (ComputeStage counts from 1): the collider lays these
+  // objects out anew, and the pipeline's objects again on its first step.
+  constexpr uint64_t kKeys = uint64_t{1} << 62;
+  const std::vector<CheckObject> filters = FilterCases();
+  std::vector<SlotPair> filter_pairs;
+  for (size_t i = 0; i + 1 < filters.size(); i += 2)
+    filter_pairs.push_back({SlotAt(i), SlotAt(i + 1)});
+  const std::vector<CheckObject> meshes = TraversalCases();
+  std::vector<SlotPair> mesh_pairs;
+  for (size_t a = 0; a < meshes.size(); ++a) {
+    for (size_t b = a + 1; b < meshes.size(); ++b) mesh_pairs.push_back({SlotAt(a), SlotAt(b)});
+  }
+  for (const auto& [objects, pairs, what] : {std::tuple{&filters, &filter_pairs, "the filters"},
+                                             std::tuple{&meshes, &mesh_pairs, "the traversal"}}) {
+    auto disagreement =
+        Compare(collider, *objects, *pairs, kKeys + (objects == &meshes ? 1 << 20 : 0));
+    if (!disagreement) return disagreement.error();
+    if (!disagreement->empty()) {
+      return MakeError(ErrorCode::kUnavailable,
+                       std::string("gpu method: this GL driver's compute results disagree with the "
+                                   "exact predicates in the self-check of ") +
+                           what + " (" + *disagreement +
+                           "); the method is not used on it (docs/culling.md)");
+    }
+  }
+  return {};
+}
+
+}  // namespace far::internal
