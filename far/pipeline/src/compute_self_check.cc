@@ -1,5 +1,7 @@
 #include "compute_self_check.h"
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <set>
 #include <string>
@@ -91,17 +93,17 @@ std::vector<CheckObject> FilterCases() {
   return objects;
 }
 
-// Meshes of random triangles, each a few hundred, overlapping: the traversal's case.
+// Meshes of small random triangles, overlapping, from a few hundred triangles to 100K (deep
+// hierarchies, many descents): the traversal's case.
 std::vector<CheckObject> TraversalCases() {
   std::mt19937_64 rng(7);
   std::vector<CheckObject> objects;
-  for (int o = 0; o < 4; ++o) {
+  for (int n : {300, 2000, 20000, 100000}) {
     Mesh mesh;
-    const Vector3d center = Random(rng, 0.5);
-    const int n = 200 + 150 * o;
+    const double size = 0.6 / std::cbrt(static_cast<double>(n));
     for (int t = 0; t < n; ++t) {
-      const Vector3d c = center + Random(rng, 0.8);
-      for (int k = 0; k < 3; ++k) mesh.p_MV.push_back(c + Random(rng, 0.12));
+      const Vector3d c = Random(rng, 1.0);
+      for (int k = 0; k < 3; ++k) mesh.p_MV.push_back(c + Random(rng, size));
       mesh.triangles.push_back({static_cast<uint32_t>(3 * t), static_cast<uint32_t>(3 * t + 1),
                                 static_cast<uint32_t>(3 * t + 2)});
     }
@@ -113,6 +115,27 @@ std::vector<CheckObject> TraversalCases() {
 TrianglePoints Corners(const Mesh& mesh, uint32_t t) {
   const TriangleIndices& v = mesh.triangles[t];
   return {mesh.p_MV[v[0]], mesh.p_MV[v[1]], mesh.p_MV[v[2]]};
+}
+
+// A triangle's closed box (its corners' min and max: exact).
+struct TriangleBoxOf {
+  Eigen::AlignedBox3d box;
+  uint32_t triangle = 0;
+};
+
+// Every triangle's box, sorted by its low x.
+std::vector<TriangleBoxOf> SortedBoxes(const Mesh& mesh) {
+  std::vector<TriangleBoxOf> boxes;
+  boxes.reserve(mesh.triangles.size());
+  for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    TriangleBoxOf box{Eigen::AlignedBox3d(), t};
+    for (uint32_t v : mesh.triangles[t]) box.box.extend(mesh.p_MV[v]);
+    boxes.push_back(box);
+  }
+  std::sort(boxes.begin(), boxes.end(), [](const TriangleBoxOf& x, const TriangleBoxOf& y) {
+    return x.box.min().x() < y.box.min().x();
+  });
+  return boxes;
 }
 
 std::string Name(const SlotContact& c) {
@@ -146,13 +169,24 @@ Result<std::string> Compare(ComputeCollider& collider, const std::vector<CheckOb
                             Corners(objects[Index(c.object_b)].mesh, c.triangle_b)))
       return "pair " + Name(c) + " certified crossing, and it does not intersect";
   }
+  // Every pair whose closed boxes meet (b's boxes sorted along x: a's partners start at most
+  // b's widest extent before it), then the exact predicates.
   for (const SlotPair& pair : pairs) {
     const Mesh& a = objects[Index(pair.object_a)].mesh;
     const Mesh& b = objects[Index(pair.object_b)].mesh;
-    for (uint32_t i = 0; i < a.triangles.size(); ++i) {
-      for (uint32_t j = 0; j < b.triangles.size(); ++j) {
-        const SlotContact c{pair.object_a, i, pair.object_b, j};
-        if (!kept.count(c) && TrianglesIntersect(Corners(a, i), Corners(b, j)))
+    const std::vector<TriangleBoxOf> boxes_a = SortedBoxes(a), boxes_b = SortedBoxes(b);
+    double widest = 0;
+    for (const TriangleBoxOf& box : boxes_b)
+      widest = std::max(widest, box.box.max().x() - box.box.min().x());
+    for (const TriangleBoxOf& box_a : boxes_a) {
+      auto k = std::lower_bound(
+          boxes_b.begin(), boxes_b.end(), box_a.box.min().x() - widest,
+          [](const TriangleBoxOf& box, double x) { return box.box.min().x() < x; });
+      for (; k != boxes_b.end() && k->box.min().x() <= box_a.box.max().x(); ++k) {
+        if (!box_a.box.intersects(k->box)) continue;
+        const SlotContact c{pair.object_a, box_a.triangle, pair.object_b, k->triangle};
+        if (!kept.count(c) &&
+            TrianglesIntersect(Corners(a, c.triangle_a), Corners(b, c.triangle_b)))
           return "pair " + Name(c) + " intersects, and was dropped";
       }
     }
