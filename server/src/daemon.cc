@@ -56,6 +56,7 @@ struct Daemon::Impl {
   SetupAllowance setup_allowance{config.setup_allowance_ms};
   std::unique_ptr<Replier> replier;
   std::unique_ptr<MessageHandlers> handlers;
+  ActiveSessions active_sessions;  // before workers: they point at it
   std::unique_ptr<WorkerContext> workers;
   std::unique_ptr<StatusSources> status;
   std::atomic<bool> stop{false};
@@ -102,7 +103,8 @@ Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, Daemo
   impl->budget.OnReclaim([raw](int64_t id, const Error& why) { raw->EndSession(id, why); });
   impl->workers = std::make_unique<WorkerContext>(WorkerContext{
       impl->config, *impl->replier, impl->stats, impl->budget, impl->setup_allowance, true,
-      [raw](int64_t id, const std::string& reason) { raw->CloseSession(id, reason); }});
+      [raw](int64_t id, const std::string& reason) { raw->CloseSession(id, reason); },
+      &impl->active_sessions});
   return std::unique_ptr<Daemon>(new Daemon(std::move(impl)));
 }
 

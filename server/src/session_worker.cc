@@ -243,6 +243,12 @@ class SessionWorker {
     if (auto fits = deadlines_.Check(command.request, triangles, Clock::now()); !fits)
       return replier.StepError(*session_, command, fits.error());
     const auto step_started = Clock::now();
+    // The cores this step can count on: the daemon's, over the sessions stepping now.
+    if (context_.active != nullptr) {
+      const int sessions = context_.active->Stepping(session_->id);
+      session_->pipeline->SetCpuShare(static_cast<double>(CpuCoresOf(context_.config)) /
+                                      std::max(1, sessions));
+    }
     StepCpuMeter meter(worker_clock_, context_.setup_allowance, session_->uid);
     auto result = session_->pipeline->Step(command.request, ControlFor(job, meter));
     deadlines_.Record(command.request, triangles, EndOf(job, result, dequeued, gl_waited_ms),

@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 
+#include "active_sessions.h"
 #include "daemon_config.h"
 #include "daemon_stats.h"
 #include "replier.h"
@@ -24,6 +25,8 @@ struct WorkerContext {
   bool use_gl = true;               ///< the daemon made a GL context at start-up
   /// Ends a session from its worker (the segment became unreadable), telling its client.
   std::function<void(int64_t session_id, const std::string& reason)> close_session;
+  /// The sessions stepping now (the daemon's); null: each session counts on all cpu_cores.
+  ActiveSessions* active = nullptr;
 };
 
 /// Starts the thread that serves one session: it takes the session's queued steps one at a

@@ -127,4 +127,24 @@ void ThreadPool::MoveCallingThreadToBackground() {
   moved = true;
 }
 
+namespace {
+double ClockMs(clockid_t clock) {
+  timespec t{};
+  if (clock_gettime(clock, &t) != 0) return 0;
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
+}  // namespace
+
+double ThreadPool::WorkersCpuMs() const {
+  double ms = 0;
+  for (const std::thread& worker : workers_) {
+    clockid_t clock;
+    if (pthread_getcpuclockid(const_cast<std::thread&>(worker).native_handle(), &clock) == 0)
+      ms += ClockMs(clock);
+  }
+  return ms;
+}
+
+double ThreadPool::CallingThreadCpuMs() { return ClockMs(CLOCK_THREAD_CPUTIME_ID); }
+
 }  // namespace far

@@ -44,6 +44,12 @@ std::string NotTried(const std::vector<const Entry*>& skipped) {
   return text;
 }
 
+std::string Cores(double cores) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.1f", cores);
+  return text;
+}
+
 bool Changed(int64_t now, int64_t then, double fraction) {
   return std::abs(static_cast<double>(now - then)) >
          fraction * static_cast<double>(std::max<int64_t>(then, 1));
@@ -145,6 +151,9 @@ Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
             Ms(*best->measured_ms) +
             (cpu_threads_ > 0 ? ", CPU stages on " + std::to_string(cpu_threads_) + " threads"
                               : std::string()) +
+            (cpu_share_ > 0 && cpu_share_ < cpu_threads_
+                 ? ", CPU time over a " + Cores(cpu_share_) + "-core share"
+                 : std::string()) +
             ")";
   for (const Entry& entry : entries_) {
     if (&entry != best && entry.measured_ms)
@@ -160,8 +169,10 @@ void AutoSelector::Exclude(const Candidate& candidate) {
   }
 }
 
-void AutoSelector::Record(const Candidate& candidate, double ms) {
+void AutoSelector::Record(const Candidate& candidate, double wall_ms, double cpu_ms) {
   ++steps_since_calibration_;
+  // The step's cost: its wall time, or its CPU time over the share where that is larger.
+  const double ms = cpu_share_ > 0 ? std::max(wall_ms, cpu_ms / cpu_share_) : wall_ms;
   bool steady = false;  // a time without one-off work in it
   for (Entry& entry : entries_) {
     if (!(entry.candidate == candidate)) continue;

@@ -23,6 +23,7 @@ struct Pipeline::Impl {
   SceneModel model;
   internal::StepWorld world;
   std::optional<internal::AutoSelector> selector;  // made on the first auto step
+  double cpu_share = 0;                            // SetCpuShare; 0: the pool's threads
 
   explicit Impl(const PipelineOptions& o)
       : options(o),
@@ -67,6 +68,7 @@ Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request,
     concrete.resolution = chosen.resolution;
   }
   const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = pool.WorkersCpuMs() + ThreadPool::CallingThreadCpuMs();
   auto result = Step(concrete, control);
   // A GPU configuration that cannot run this scene (a hierarchy too deep for the kernels' stack,
   // over their 32-bit counts or read-back limit, a GL error) is not a failed step for auto: it
@@ -82,10 +84,14 @@ Result<StepResult> Pipeline::Impl::StepAuto(const StepRequest& request,
     result = Step(concrete, control);
   }
   if (!result) return result;
-  if (!gpu_refused)
+  if (!gpu_refused) {
+    const double cpu_ms = pool.WorkersCpuMs() + ThreadPool::CallingThreadCpuMs() - cpu_start;
+    selector->set_cpu_share(cpu_share > 0 ? cpu_share : pool.num_threads());
     selector->Record(
-        chosen, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                    .count());
+        chosen,
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(),
+        cpu_ms);
+  }
   result->stats.method_reason = std::move(reason);
   return result;
 }
@@ -168,6 +174,7 @@ Result<StepResult> Pipeline::Step(const StepRequest& request, const StepControl&
 int Pipeline::num_objects() const { return impl_->world.cache.size(); }
 int64_t Pipeline::num_triangles() const { return impl_->model.num_triangles(); }
 void Pipeline::SetCpuBackground(int max_threads) { impl_->pool.SetBackground(max_threads); }
+void Pipeline::SetCpuShare(double cores) { impl_->cpu_share = cores; }
 int Pipeline::cpu_threads() const { return impl_->pool.num_threads(); }
 const SceneCounters& Pipeline::counters() const { return impl_->world.cache.counters(); }
 std::string Pipeline::gl_renderer() const { return impl_->renderer_name; }

@@ -144,6 +144,36 @@ TEST(AutoSelectorTest, TheGpuMethodIsSkippedWhenHopelessUnprobedOrFailed) {
     EXPECT_NE(name, "gpu");
 }
 
+// Cores shared with other sessions or simulators: bvh's step is fast on 16 threads but keeps
+// them busy (12 ms of CPU for 1.7 ms); gpu's takes 1.9 ms and 1.9 ms of CPU. Alone (a share of
+// 16 cores) bvh wins; on a 1-core share gpu does.
+TEST(AutoSelectorTest, CpuTimeOverTheShareDecidesOnSharedCores) {
+  GpuCost probe{5.0, 0.03};
+  probe.compute_fixed_ms = 1.0;
+  probe.compute_ms_per_triangle = 0.0;
+  for (double share : {16.0, 1.0}) {
+    AutoSelector selector(
+        true, [&] { return std::optional<GpuCost>(probe); }, 16);
+    selector.set_cpu_share(share);
+    std::string reason;
+    for (int i = 0; i < 8; ++i) {
+      const Candidate c = selector.Choose({150, 40000}, &reason);
+      if (c.Name() == "bvh")
+        selector.Record(c, 1.7, 12.0);
+      else if (c.Name() == "gpu")
+        selector.Record(c, 1.9, 1.9);
+      else
+        selector.Record(c, 100, 100);
+    }
+    const Candidate chosen = selector.Choose({150, 40000}, &reason);
+    EXPECT_EQ(chosen.Name(), share == 16.0 ? "bvh" : "gpu") << reason;
+    if (share == 1.0) {
+      EXPECT_NE(reason.find("CPU time over a 1.0-core share"), std::string::npos) << reason;
+      EXPECT_NE(reason.find("bvh measured 12 ms"), std::string::npos) << reason;
+    }
+  }
+}
+
 TEST(AutoSelectorTest, RecalibratesWhenTheSceneGrowsOrTheChoiceDrifts) {
   AutoSelector selector(true, [] { return std::optional<GpuCost>(GpuCost{1.0, 0.001}); });
   // Small scene: the GPU (1.1 ms predicted, 1 ms measured) wins over bvh (5 ms).

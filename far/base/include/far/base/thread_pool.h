@@ -39,6 +39,12 @@ class ThreadPool {
   /// alone did not do: bench/RESULTS.md). One way: an unprivileged process cannot undo it.
   void SetBackground(int max_threads);
 
+  /// CPU time the workers have used since they started, all together (ms; Linux thread CPU
+  /// clocks, 0 elsewhere). With the caller's own thread CPU time, what a loop cost in CPU.
+  double WorkersCpuMs() const;
+  /// CPU time the calling thread has used since it started (ms).
+  static double CallingThreadCpuMs();
+
   /// The nice value of background threads.
   static constexpr int kBackgroundNice = 10;
   /// Moves the calling thread to the background (nice kBackgroundNice under SCHED_IDLE, Linux),

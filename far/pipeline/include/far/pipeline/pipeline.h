@@ -94,6 +94,11 @@ class Pipeline {
   /// Makes the pipeline's CPU pool background work on at most `max_threads` threads (see
   /// ThreadPool::SetBackground; one way).
   void SetCpuBackground(int max_threads);
+  /// The cores this pipeline's steps can count on now (a daemon: its cores over the sessions
+  /// stepping; 0, the default: its pool's threads). auto weighs each configuration's CPU time
+  /// by it: a step costs at least its CPU time over the share, so where the cores are shared,
+  /// a configuration that needs little CPU (gpu) wins over one that needs many cores (bvh).
+  void SetCpuShare(double cores);
   /// The threads of the CPU pool's parallel loops (the calling thread included).
   int cpu_threads() const;
 

@@ -88,8 +88,14 @@ class AutoSelector {
 
   /// The configuration for the next step, and why (filled into the step's stats).
   Candidate Choose(const SceneSize& scene, std::string* reason);
-  /// Records the time of a step that ran `candidate` (the one Choose just gave).
-  void Record(const Candidate& candidate, double ms);
+  /// Records the time of a step that ran `candidate` (the one Choose just gave): its wall time
+  /// and, when known, the CPU time its pipeline used (all threads). Its cost is the larger of
+  /// the wall time and the CPU time over the CPU share (set_cpu_share): on cores other
+  /// sessions or simulators also need, a step that keeps 16 threads busy costs what they
+  /// would take from the others.
+  void Record(const Candidate& candidate, double wall_ms, double cpu_ms = 0);
+  /// The cores the pipeline can count on now (0: only wall times count).
+  void set_cpu_share(double cores) { cpu_share_ = cores; }
   /// Never chooses `candidate` again (its step failed: its GPU resources or limits do not fit
   /// this scene); the next Choose goes on with the others.
   void Exclude(const Candidate& candidate);
@@ -111,6 +117,7 @@ class AutoSelector {
 
   bool has_gpu_;
   int cpu_threads_ = 0;
+  double cpu_share_ = 0;
   std::function<std::optional<GpuCost>()> probe_gpu_;
   std::optional<GpuCost> gpu_cost_;  // once probed
   bool probed_ = false;
