@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <limits>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include "compute_shaders.h"
@@ -33,6 +34,18 @@ using Clock = std::chrono::steady_clock;
 
 double MsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Waits for the GL work issued so far with a fence polled between short sleeps: a read-back
+// would wait too, but NVIDIA's driver spins a core while it does (the gpu step's CPU time was
+// its wall time on the H100), and on shared cores the simulators want that core.
+void WaitForGpu() {
+  GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+  if (fence == nullptr) return;  // the read-back waits instead
+  glFlush();
+  while (glClientWaitSync(fence, 0, 0) == GL_TIMEOUT_EXPIRED)
+    std::this_thread::sleep_for(std::chrono::microseconds(20));
+  glDeleteSync(fence);
 }
 
 // Work groups per dispatch: each invocation loops with the grid's stride past this.
@@ -352,6 +365,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query,
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     if (answer.runs == 1) answer.cpu_submit_ms = MsSince(submit_start);
     const auto wait_start = Clock::now();
+    WaitForGpu();
     glGetNamedBufferSubData(buffer(internal::kCountersBinding).id, 0, sizeof(counters),
                             counters.data());
     answer.cpu_wait_ms += MsSince(wait_start);
