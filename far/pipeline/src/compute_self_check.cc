@@ -93,12 +93,12 @@ std::vector<CheckObject> FilterCases() {
   return objects;
 }
 
-// Meshes of small random triangles, overlapping, from a few hundred triangles to 100K (deep
+// Meshes of small random triangles, overlapping, from a few hundred triangles to 30K (deep
 // hierarchies, many descents): the traversal's case.
 std::vector<CheckObject> TraversalCases() {
   std::mt19937_64 rng(7);
   std::vector<CheckObject> objects;
-  for (int n : {300, 2000, 20000, 100000}) {
+  for (int n : {300, 3000, 10000, 30000}) {
     Mesh mesh;
     const double size = 0.6 / std::cbrt(static_cast<double>(n));
     for (int t = 0; t < n; ++t) {
