@@ -176,4 +176,16 @@ inline void CheckAnswer(Pipeline& pipeline, const StepRequest& request,
   FAR_FUZZ_CHECK(found_near == expected_near);
 }
 
+/// The GL targets' run: a pipeline of its own on the process's current context, the scene and
+/// its steps from the rest of the input, each step's `request` held to `exact`.
+inline void StepOnGlAgainstExact(FuzzInput& in, const SceneSpec& spec, const StepRequest& request) {
+  PipelineOptions options;
+  options.use_current_context = true;
+  options.num_threads = 2;
+  auto pipeline = Pipeline::Create(options);
+  FAR_FUZZ_CHECK(pipeline.ok());
+  StepScene(in, spec, **pipeline,
+            [&] { CheckAnswer(**pipeline, request, ExpectedAnswer(**pipeline, request)); });
+}
+
 }  // namespace far::fuzz

@@ -43,13 +43,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   request.method = Method::kGpu;
   request.distance = spec.distance;
   request.output = spec.distance ? Output::kDistancePairs : Output::kContacts;
-
-  PipelineOptions options;
-  options.use_current_context = true;
-  options.num_threads = 2;
-  auto pipeline = Pipeline::Create(options);
-  FAR_FUZZ_CHECK(pipeline.ok());
-  StepScene(in, spec, **pipeline,
-            [&] { CheckAnswer(**pipeline, request, ExpectedAnswer(**pipeline, request)); });
+  StepOnGlAgainstExact(in, spec, request);
   return 0;
 }

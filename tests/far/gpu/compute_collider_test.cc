@@ -8,6 +8,8 @@
 #include <memory>
 #include <random>
 #include <set>
+#include <span>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -91,6 +93,43 @@ class ComputeColliderTest : public ::testing::Test {
 Vector3d RandomPoint(std::mt19937_64& rng, double scale) {
   std::uniform_real_distribution<double> u(-scale, scale);
   return {u(rng), u(rng), u(rng)};
+}
+
+// Runs the collider on `objects` (meshes[i]'s views) and checks that every intersecting triangle
+// pair of `pairs` is kept (crossing or undecided) and none twice; returns how many intersect.
+int ExpectEveryIntersectingPairKept(ComputeCollider& collider,
+                                    std::span<const ComputeObject> objects,
+                                    const std::vector<Mesh>& meshes,
+                                    const std::vector<SlotPair>& pairs, const std::string& where) {
+  ComputeQuery query;
+  query.objects = objects;
+  query.object_pairs = pairs;
+  auto answer = collider.Run(query);
+  EXPECT_TRUE(answer.ok()) << ToString(answer.error());
+  if (!answer.ok()) return 0;
+  std::set<SlotContact> found;
+  for (const auto* list : {&answer->crossing, &answer->undecided}) {
+    for (const SlotContact& c : *list) EXPECT_TRUE(found.insert(c).second) << where << ": twice";
+  }
+  int intersecting = 0;
+  for (const SlotPair& pair : pairs) {
+    const Mesh& a = meshes[Index(pair.object_a)];
+    const Mesh& b = meshes[Index(pair.object_b)];
+    for (uint32_t i = 0; i < a.triangles.size(); ++i) {
+      for (uint32_t j = 0; j < b.triangles.size(); ++j) {
+        const auto& s = a.triangles[i];
+        const auto& t = b.triangles[j];
+        if (!TrianglesIntersect({a.p_MV[s[0]], a.p_MV[s[1]], a.p_MV[s[2]]},
+                                {b.p_MV[t[0]], b.p_MV[t[1]], b.p_MV[t[2]]}))
+          continue;
+        ++intersecting;
+        EXPECT_TRUE(found.count({pair.object_a, i, pair.object_b, j}))
+            << where << ": " << Index(pair.object_a) << "/" << i << " - " << Index(pair.object_b)
+            << "/" << j << " missed";
+      }
+    }
+  }
+  return intersecting;
 }
 
 TEST_F(ComputeColliderTest, FiltersAgreeWithTheExactPredicatesOnRandomPairs) {
@@ -213,32 +252,8 @@ TEST_F(ComputeColliderTest, TraversalFindsEveryIntersectingPairOfMeshes) {
     for (int a = 0; a < num_objects; ++a) {
       for (int b = a + 1; b < num_objects; ++b) pairs.push_back({SlotAt(a), SlotAt(b)});
     }
-    ComputeQuery query;
-    query.objects = objects;
-    query.object_pairs = pairs;
-    auto answer = collider_->Run(query);
-    ASSERT_TRUE(answer.ok()) << ToString(answer.error());
-    std::set<SlotContact> found;
-    for (const auto* list : {&answer->crossing, &answer->undecided}) {
-      for (const SlotContact& c : *list) EXPECT_TRUE(found.insert(c).second) << "twice";
-    }
-    for (const SlotPair& pair : pairs) {
-      const Mesh& a = meshes[Index(pair.object_a)];
-      const Mesh& b = meshes[Index(pair.object_b)];
-      for (uint32_t i = 0; i < a.triangles.size(); ++i) {
-        for (uint32_t j = 0; j < b.triangles.size(); ++j) {
-          const auto& s = a.triangles[i];
-          const auto& t = b.triangles[j];
-          if (!TrianglesIntersect({a.p_MV[s[0]], a.p_MV[s[1]], a.p_MV[s[2]]},
-                                  {b.p_MV[t[0]], b.p_MV[t[1]], b.p_MV[t[2]]}))
-            continue;
-          ++expected;
-          EXPECT_TRUE(found.count({pair.object_a, i, pair.object_b, j}))
-              << "scene " << scene << ": " << Index(pair.object_a) << "/" << i << " - "
-              << Index(pair.object_b) << "/" << j << " missed";
-        }
-      }
-    }
+    expected += ExpectEveryIntersectingPairKept(*collider_, objects, meshes, pairs,
+                                                "scene " + std::to_string(scene));
   }
   EXPECT_GT(expected, 200) << "the scenes should have many intersecting pairs to find";
 }
@@ -284,31 +299,8 @@ TEST_F(ComputeColliderTest, ObjectsThatDidNotMoveKeepTheirBoxes) {
       objects[o] = {meshes[o].p_MV, meshes[o].triangles,          nodes[o],
                     orders[o],      static_cast<uint64_t>(o + 1), world[o]};
     }
-    ComputeQuery query;
-    query.objects = objects;
-    query.object_pairs = pairs;
-    auto answer = collider_->Run(query);
-    ASSERT_TRUE(answer.ok()) << ToString(answer.error());
-    std::set<SlotContact> found;
-    for (const auto* list : {&answer->crossing, &answer->undecided})
-      found.insert(list->begin(), list->end());
-    for (const SlotPair& pair : pairs) {
-      const Mesh& a = meshes[Index(pair.object_a)];
-      const Mesh& b = meshes[Index(pair.object_b)];
-      for (uint32_t i = 0; i < a.triangles.size(); ++i) {
-        for (uint32_t j = 0; j < b.triangles.size(); ++j) {
-          const auto& s = a.triangles[i];
-          const auto& t = b.triangles[j];
-          if (!TrianglesIntersect({a.p_MV[s[0]], a.p_MV[s[1]], a.p_MV[s[2]]},
-                                  {b.p_MV[t[0]], b.p_MV[t[1]], b.p_MV[t[2]]}))
-            continue;
-          ++found_total;
-          EXPECT_TRUE(found.count({pair.object_a, i, pair.object_b, j}))
-              << "step " << step << ": " << Index(pair.object_a) << "/" << i << " - "
-              << Index(pair.object_b) << "/" << j << " missed";
-        }
-      }
-    }
+    found_total += ExpectEveryIntersectingPairKept(*collider_, objects, meshes, pairs,
+                                                   "step " + std::to_string(step));
   }
   EXPECT_GT(found_total, 50);
 }
