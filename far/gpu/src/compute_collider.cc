@@ -117,6 +117,8 @@ struct ComputeCollider::Impl {
   // The boxes of the moved objects' triangles, then their hierarchies level by level, deepest
   // first (the other objects' boxes stay as computed before); returns the bytes uploaded.
   int64_t RefitMoved();
+  // The primitive PCS from the traversal's bits, by slot.
+  void ReadPcs(ComputeAnswer& answer);
   // Run's GL work: uploads, the three kernels and the read-back.
   Result<ComputeAnswer> RunGl(const ComputeQuery& query,
                               std::span<const std::array<uint32_t, 4>> work,
@@ -241,6 +243,7 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
   buffer(internal::kNodesBinding).Reserve(node_data.size() * 4 * sizeof(uint32_t));
   buffer(internal::kOrderBinding).Reserve(order.size() * sizeof(uint32_t));
   buffer(internal::kNodeBoxesBinding).Reserve(2 * nodes * 4 * sizeof(float));
+  buffer(internal::kPcsBitsBinding).Reserve((triangles + 31) / 32 * sizeof(uint32_t));
   const auto upload = [&](ComputeBinding binding, const void* data, size_t bytes) {
     if (bytes > 0)
       glNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(bytes), data);
@@ -336,6 +339,27 @@ int64_t ComputeCollider::Impl::RefitMoved() {
   return static_cast<int64_t>(ranges.size() * 8 + list.size() * 4);
 }
 
+void ComputeCollider::Impl::ReadPcs(ComputeAnswer& answer) {
+  std::vector<uint32_t> bits((total_triangles + 31) / 32);
+  if (!bits.empty()) {
+    glGetNamedBufferSubData(buffer(internal::kPcsBitsBinding).id, 0,
+                            static_cast<GLsizeiptr>(bits.size() * sizeof(uint32_t)), bits.data());
+  }
+  answer.pcs.resize(layout.size());
+  for (size_t s = 0; s < layout.size(); ++s) {
+    const uint32_t base = layout[s].triangle_base;
+    for (uint32_t t = 0; t < layout[s].triangles; ++t) {
+      const uint32_t global = base + t;
+      const uint32_t word = bits[global >> 5];
+      if (word == 0) {  // skip the rest of an empty word
+        t += 31 - (global & 31);
+        continue;
+      }
+      if ((word >> (global & 31)) & 1u) answer.pcs[s].push_back(t);
+    }
+  }
+}
+
 Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query, uint32_t pairs,
                                                       uint32_t items,
                                                       Clock::time_point submit_start) {
@@ -350,6 +374,8 @@ Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query,
     undecided.Reserve(capacity * 16);
     const uint32_t zero = 0;
     glClearNamedBufferData(buffer(internal::kCountersBinding).id, GL_R32UI, GL_RED_INTEGER,
+                           GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferData(buffer(internal::kPcsBitsBinding).id, GL_R32UI, GL_RED_INTEGER,
                            GL_UNSIGNED_INT, &zero);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kCrossingBinding, crossing.id);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kUndecidedBinding, undecided.id);
@@ -410,6 +436,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query,
     answer.undecided.push_back({SlotAt(e[0]), e[1], SlotAt(e[2] & 0x7fffffffu), e[3]});
     answer.proven_apart.push_back((e[2] & 0x80000000u) != 0 ? 1 : 0);
   }
+  ReadPcs(answer);
   if (auto ok = CheckGl("gpu method: reading the pairs back"); !ok) return ok.error();
   GLuint64 refit_ns = 0, traverse_ns = 0;
   glGetQueryObjectui64v(refit_query, GL_QUERY_RESULT, &refit_ns);

@@ -22,6 +22,7 @@ layout(std430, binding = 9) writeonly buffer Crossing { uvec4 crossing[]; };
 layout(std430, binding = 10) writeonly buffer Undecided { uvec4 undecided[]; };
 layout(std430, binding = 11) readonly buffer Ranges { uvec2 ranges[]; };
 layout(std430, binding = 12) readonly buffer RefitList { uint refit_list[]; };
+layout(std430, binding = 13) buffer PcsBits { uint pcs_bits[]; };
 
 uniform uint u_count;  // invocations with work: triangles, nodes or driver triangles
 
@@ -225,6 +226,10 @@ void Visit(uint driver_tri, uint other_tri, uvec4 w0, uvec4 w1) {
   uvec4 entry = w1.z != 0u ? uvec4(w1.x, a, w1.y, b) : uvec4(w1.y, b, w1.x, a);
   if (c == kApart) entry.z |= 0x80000000u;
   Append(c == kCross, entry);
+  // Both triangles are in the primitive PCS: a bit each, read back instead of the CPU sorting
+  // the pairs' triangles.
+  atomicOr(pcs_bits[driver_tri >> 5], 1u << (driver_tri & 31u));
+  atomicOr(pcs_bits[other_tri >> 5], 1u << (other_tri & 31u));
 }
 
 // Each invocation's traversal stack, in shared memory: as a private array (uint stack[64]),

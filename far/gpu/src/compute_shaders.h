@@ -24,7 +24,8 @@ enum ComputeBinding : int {
   kUndecidedBinding = 10,  // uvec4[capacity]: pairs for the CPU's exact predicates
   kRangesBinding = 11,     // uvec2[ranges]: the moved objects' triangles (first, before)
   kRefitListBinding = 12,  // uint[]: the moved objects' nodes, level by level, deepest first
-  kNumBindings = 13,
+  kPcsBitsBinding = 13,    // uint[]: a bit per global triangle, set when a kept pair holds it
+  kNumBindings = 14,
 };
 
 /// The counters the traversal writes (kCountersBinding).

@@ -387,14 +387,9 @@ Result<void> Stages::FilterOnGpu() {
   state_.stats.gl_prepare_ms += answer.cpu_submit_ms;
   state_.stats.gl_passes_ms += answer.cpu_wait_ms;
   state_.stats.gl_gpu_ms += answer.gpu_refit_ms + answer.gpu_traverse_ms;
-  std::vector<std::vector<uint32_t>> pcs(state_.objects.size());
-  for (const auto* list : {&state_.computed.crossing, &state_.computed.undecided}) {
-    for (const SlotContact& pair : *list) {
-      pcs[Index(pair.object_a)].push_back(pair.triangle_a);
-      pcs[Index(pair.object_b)].push_back(pair.triangle_b);
-    }
-  }
-  for (auto& triangles : pcs) SortUnique(triangles);
+  // The primitive PCS, from the GPU's bits (sorted by slot; none when no pair was run).
+  std::vector<std::vector<uint32_t>> pcs = std::move(state_.computed.pcs);
+  pcs.resize(state_.objects.size());
   state_.answer.pcs_primitives = std::move(pcs);
   return {};
 }

@@ -56,6 +56,9 @@ struct ComputeAnswer {
   /// Indexed like `undecided`: 1 where the filters proved the pair apart (a distance query's
   /// pair that needs only its distance).
   std::vector<uint8_t> proven_apart;
+  /// By slot (indexed like ComputeQuery::objects), sorted: the triangles in some crossing or
+  /// undecided pair, the primitive PCS.
+  std::vector<std::vector<uint32_t>> pcs;
   int64_t box_pairs = 0;       ///< triangle pairs whose boxes met
   int64_t float_decided = 0;   ///< of those, decided by the float filter
   int64_t double_decided = 0;  ///< decided by the fp64 filter (the float one could not)
