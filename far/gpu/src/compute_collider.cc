@@ -69,7 +69,9 @@ struct Buffer {
   void Reserve(size_t wanted) {
     wanted = std::max<size_t>(wanted, 16);
     if (wanted <= bytes) return;
-    bytes = std::max(wanted, bytes * 3 / 2);
+    // A multiple of 16 bytes: glClearNamedBufferData with GL_R32UI refuses a size that is not a
+    // multiple of 4 (GL_INVALID_VALUE), and growing by half could make one.
+    bytes = (std::max(wanted, bytes * 3 / 2) + 15) / 16 * 16;
     glNamedBufferData(id, static_cast<GLsizeiptr>(bytes), nullptr, GL_DYNAMIC_DRAW);
   }
 };
