@@ -121,6 +121,8 @@ struct ComputeCollider::Impl {
   int64_t RefitMoved();
   // The primitive PCS from the traversal's bits, by slot.
   void ReadPcs(ComputeAnswer& answer);
+  // The crossing and undecided pairs the traversal wrote (counts from its counters).
+  void ReadPairs(uint32_t num_crossing, uint32_t num_undecided, ComputeAnswer& answer);
   // Run's GL work: uploads, the three kernels and the read-back.
   Result<ComputeAnswer> RunGl(const ComputeQuery& query,
                               std::span<const std::array<uint32_t, 4>> work,
@@ -362,6 +364,31 @@ void ComputeCollider::Impl::ReadPcs(ComputeAnswer& answer) {
   }
 }
 
+void ComputeCollider::Impl::ReadPairs(uint32_t num_crossing, uint32_t num_undecided,
+                                      ComputeAnswer& answer) {
+  std::vector<std::array<uint32_t, 4>> entries(std::max(num_crossing, num_undecided));
+  const auto read = [&](internal::ComputeBinding binding, uint32_t count) {
+    if (count > 0) {
+      glGetNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(count) * 16,
+                              entries.data());
+    }
+  };
+  read(internal::kCrossingBinding, num_crossing);
+  answer.crossing.reserve(num_crossing);
+  for (uint32_t i = 0; i < num_crossing; ++i) {
+    const auto& e = entries[i];
+    answer.crossing.push_back({SlotAt(e[0]), e[1], SlotAt(e[2]), e[3]});
+  }
+  read(internal::kUndecidedBinding, num_undecided);
+  answer.undecided.reserve(num_undecided);
+  answer.proven_apart.reserve(num_undecided);
+  for (uint32_t i = 0; i < num_undecided; ++i) {
+    const auto& e = entries[i];
+    answer.undecided.push_back({SlotAt(e[0]), e[1], SlotAt(e[2] & 0x7fffffffu), e[3]});
+    answer.proven_apart.push_back((e[2] & 0x80000000u) != 0 ? 1 : 0);
+  }
+}
+
 Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query, uint32_t pairs,
                                                       uint32_t items,
                                                       Clock::time_point submit_start) {
@@ -415,29 +442,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query,
     capacity = std::bit_ceil(most);
   }
   const auto read_start = Clock::now();
-  const uint32_t num_crossing = counters[internal::kCrossingCount];
-  const uint32_t num_undecided = counters[internal::kUndecidedCount];
-  std::vector<std::array<uint32_t, 4>> entries(std::max(num_crossing, num_undecided));
-  const auto read = [&](internal::ComputeBinding binding, uint32_t count) {
-    if (count > 0) {
-      glGetNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(count) * 16,
-                              entries.data());
-    }
-  };
-  read(internal::kCrossingBinding, num_crossing);
-  answer.crossing.reserve(num_crossing);
-  for (uint32_t i = 0; i < num_crossing; ++i) {
-    const auto& e = entries[i];
-    answer.crossing.push_back({SlotAt(e[0]), e[1], SlotAt(e[2]), e[3]});
-  }
-  read(internal::kUndecidedBinding, num_undecided);
-  answer.undecided.reserve(num_undecided);
-  answer.proven_apart.reserve(num_undecided);
-  for (uint32_t i = 0; i < num_undecided; ++i) {
-    const auto& e = entries[i];
-    answer.undecided.push_back({SlotAt(e[0]), e[1], SlotAt(e[2] & 0x7fffffffu), e[3]});
-    answer.proven_apart.push_back((e[2] & 0x80000000u) != 0 ? 1 : 0);
-  }
+  ReadPairs(counters[internal::kCrossingCount], counters[internal::kUndecidedCount], answer);
   ReadPcs(answer);
   if (auto ok = CheckGl("gpu method: reading the pairs back"); !ok) return ok.error();
   GLuint64 refit_ns = 0, traverse_ns = 0;
