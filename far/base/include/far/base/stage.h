@@ -17,14 +17,16 @@ enum class Stage {
   kSweepAndPrune,  ///< sweep-and-prune on the objects' boxes -> candidate object pairs
   kPrimitiveCull,  ///< sub-object culling -> primitive PCS
   kExact,          ///< exact triangle tests -> contacts and distance pairs
+  kGeometry,       ///< contact points, closest points, penetration (only when asked)
 };
 
 /// Every stage, in order.
-inline constexpr std::array<Stage, 5> kStages = {Stage::kUpdate, Stage::kObjectCull,
-                                                 Stage::kSweepAndPrune, Stage::kPrimitiveCull,
-                                                 Stage::kExact};
+inline constexpr std::array<Stage, 6> kStages = {Stage::kUpdate,         Stage::kObjectCull,
+                                                 Stage::kSweepAndPrune,  Stage::kPrimitiveCull,
+                                                 Stage::kExact,          Stage::kGeometry};
 
-/// The stage's name: "update", "object_cull", "sweep_and_prune", "primitive_cull", "exact".
+/// The stage's name: "update", "object_cull", "sweep_and_prune", "primitive_cull", "exact",
+/// "geometry".
 constexpr std::string_view ToString(Stage stage) {
   switch (stage) {
     case Stage::kUpdate:
@@ -37,6 +39,8 @@ constexpr std::string_view ToString(Stage stage) {
       return "primitive_cull";
     case Stage::kExact:
       return "exact";
+    case Stage::kGeometry:
+      return "geometry";
   }
   return "unknown";
 }

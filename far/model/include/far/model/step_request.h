@@ -53,6 +53,11 @@ struct StepRequest {
   int subobject_size = 1;          ///< triangles per sub-object (k)
   std::optional<double> distance;  ///< D for localized distance culling (world units)
   Output output = Output::kContacts;
+  /// Also compute the contact geometry (far/model/contact_geometry.h): for every contact the
+  /// points where its triangles meet and their normals, for every distance pair its closest
+  /// points, for every object pair in contact its penetration depth. Runs as the "geometry"
+  /// stage after the exact one; nothing of it runs when false. Needs output contacts or distance.
+  bool geometry = false;
 };
 
 /// Names used on command lines and in messages: "auto", "aabb", "bvh", "gpu", "cullide", "far",

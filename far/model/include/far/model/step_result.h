@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "far/base/stage.h"
+#include "far/model/contact_geometry.h"
 #include "far/model/contact_pair.h"
 
 namespace far {
@@ -123,6 +124,12 @@ struct StepResult {
   std::map<uint32_t, std::vector<uint32_t>> pcs_primitives;  ///< id -> sorted triangles
   std::vector<ContactPair> contacts;                         ///< sorted
   std::vector<DistancePair> distance_pairs;                  ///< sorted
+  /// Only when StepRequest::geometry asked (else empty): contact_geometry[i] for contacts[i],
+  /// closest_points[i] for distance_pairs[i], and one Penetration per object pair that has a
+  /// contact, sorted by (object_a, object_b).
+  std::vector<ContactGeometry> contact_geometry;
+  std::vector<ClosestPoints> closest_points;
+  std::vector<Penetration> penetrations;
   StepStats stats;
 };
 
