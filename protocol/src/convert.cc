@@ -44,6 +44,12 @@ far_lcm::step_reply_t EmptyReply(const StepReplyIds& ids) {
   reply.num_pcs_primitives = 0;
   reply.num_contacts = 0;
   reply.num_distance_pairs = 0;
+  reply.num_contact_geometry = 0;
+  reply.num_contact_point_coords = 0;
+  reply.num_contact_normal_coords = 0;
+  reply.num_closest_point_coords = 0;
+  reply.num_penetrations = 0;
+  reply.num_penetration_coords = 0;
   reply.num_stages = 0;
   reply.total_ms = 0;
   reply.primitives_rendered = 0;
@@ -97,11 +103,22 @@ far_lcm::step_request_t MakeStepRequest(int64_t session_id, int64_t request_id, 
   message.subobject_size = request.subobject_size;
   message.has_distance = request.distance.has_value();
   message.distance = request.distance.value_or(0.0);
+  message.geometry = request.geometry;
   message.timeout_ms = timeout_ms;
   return message;
 }
 
 namespace {
+
+// The wire bytes of a result's contact geometry.
+uint64_t GeometryBytes(const StepResult& result) {
+  uint64_t bytes =
+      48 * uint64_t{result.closest_points.size()} + 97 * uint64_t{result.penetrations.size()};
+  for (const ContactGeometry& g : result.contact_geometry) {
+    bytes += 50 + 24 * static_cast<uint64_t>(g.num_points);
+  }
+  return bytes;
+}
 
 // Checks the size of a result's arrays against the reply cap and the wire's int32 counts,
 // before anything is allocated.
@@ -111,7 +128,8 @@ Result<void> CheckReplySize(const StepResult& result) {
   const uint64_t array_bytes =
       8 * uint64_t{result.pcs_objects.size()} + 16 * uint64_t{result.object_pairs.size()} +
       12 * uint64_t{result.pcs_primitives.size()} + 4 * uint64_t{primitive_total} +
-      24 * uint64_t{result.contacts.size()} + 32 * uint64_t{result.distance_pairs.size()};
+      24 * uint64_t{result.contacts.size()} + 32 * uint64_t{result.distance_pairs.size()} +
+      GeometryBytes(result);
   if (array_bytes > kMaxStepReplyBytes - 4096) {
     return MakeError(ErrorCode::kLimitExceeded, "step_reply_t: " + std::to_string(array_bytes) +
                                                     " bytes of results exceed the " +
@@ -179,6 +197,40 @@ void SetPairArrays(far_lcm::step_reply_t& reply, const StepResult& result, bool*
   }
 }
 
+void PushPoint(std::vector<double>& coords, const Eigen::Vector3d& p) {
+  coords.insert(coords.end(), {p.x(), p.y(), p.z()});
+}
+
+// The contact geometry, when the step computed it.
+void SetGeometryArrays(far_lcm::step_reply_t& reply, const StepResult& result) {
+  reply.num_contact_geometry = static_cast<int32_t>(result.contact_geometry.size());
+  for (const ContactGeometry& g : result.contact_geometry) {
+    reply.contact_point_count.push_back(static_cast<int8_t>(g.num_points));
+    reply.contact_coplanar.push_back(g.coplanar);
+    for (int k = 0; k < g.num_points; ++k) PushPoint(reply.contact_points, g.points[k]);
+    PushPoint(reply.contact_normal_a, g.normal_a);
+    PushPoint(reply.contact_normal_b, g.normal_b);
+  }
+  reply.num_contact_point_coords = static_cast<int32_t>(reply.contact_points.size());
+  reply.num_contact_normal_coords = static_cast<int32_t>(reply.contact_normal_a.size());
+  for (const ClosestPoints& c : result.closest_points) {
+    PushPoint(reply.closest_point_a, c.point_a);
+    PushPoint(reply.closest_point_b, c.point_b);
+  }
+  reply.num_closest_point_coords = static_cast<int32_t>(reply.closest_point_a.size());
+  reply.num_penetrations = static_cast<int32_t>(result.penetrations.size());
+  for (const Penetration& p : result.penetrations) {
+    reply.penetration_object_a.push_back(WireId(p.object_a));
+    reply.penetration_object_b.push_back(WireId(p.object_b));
+    reply.penetration_closed.push_back(p.closed);
+    reply.penetration_depth.push_back(p.depth);
+    PushPoint(reply.penetration_direction, p.direction);
+    PushPoint(reply.penetration_point_a, p.point_a);
+    PushPoint(reply.penetration_point_b, p.point_b);
+  }
+  reply.num_penetration_coords = static_cast<int32_t>(reply.penetration_direction.size());
+}
+
 void SetStats(far_lcm::step_reply_t& reply, const StepStats& stats) {
   reply.method_run = stats.method;
   reply.method_reason = stats.method_reason;
@@ -229,6 +281,7 @@ Result<far_lcm::step_reply_t> MakeStepReply(const StepReplyIds& ids, Output outp
   bool index_overflow = false;
   SetCullingArrays(reply, result, &index_overflow);
   SetPairArrays(reply, result, &index_overflow);
+  SetGeometryArrays(reply, result);
   if (index_overflow) {
     return MakeError(ErrorCode::kInternal, "step_reply_t: a triangle index is over INT32_MAX");
   }
@@ -260,7 +313,8 @@ far_lcm::step_status_t MakeStepStatus(int64_t session_id, int64_t request_id, in
 }
 
 far_lcm::step_request_t MakeProbeRequest(int64_t session_id, int64_t request_id) {
-  far_lcm::step_request_t message = MakeStepRequest(session_id, request_id, kProbeStepId, 0, StepRequest{});
+  far_lcm::step_request_t message =
+      MakeStepRequest(session_id, request_id, kProbeStepId, 0, StepRequest{});
   message.output = std::string(kProbeOutput);
   return message;
 }
@@ -280,6 +334,37 @@ far_lcm::error_t MakeErrorMessage(int64_t session_id, int64_t request_id, const 
 }
 
 namespace {
+
+// Checks the contact geometry's counts against each other (the sizes are already checked).
+Result<void> CheckGeometryArrays(const far_lcm::step_reply_t& reply) {
+  if (reply.num_contact_geometry != 0 && reply.num_contact_geometry != reply.num_contacts) {
+    return BadReply("num_contact_geometry",
+                    std::to_string(reply.num_contact_geometry) + " is neither 0 nor num_contacts");
+  }
+  int64_t points = 0;
+  for (size_t i = 0; i < reply.contact_point_count.size(); ++i) {
+    const int count = reply.contact_point_count[i];
+    if (count < 1 || count > ContactGeometry::kMaxPoints) {
+      return BadReply("contact_point_count",
+                      "[" + std::to_string(i) + "] = " + std::to_string(count) +
+                          " is outside [1, " + std::to_string(ContactGeometry::kMaxPoints) + "]");
+    }
+    points += count;
+  }
+  const auto coords = [](int64_t n) { return 3 * n; };
+  if (reply.num_contact_point_coords != coords(points) ||
+      reply.num_contact_normal_coords != coords(reply.num_contact_geometry)) {
+    return BadReply("num_contact_point_coords", "coordinates do not match the point counts");
+  }
+  if (reply.num_closest_point_coords != 0 &&
+      reply.num_closest_point_coords != coords(reply.num_distance_pairs)) {
+    return BadReply("num_closest_point_coords", "is neither 0 nor 3 x num_distance_pairs");
+  }
+  if (reply.num_penetration_coords != coords(reply.num_penetrations)) {
+    return BadReply("num_penetration_coords", "is not 3 x num_penetrations");
+  }
+  return {};
+}
 
 // Checks a reply's arrays: sizes equal to their counts, object ids in [0, 2^32 - 1], indices
 // and counts >= 0, primitive counts that add up.
@@ -303,6 +388,20 @@ Result<void> CheckReplyArrays(const far_lcm::step_reply_t& reply) {
       !sized(reply.distance_object_b.size(), reply.num_distance_pairs) ||
       !sized(reply.distance_triangle_b.size(), reply.num_distance_pairs) ||
       !sized(reply.distance.size(), reply.num_distance_pairs) ||
+      !sized(reply.contact_point_count.size(), reply.num_contact_geometry) ||
+      !sized(reply.contact_coplanar.size(), reply.num_contact_geometry) ||
+      !sized(reply.contact_points.size(), reply.num_contact_point_coords) ||
+      !sized(reply.contact_normal_a.size(), reply.num_contact_normal_coords) ||
+      !sized(reply.contact_normal_b.size(), reply.num_contact_normal_coords) ||
+      !sized(reply.closest_point_a.size(), reply.num_closest_point_coords) ||
+      !sized(reply.closest_point_b.size(), reply.num_closest_point_coords) ||
+      !sized(reply.penetration_object_a.size(), reply.num_penetrations) ||
+      !sized(reply.penetration_object_b.size(), reply.num_penetrations) ||
+      !sized(reply.penetration_closed.size(), reply.num_penetrations) ||
+      !sized(reply.penetration_depth.size(), reply.num_penetrations) ||
+      !sized(reply.penetration_direction.size(), reply.num_penetration_coords) ||
+      !sized(reply.penetration_point_a.size(), reply.num_penetration_coords) ||
+      !sized(reply.penetration_point_b.size(), reply.num_penetration_coords) ||
       !sized(reply.stage_name.size(), reply.num_stages) ||
       !sized(reply.stage_ms.size(), reply.num_stages)) {
     return BadReply("num_*", "an array's size differs from its count");
@@ -325,7 +424,9 @@ Result<void> CheckReplyArrays(const far_lcm::step_reply_t& reply) {
         {"contact_object_a", &reply.contact_object_a},
         {"contact_object_b", &reply.contact_object_b},
         {"distance_object_a", &reply.distance_object_a},
-        {"distance_object_b", &reply.distance_object_b}}) {
+        {"distance_object_b", &reply.distance_object_b},
+        {"penetration_object_a", &reply.penetration_object_a},
+        {"penetration_object_b", &reply.penetration_object_b}}) {
     if (auto ok = check(field, *values, int64_t{kMaxObjectId}); !ok) return ok.error();
   }
   for (const auto& [field, values] : {std::pair<const char*, const std::vector<int32_t>*>{
@@ -349,7 +450,7 @@ Result<void> CheckReplyArrays(const far_lcm::step_reply_t& reply) {
                                                std::to_string(reply.num_pcs_primitives));
   }
 
-  return {};
+  return CheckGeometryArrays(reply);
 }
 
 // The object PCS, pairs and primitive PCS of a checked reply.
@@ -393,6 +494,41 @@ void ReadPairArrays(const far_lcm::step_reply_t& reply, StepResult& result) {
                  static_cast<uint32_t>(reply.distance_triangle_b[i])};
     pair.distance = reply.distance[i];
     result.distance_pairs.push_back(pair);
+  }
+}
+
+Eigen::Vector3d PointAt(const std::vector<double>& coords, size_t index) {
+  return {coords[3 * index], coords[3 * index + 1], coords[3 * index + 2]};
+}
+
+// The contact geometry of a checked reply.
+void ReadGeometryArrays(const far_lcm::step_reply_t& reply, StepResult& result) {
+  size_t next_point = 0;
+  result.contact_geometry.resize(static_cast<size_t>(reply.num_contact_geometry));
+  for (size_t i = 0; i < result.contact_geometry.size(); ++i) {
+    ContactGeometry& g = result.contact_geometry[i];
+    g.num_points = reply.contact_point_count[i];
+    for (int k = 0; k < g.num_points; ++k)
+      g.points[k] = PointAt(reply.contact_points, next_point++);
+    g.normal_a = PointAt(reply.contact_normal_a, i);
+    g.normal_b = PointAt(reply.contact_normal_b, i);
+    g.coplanar = reply.contact_coplanar[i];
+  }
+  result.closest_points.resize(static_cast<size_t>(reply.num_closest_point_coords / 3));
+  for (size_t i = 0; i < result.closest_points.size(); ++i) {
+    result.closest_points[i] = {PointAt(reply.closest_point_a, i),
+                                PointAt(reply.closest_point_b, i)};
+  }
+  result.penetrations.resize(static_cast<size_t>(reply.num_penetrations));
+  for (size_t i = 0; i < result.penetrations.size(); ++i) {
+    Penetration& p = result.penetrations[i];
+    p.object_a = static_cast<uint32_t>(reply.penetration_object_a[i]);
+    p.object_b = static_cast<uint32_t>(reply.penetration_object_b[i]);
+    p.closed = reply.penetration_closed[i];
+    p.depth = reply.penetration_depth[i];
+    p.direction = PointAt(reply.penetration_direction, i);
+    p.point_a = PointAt(reply.penetration_point_a, i);
+    p.point_b = PointAt(reply.penetration_point_b, i);
   }
 }
 
@@ -447,6 +583,7 @@ Result<StepResult> ParseStepReply(const far_lcm::step_reply_t& reply) {
   StepResult result;
   if (auto ok = ReadCullingArrays(reply, result); !ok) return ok.error();
   ReadPairArrays(reply, result);
+  ReadGeometryArrays(reply, result);
   ReadStats(reply, result);
   return result;
 }

@@ -88,6 +88,7 @@ constexpr std::array kStepRequest{
     Scalar("subobject_size", 4),
     Scalar("has_distance", 1),
     Scalar("distance", 8),
+    Scalar("geometry", 1),
     Scalar("timeout_ms", 4),
 };
 constexpr std::array kStepReply{
@@ -129,35 +130,55 @@ constexpr std::array kStepReply{
     Array("distance_object_b", 8, 32),       // 35
     Array("distance_triangle_b", 4, 32),     // 36
     Array("distance", 8, 32),                // 37
-    Count("num_stages"),                     // 38
-    StringArray("stage_name", 38),           // 39
-    Array("stage_ms", 8, 38),                // 40
-    Scalar("total_ms", 8),                   // 41
-    Scalar("primitives_rendered", 8),        // 42
-    Scalar("draws", 8),                      // 43
-    Scalar("queries", 8),                    // 44
-    Scalar("bytes_uploaded", 8),             // 45
-    Scalar("object_pairs_considered", 8),    // 46
-    Scalar("pairs_considered", 8),           // 47
-    Scalar("pairs_tested", 8),               // 48
-    Scalar("object_radius", 8),              // 49
-    Scalar("primitive_radius", 8),           // 50
-    Scalar("guaranteed", 1),                 // 51
-    String("guarantee_basis"),               // 52
-    Count("num_levels"),                     // 53
-    StringArray("level_name", 53),           // 54
-    Array("level_views", 4, 53),             // 55
-    Array("level_resolution", 4, 53),        // 56
-    Array("level_offset_radius", 8, 53),     // 57
-    Array("level_pixel_size", 8, 53),        // 58
-    Array("level_depth_step", 8, 53),        // 59
-    Array("level_rounding", 8, 53),          // 60
-    Array("level_world_min_x", 8, 53),       // 61
-    Array("level_world_min_y", 8, 53),       // 62
-    Array("level_world_min_z", 8, 53),       // 63
-    Array("level_world_max_x", 8, 53),       // 64
-    Array("level_world_max_y", 8, 53),       // 65
-    Array("level_world_max_z", 8, 53),       // 66
+    Count("num_contact_geometry"),           // 38
+    Array("contact_point_count", 1, 38),     // 39
+    Array("contact_coplanar", 1, 38),        // 40
+    Count("num_contact_point_coords"),       // 41
+    Array("contact_points", 8, 41),          // 42
+    Count("num_contact_normal_coords"),      // 43
+    Array("contact_normal_a", 8, 43),        // 44
+    Array("contact_normal_b", 8, 43),        // 45
+    Count("num_closest_point_coords"),       // 46
+    Array("closest_point_a", 8, 46),         // 47
+    Array("closest_point_b", 8, 46),         // 48
+    Count("num_penetrations"),               // 49
+    Array("penetration_object_a", 8, 49),    // 50
+    Array("penetration_object_b", 8, 49),    // 51
+    Array("penetration_closed", 1, 49),      // 52
+    Array("penetration_depth", 8, 49),       // 53
+    Count("num_penetration_coords"),         // 54
+    Array("penetration_direction", 8, 54),   // 55
+    Array("penetration_point_a", 8, 54),     // 56
+    Array("penetration_point_b", 8, 54),     // 57
+    Count("num_stages"),                     // 58
+    StringArray("stage_name", 58),           // 59
+    Array("stage_ms", 8, 58),                // 60
+    Scalar("total_ms", 8),                   // 61
+    Scalar("primitives_rendered", 8),        // 62
+    Scalar("draws", 8),                      // 63
+    Scalar("queries", 8),                    // 64
+    Scalar("bytes_uploaded", 8),             // 65
+    Scalar("object_pairs_considered", 8),    // 66
+    Scalar("pairs_considered", 8),           // 67
+    Scalar("pairs_tested", 8),               // 68
+    Scalar("object_radius", 8),              // 69
+    Scalar("primitive_radius", 8),           // 70
+    Scalar("guaranteed", 1),                 // 71
+    String("guarantee_basis"),               // 72
+    Count("num_levels"),                     // 73
+    StringArray("level_name", 73),           // 74
+    Array("level_views", 4, 73),             // 75
+    Array("level_resolution", 4, 73),        // 76
+    Array("level_offset_radius", 8, 73),     // 77
+    Array("level_pixel_size", 8, 73),        // 78
+    Array("level_depth_step", 8, 73),        // 79
+    Array("level_rounding", 8, 73),          // 80
+    Array("level_world_min_x", 8, 73),       // 81
+    Array("level_world_min_y", 8, 73),       // 82
+    Array("level_world_min_z", 8, 73),       // 83
+    Array("level_world_max_x", 8, 73),       // 84
+    Array("level_world_max_y", 8, 73),       // 85
+    Array("level_world_max_z", 8, 73),       // 86
 };
 constexpr std::array kError{
     Scalar("protocol_version", 4),

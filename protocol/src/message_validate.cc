@@ -140,6 +140,7 @@ Result<StepCommand> ValidateStepRequest(const far_lcm::step_request_t& message) 
     return Invalid(kType, "distance",
                    FormatDouble(message.distance) + " is set but has_distance is false");
   }
+  request.geometry = message.geometry;
   if (auto ok = CheckStepRequest(request); !ok) {
     return MakeError(ok.error().code, std::string(kType) + "." + ok.error().message);
   }

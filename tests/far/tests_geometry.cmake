@@ -16,5 +16,6 @@ far_add_test(far_geometry_test unit
   far/geometry/predicates_test.cc
   far/geometry/exact_reference_test.cc
   far/geometry/triangle_intersection_test.cc
-  far/geometry/triangle_distance_test.cc)
+  far/geometry/triangle_distance_test.cc
+  far/geometry/triangle_contact_test.cc)
 target_link_libraries(far_geometry_test PRIVATE far::geometry far_hard_cases)

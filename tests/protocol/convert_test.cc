@@ -2,6 +2,8 @@
 
 #include "far/protocol/convert.h"
 
+#include <cmath>
+
 #include "test_messages.h"
 #include <gtest/gtest.h>
 
@@ -62,6 +64,7 @@ TEST(ConvertTest, StepRequestRoundTripsThroughValidation) {
   request.subobject_size = 8;
   request.distance = 0.125;
   request.output = Output::kDistancePairs;
+  request.geometry = true;
   const auto message = MakeStepRequest(4, 9, 100, 55, request);
   auto bytes = EncodeMessage(message);
   ASSERT_TRUE(bytes);
@@ -81,6 +84,7 @@ TEST(ConvertTest, StepRequestRoundTripsThroughValidation) {
   EXPECT_EQ(command->request.subobject_size, request.subobject_size);
   EXPECT_EQ(command->request.distance, request.distance);
   EXPECT_EQ(command->request.output, request.output);
+  EXPECT_TRUE(command->request.geometry);
 }
 
 TEST(ConvertTest, StepResultRoundTripsThroughTheWire) {
@@ -170,6 +174,90 @@ TEST(ConvertTest, ParseStepReplyRejectsInconsistentReplies) {
   parsed = ParseStepReply(reply);
   ASSERT_FALSE(parsed);
   EXPECT_EQ(parsed.error().code, ErrorCode::kInvalidArgument);
+}
+
+TEST(ConvertTest, ContactGeometryRoundTripsThroughTheWire) {
+  StepResult result = SampleResult();
+  ContactGeometry point;
+  point.num_points = 1;
+  point.points[0] = {1, 2, 3};
+  point.normal_a = {0, 0, 1};
+  ContactGeometry hexagon;
+  hexagon.num_points = 6;
+  for (int k = 0; k < 6; ++k) hexagon.points[k] = {std::cos(k), std::sin(k), 0.1 * k};
+  hexagon.normal_a = {0, 1, 0};
+  hexagon.normal_b = {0, -1, 0};
+  hexagon.coplanar = true;
+  result.contact_geometry = {point, hexagon};
+  result.closest_points = {{{0, 0, 0}, {0, 0, 0.5}}, {{1, 1, 1}, {1, 1, 1 + 1e-9}}};
+  Penetration closed{1, 2, true, 0.25, {0, 0, 1}, {0, 0, 1}, {0, 0, 0.75}};
+  Penetration open{2, 7, false, 0, {}, {}, {}};
+  result.penetrations = {closed, open};
+  auto reply = MakeStepReply({4, 9, 100, 55}, Output::kDistancePairs, result);
+  ASSERT_TRUE(reply) << reply.error().message;
+  auto bytes = EncodeMessage(*reply);
+  ASSERT_TRUE(bytes);
+  auto decoded =
+      DecodeMessage<far_lcm::step_reply_t>(bytes->data(), bytes->size(), kMaxStepReplyBytes);
+  ASSERT_TRUE(decoded) << decoded.error().message;
+  auto parsed = ParseStepReply(*decoded);
+  ASSERT_TRUE(parsed) << parsed.error().message;
+  ASSERT_EQ(parsed->contact_geometry.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const ContactGeometry& a = result.contact_geometry[i];
+    const ContactGeometry& b = parsed->contact_geometry[i];
+    ASSERT_EQ(a.num_points, b.num_points);
+    for (int k = 0; k < a.num_points; ++k) EXPECT_EQ(a.points[k], b.points[k]);
+    EXPECT_EQ(a.normal_a, b.normal_a);
+    EXPECT_EQ(a.normal_b, b.normal_b);
+    EXPECT_EQ(a.coplanar, b.coplanar);
+  }
+  ASSERT_EQ(parsed->closest_points.size(), 2u);
+  EXPECT_EQ(parsed->closest_points[1].point_b, result.closest_points[1].point_b);
+  ASSERT_EQ(parsed->penetrations.size(), 2u);
+  EXPECT_EQ(parsed->penetrations[0].depth, 0.25);
+  EXPECT_EQ(parsed->penetrations[0].point_b, closed.point_b);
+  EXPECT_EQ(parsed->penetrations[1].object_b, 7u);
+  EXPECT_FALSE(parsed->penetrations[1].closed);
+
+  // Without geometry nothing is sent.
+  result = SampleResult();
+  reply = MakeStepReply({4, 9, 100, 55}, Output::kDistancePairs, result);
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->num_contact_geometry, 0);
+  EXPECT_EQ(reply->num_closest_point_coords, 0);
+  EXPECT_EQ(reply->num_penetrations, 0);
+}
+
+TEST(ConvertTest, ParseStepReplyRejectsInconsistentGeometry) {
+  auto reply = testing::SampleStepReply();
+  ASSERT_TRUE(ParseStepReply(reply)) << "the sample is consistent";
+  reply.contact_point_count = {7};
+  auto parsed = ParseStepReply(reply);
+  ASSERT_FALSE(parsed);
+  EXPECT_NE(parsed.error().message.find("contact_point_count: [0] = 7 is outside [1, 6]"),
+            std::string::npos)
+      << parsed.error().message;
+
+  reply = testing::SampleStepReply();
+  reply.contact_point_count = {1};  // the points say 2
+  parsed = ParseStepReply(reply);
+  ASSERT_FALSE(parsed);
+  EXPECT_EQ(parsed.error().code, ErrorCode::kParseError);
+
+  reply = testing::SampleStepReply();
+  reply.num_closest_point_coords = 3;
+  reply.closest_point_a.resize(3);
+  reply.closest_point_b.resize(3);
+  parsed = ParseStepReply(reply);
+  ASSERT_FALSE(parsed);
+  EXPECT_NE(parsed.error().message.find("num_closest_point_coords"), std::string::npos);
+
+  reply = testing::SampleStepReply();
+  reply.penetration_object_b = {int64_t{1} << 40};
+  parsed = ParseStepReply(reply);
+  ASSERT_FALSE(parsed);
+  EXPECT_NE(parsed.error().message.find("penetration_object_b"), std::string::npos);
 }
 
 TEST(ConvertTest, EveryUint32IdRoundTrips) {

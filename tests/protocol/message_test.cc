@@ -78,19 +78,20 @@ TEST(MessageTest, EveryTypeRoundTripsThroughThePreScan) {
 }
 
 TEST(MessageTest, FingerprintsArePinned) {
-  // The wire contract of protocol version 3. A change of any .lcm file changes its fingerprint
-  // and fails here: update the value, docs/protocol.md, and kProtocolVersion if the meaning
-  // changed, so that old and new peers reject each other with a clear error.
+  // The wire contract of protocol version 4 (4: contact geometry). A change of any .lcm file
+  // changes its fingerprint and fails here: update the value, docs/protocol.md, and
+  // kProtocolVersion if the meaning changed, so that old and new peers reject each other with a
+  // clear error.
   EXPECT_EQ(far_lcm::open_session_t::getHash(), static_cast<int64_t>(0xfd44631e0fd969b1ull));
   EXPECT_EQ(far_lcm::open_session_reply_t::getHash(), static_cast<int64_t>(0x133fbd56d0df8f90ull));
   EXPECT_EQ(far_lcm::sealed_t::getHash(), static_cast<int64_t>(0x71e71b1583d17514ull));
   EXPECT_EQ(far_lcm::step_status_t::getHash(), static_cast<int64_t>(0x90548ca9dd3567d6ull));
-  EXPECT_EQ(far_lcm::step_request_t::getHash(), static_cast<int64_t>(0x950d72435652b582ull));
-  EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0xb18eb44221dd52e0ull));
+  EXPECT_EQ(far_lcm::step_request_t::getHash(), static_cast<int64_t>(0x7e829d821c8e84edull));
+  EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0x5bd75aad5eeeda94ull));
   EXPECT_EQ(far_lcm::error_t::getHash(), static_cast<int64_t>(0xb22a7284ae722a4full));
   EXPECT_EQ(far_lcm::status_request_t::getHash(), static_cast<int64_t>(0x232a6c3597e1b397ull));
   EXPECT_EQ(far_lcm::status_reply_t::getHash(), static_cast<int64_t>(0x8bceb52ed7defbbcull));
-  EXPECT_EQ(kProtocolVersion, 3);
+  EXPECT_EQ(kProtocolVersion, 4);
 }
 
 TEST(MessageTest, EmptyArraysAndStringsRoundTrip) {
@@ -166,7 +167,7 @@ TEST(MessageTest, RejectsWrongProtocolVersion) {
   auto message = SampleStepRequest();
   message.protocol_version = kProtocolVersion + 1;
   ExpectDecodeError<far_lcm::step_request_t>(Encode(message), ErrorCode::kVersionMismatch,
-                                             "step_request_t.protocol_version: got 4, expected 3");
+                                             "step_request_t.protocol_version: got 5, expected 4");
 }
 
 TEST(MessageTest, RejectsAForgedHugeArrayLengthWithoutAllocating) {

@@ -86,6 +86,7 @@ inline far_lcm::step_request_t SampleStepRequest() {
   m.subobject_size = 4;
   m.has_distance = true;
   m.distance = 0.25;
+  m.geometry = true;
   m.timeout_ms = 30000;
   return m;
 }
@@ -128,6 +129,27 @@ inline far_lcm::step_reply_t SampleStepReply() {
   m.distance_object_b = {2, 2};
   m.distance_triangle_b = {0, 0};
   m.distance = {0.0, 0.125};
+  // Geometry for the contact (a segment), the distance pairs and one penetration.
+  m.num_contact_geometry = m.num_contacts;
+  m.contact_point_count = {2};
+  m.contact_coplanar = {false};
+  m.contact_points = {0.5, 0, 1, 1, 0, 1};
+  m.num_contact_point_coords = 6;
+  m.contact_normal_a = {0, 0, 1};
+  m.contact_normal_b = {0, 0, -1};
+  m.num_contact_normal_coords = 3;
+  m.closest_point_a = {0, 0, 0, 1, 1, 1};
+  m.closest_point_b = {0, 0, 0, 1, 1, 1.125};
+  m.num_closest_point_coords = 6;
+  m.num_penetrations = 1;
+  m.penetration_object_a = {1};
+  m.penetration_object_b = {2};
+  m.penetration_closed = {true};
+  m.penetration_depth = {0.25};
+  m.penetration_direction = {0, 0, 1};
+  m.penetration_point_a = {0, 0, 1};
+  m.penetration_point_b = {0, 0, 0.75};
+  m.num_penetration_coords = 3;
   m.num_stages = 2;
   m.stage_name = {"update", "object_cull"};
   m.stage_ms = {0.5, 1.25};

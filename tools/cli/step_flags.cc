@@ -40,6 +40,10 @@ void StepFlags::Add(CLI::App* command) {
       "deepest output: object-pcs (objects only), pairs (object pairs), pcs (object and "
       "primitive PCS), contacts, "
       "distance (default: contacts, or distance when --distance is given)");
+  command->add_flag("--geometry", geometry,
+                    "also the contact geometry: where each contact's triangles meet and their "
+                    "normals, each distance pair's closest points, each object pair's "
+                    "penetration depth (needs output contacts or distance)");
 }
 
 Result<StepRequest> StepFlags::Request() const {
@@ -74,6 +78,7 @@ Result<StepRequest> StepFlags::Request() const {
   if (!o)
     return far::MakeError(far::ErrorCode::kInvalidArgument, "--output: unknown '" + out + "'");
   request.output = *o;
+  request.geometry = geometry;
   return request;
 }
 

@@ -16,6 +16,7 @@ struct StepFlags {
   std::string timeout = "60s";
   int resolution = 1024, subobject_size = 1;
   double distance = 0;
+  bool geometry = false;
   CLI::Option* distance_option = nullptr;
 
   /// Adds the options of the request to `command`.

@@ -82,6 +82,51 @@ std::string FirstDistanceDifference(const StepResult& recorded, const StepResult
   return "";
 }
 
+bool Near(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return (a - b).cwiseAbs().maxCoeff() <=
+         kDistanceTolerance * std::max(1.0, std::max(a.cwiseAbs().maxCoeff(), 1.0));
+}
+
+// The contact geometry of the pairs both hold in the same order (the same contacts and
+// distance pairs: otherwise those differences are reported), within kDistanceTolerance.
+std::string FirstGeometryDifference(const StepResult& recorded, const StepResult& replayed) {
+  if (recorded.contact_geometry.size() == recorded.contacts.size() &&
+      replayed.contact_geometry.size() == replayed.contacts.size() &&
+      recorded.contacts == replayed.contacts) {
+    for (size_t i = 0; i < recorded.contacts.size(); ++i) {
+      const ContactGeometry& a = recorded.contact_geometry[i];
+      const ContactGeometry& b = replayed.contact_geometry[i];
+      bool same = a.num_points == b.num_points && Near(a.normal_a, b.normal_a) &&
+                  Near(a.normal_b, b.normal_b);
+      for (int k = 0; same && k < a.num_points; ++k) same = Near(a.points[k], b.points[k]);
+      if (!same) return "contact geometry of " + Describe(recorded.contacts[i]) + " differs";
+    }
+  }
+  if (recorded.closest_points.size() == recorded.distance_pairs.size() &&
+      replayed.closest_points.size() == replayed.distance_pairs.size() &&
+      DistancePairsOf(recorded) == DistancePairsOf(replayed)) {
+    for (size_t i = 0; i < recorded.closest_points.size(); ++i) {
+      if (!Near(recorded.closest_points[i].point_a, replayed.closest_points[i].point_a) ||
+          !Near(recorded.closest_points[i].point_b, replayed.closest_points[i].point_b)) {
+        return "closest points of " + Describe(recorded.distance_pairs[i].pair) + " differ";
+      }
+    }
+  }
+  if (recorded.penetrations.size() == replayed.penetrations.size()) {
+    for (size_t i = 0; i < recorded.penetrations.size(); ++i) {
+      const Penetration& a = recorded.penetrations[i];
+      const Penetration& b = replayed.penetrations[i];
+      const ObjectPair objects{a.object_a, a.object_b};
+      if (a.object_a != b.object_a || a.object_b != b.object_b || a.closed != b.closed ||
+          std::abs(a.depth - b.depth) > kDistanceTolerance * std::max(1.0, a.depth) ||
+          !Near(a.point_a, b.point_a) || !Near(a.point_b, b.point_b)) {
+        return "penetration of " + Describe(objects) + " differs";
+      }
+    }
+  }
+  return "";
+}
+
 // A reliable method's PCS holds every contact's triangles (when the reply carries a PCS).
 std::string FirstContactOutsidePcs(const StepResult& replayed) {
   if (replayed.pcs_primitives.empty() || !replayed.stats.certificate.guaranteed) return "";
@@ -121,6 +166,7 @@ void CompareResults(const StepResult& recorded, const StepResult& replayed,
   add(exact_required,
       FirstDifference("distance pair", DistancePairsOf(recorded), DistancePairsOf(replayed)));
   add(exact_required, FirstDistanceDifference(recorded, replayed));
+  add(exact_required, FirstGeometryDifference(recorded, replayed));
   add(true, FirstContactOutsidePcs(replayed));
   add(pcs_required, FirstDifference("PCS object", recorded.pcs_objects, replayed.pcs_objects));
   add(pcs_required, FirstDifference("PCS triangle", Primitives(recorded), Primitives(replayed)));

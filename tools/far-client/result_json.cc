@@ -65,7 +65,41 @@ json StatsJson(const StepStats& stats) {
           {"certificate", CertificateJson(stats.certificate)}};
 }
 
-json ResultJson(const StepResult& result) {
+namespace {
+
+json PointJson(const Eigen::Vector3d& p) { return json::array({p.x(), p.y(), p.z()}); }
+
+// The contact geometry (StepRequest::geometry), parallel to contacts and distance_pairs.
+void AddGeometryJson(const StepResult& result, json& out) {
+  json contact_geometry = json::array(), closest = json::array(), penetrations = json::array();
+  for (const ContactGeometry& g : result.contact_geometry) {
+    json points = json::array();
+    for (int k = 0; k < g.num_points; ++k) points.push_back(PointJson(g.points[k]));
+    contact_geometry.push_back({{"points", points},
+                                {"normal_a", PointJson(g.normal_a)},
+                                {"normal_b", PointJson(g.normal_b)},
+                                {"coplanar", g.coplanar}});
+  }
+  for (const ClosestPoints& c : result.closest_points)
+    closest.push_back({{"point_a", PointJson(c.point_a)}, {"point_b", PointJson(c.point_b)}});
+  for (const Penetration& p : result.penetrations) {
+    json entry = {{"objects", {p.object_a, p.object_b}}, {"closed", p.closed}};
+    if (p.closed) {
+      entry["depth"] = p.depth;
+      entry["direction"] = PointJson(p.direction);
+      entry["point_a"] = PointJson(p.point_a);
+      entry["point_b"] = PointJson(p.point_b);
+    }
+    penetrations.push_back(entry);
+  }
+  out["contact_geometry"] = contact_geometry;
+  out["closest_points"] = closest;
+  out["penetrations"] = penetrations;
+}
+
+}  // namespace
+
+json ResultJson(const StepResult& result, bool geometry) {
   json contacts = json::array(), distance_pairs = json::array(), pcs_primitives = json::object();
   for (const auto& c : result.contacts)
     contacts.push_back({c.object_a, c.triangle_a, c.object_b, c.triangle_b});
@@ -77,12 +111,14 @@ json ResultJson(const StepResult& result) {
     pcs_primitives[std::to_string(id)] = triangles;
   json pairs = json::array();
   for (const auto& p : result.object_pairs) pairs.push_back({p.object_a, p.object_b});
-  return {{"contacts", contacts},
-          {"distance_pairs", distance_pairs},
-          {"pcs_objects", result.pcs_objects},
-          {"pcs_primitives", pcs_primitives},
-          {"object_pairs", pairs},
-          {"stats", StatsJson(result.stats)}};
+  json out = {{"contacts", contacts},
+              {"distance_pairs", distance_pairs},
+              {"pcs_objects", result.pcs_objects},
+              {"pcs_primitives", pcs_primitives},
+              {"object_pairs", pairs},
+              {"stats", StatsJson(result.stats)}};
+  if (geometry) AddGeometryJson(result, out);
+  return out;
 }
 
 }  // namespace far::cli

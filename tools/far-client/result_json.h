@@ -13,6 +13,10 @@ nlohmann::json CertificateJson(const Certificate& certificate);
 /// distance D is asked for, r covers D/2 as well).
 std::string CertificateText(const Certificate& certificate);
 nlohmann::json StatsJson(const StepStats& stats);
-nlohmann::json ResultJson(const StepResult& result);
+/// With `geometry` (the step asked for it): also "contact_geometry" (per contact: points,
+/// normal_a, normal_b, coplanar), "closest_points" (per distance pair: point_a, point_b) and
+/// "penetrations" (per object pair in contact: objects, closed, and when closed depth,
+/// direction, point_a, point_b).
+nlohmann::json ResultJson(const StepResult& result, bool geometry = false);
 
 }  // namespace far::cli

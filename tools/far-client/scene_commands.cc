@@ -49,7 +49,7 @@ int RunCollide(const GlobalFlags& global, const SceneFlags& flags) {
   auto result = session->second->Step(*request, ProgressLine("step 0"));
   EndProgress();
   if (!result) return Fail(result.error());
-  std::cout << ResultJson(*result).dump() << "\n";
+  std::cout << ResultJson(*result, request->geometry).dump() << "\n";
   return 0;
 }
 
@@ -165,7 +165,9 @@ Command AddCollideCommand(CLI::App& app, const GlobalFlags& global) {
                          "Upload a scene through the ring, run one step, print JSON:\n"
                          "  {contacts: [[objA, triA, objB, triB], ...], distance_pairs: "
                          "[[objA, triA, objB, triB, d], ...],\n   pcs_objects, pcs_primitives: "
-                         "{objId: [tri, ...]}, object_pairs, stats}");
+                         "{objId: [tri, ...]}, object_pairs, stats}\n"
+                         "  with --geometry also contact_geometry, closest_points, "
+                         "penetrations (docs/contact-geometry.md)");
   command.app->add_option("scene", flags->scene, "far-scene/1 JSON file (docs/scene-format.md)")
       ->required()
       ->check(CLI::ExistingFile);

@@ -208,6 +208,37 @@ inline double Estimate(const double* e, int len) {
   return sum;
 }
 
+// Rounds an expansion to a double with a relative error of at most about 2^-52. A
+// nonoverlapping expansion's components can cancel (2^100 - (2^100 - 2^47)), so summing them as
+// they are may lose every bit; Shewchuk's compress first makes the expansion nonadjacent, whose
+// largest component then approximates the sum within a relative error below 2^-52, and the
+// smaller ones, summed from the smallest up, refine it. Overwrites e. @pre len >= 1.
+double RoundExpansion(double* e, int len) {
+  // Shewchuk's compress: a top-down pass, then a bottom-up pass.
+  int bottom = len - 1;
+  double q = e[bottom];
+  double g[256];
+  for (int i = len - 2; i >= 0; --i) {
+    double qnew, small;
+    FastTwoSum(q, e[i], qnew, small);
+    if (small != 0.0) {
+      g[bottom--] = qnew;
+      q = small;
+    } else {
+      q = qnew;
+    }
+  }
+  int top = 0;
+  for (int i = bottom + 1; i < len; ++i) {
+    double qnew, small;
+    FastTwoSum(g[i], q, qnew, small);
+    q = qnew;
+    if (small != 0.0) e[top++] = small;
+  }
+  e[top++] = q;
+  return Estimate(e, top);
+}
+
 inline int Sign(double x) { return (x > 0.0) - (x < 0.0); }
 
 }  // namespace
@@ -242,8 +273,11 @@ int Orient3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Ve
   return PlaneSide(a, b, c).Side(d);
 }
 
-int Orient3dExact(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                  const Eigen::Vector3d& d) {
+namespace {
+
+// det[b - a, c - a, d - a] as an exact expansion in `det` (192 components); returns the length.
+int Orient3dExpansion(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                      const Eigen::Vector3d& d, double* det) {
   // det[u, v, w] with u = b - a, v = c - a, w = d - a, each difference an exact expansion,
   // expanded along u: ux (vy wz - vz wy) + uy (vz wx - vx wz) + uz (vx wy - vy wx).
   const Diff ux = MakeDiff(b.x(), a.x()), uy = MakeDiff(b.y(), a.y()), uz = MakeDiff(b.z(), a.z());
@@ -259,9 +293,32 @@ int Orient3dExact(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eige
   const int z_len = MultiplyBySmall(minor, len, uz.v, uz.n, term_z);
   double xy[128];
   const int xy_len = SumExpansions(term_x, x_len, term_y, y_len, xy);
+  return SumExpansions(xy, xy_len, term_z, z_len, det);
+}
+
+// Whether a floating-point determinant with error bound `bound` is within 2^-52 relative.
+inline bool CertifiedToRelative(double det, double bound) {
+  return bound <= 0x1p-52 * std::abs(det) && det != 0.0;
+}
+
+}  // namespace
+
+int Orient3dExact(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                  const Eigen::Vector3d& d) {
   double det[192];
-  const int det_len = SumExpansions(xy, xy_len, term_z, z_len, det);
+  const int det_len = Orient3dExpansion(a, b, c, d, det);
   return SignOf(det, det_len);
+}
+
+double Orient3dValue(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                     const Eigen::Vector3d& d) {
+  const PlaneSide plane(a, b, c);
+  double bound;
+  const double det = plane.Value(d, bound);
+  if (CertifiedToRelative(det, bound)) return det;
+  double exact[192];
+  const int len = Orient3dExpansion(a, b, c, d, exact);
+  return RoundExpansion(exact, len);
 }
 
 // --- Orient2d ------------------------------------------------------------------------------
@@ -287,13 +344,35 @@ int Orient2d(double ax, double ay, double bx, double by, double cx, double cy) {
   return Orient2dExact(ax, ay, bx, by, cx, cy);
 }
 
-int Orient2dExact(double ax, double ay, double bx, double by, double cx, double cy) {
-  // (b - a) x (c - a) with exact differences.
+namespace {
+
+// (b - a) x (c - a) with exact differences, as an expansion in `det` (16); returns the length.
+int Orient2dExpansion(double ax, double ay, double bx, double by, double cx, double cy,
+                      double* det) {
   const Diff ux = MakeDiff(bx, ax), uy = MakeDiff(by, ay);
   const Diff vx = MakeDiff(cx, ax), vy = MakeDiff(cy, ay);
+  return MinorExpansion(ux, vy, uy, vx, det);
+}
+
+}  // namespace
+
+int Orient2dExact(double ax, double ay, double bx, double by, double cx, double cy) {
   double det[16];
-  const int len = MinorExpansion(ux, vy, uy, vx, det);
+  const int len = Orient2dExpansion(ax, ay, bx, by, cx, cy, det);
   return SignOf(det, len);
+}
+
+double Orient2dValue(double ax, double ay, double bx, double by, double cx, double cy) {
+  // Stage A as in Orient2d: |fl(det) - det| <= kOrient2dBoundA (|detleft| + |detright|).
+  const double detleft = (ax - cx) * (by - cy);
+  const double detright = (ay - cy) * (bx - cx);
+  const double det = detleft - detright;
+  if (CertifiedToRelative(det, kOrient2dBoundA * (std::abs(detleft) + std::abs(detright)))) {
+    return det;
+  }
+  double exact[16];
+  const int len = Orient2dExpansion(ax, ay, bx, by, cx, cy, exact);
+  return RoundExpansion(exact, len);
 }
 
 bool Collinear3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {

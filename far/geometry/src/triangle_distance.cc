@@ -61,6 +61,7 @@
 #include <Eigen/Geometry>
 
 #include "far/geometry/internal/predicates.h"
+#include "far/geometry/triangle_contact.h"
 #include "far/geometry/triangle_tests.h"
 
 namespace far {
@@ -97,20 +98,28 @@ inline Vector3d Normalized(const Vector3d& n) {
 
 // Squared distance from p to the closed segment [a, b] (a == b allowed). Squared, so that the
 // 18 vertex-edge candidates take one square root: sqrt is correctly rounded and monotone, so
-// the root of their smallest square is the smallest of their norms, bit for bit.
-double PointSegmentSquaredDistance(const Vector3d& p, const Vector3d& a, const Vector3d& b) {
+// the root of their smallest square is the smallest of their norms, bit for bit. `foot`, when
+// given, receives the closest point of the segment.
+double PointSegmentSquaredDistance(const Vector3d& p, const Vector3d& a, const Vector3d& b,
+                                   Vector3d* foot = nullptr) {
   const Vector3d e = b - a;
   const Vector3d w = p - a;
   const double ee = e.squaredNorm();
   double t = 0.0;
   if (ee > 0.0) t = std::clamp(w.dot(e) / ee, 0.0, 1.0);
+  if (foot != nullptr) *foot = a + t * e;
   return (w - t * e).squaredNorm();
 }
 
+// Where the smallest candidate so far was attained: points on the first and second triangle.
+struct Witness {
+  Vector3d on_s, on_t;
+};
+
 // The length of a vector between two points of [a, b] and [c, d] near the closest points of
 // their supporting lines (see the valley argument above), or +inf for parallel segments.
-double EdgeEdgeDistance(const Vector3d& a, const Vector3d& b, const Vector3d& c,
-                        const Vector3d& d) {
+double EdgeEdgeDistance(const Vector3d& a, const Vector3d& b, const Vector3d& c, const Vector3d& d,
+                        Witness* witness = nullptr) {
   const Vector3d cross = internal::RoundedCross(a, b, c, d);
   // Parallel (or a zero-length edge): a vertex-edge candidate is optimal.
   if (cross.x() == 0.0 && cross.y() == 0.0 && cross.z() == 0.0) return kInf;
@@ -125,6 +134,7 @@ double EdgeEdgeDistance(const Vector3d& a, const Vector3d& b, const Vector3d& c,
   // t: the best t for that s, clamped; then the actual distance of the two points.
   const Vector3d r = (a - c) + s * e1;
   const double t = std::clamp(r.dot(e2) / e2.squaredNorm(), 0.0, 1.0);
+  if (witness != nullptr) *witness = Witness{a + s * e1, c + t * e2};
   return (r - t * e2).norm();
 }
 
@@ -149,37 +159,71 @@ FaceFrame MakeFaceFrame(const std::array<const Vector3d*, 3>& v) {
 }
 
 // The distance from p to the plane of the triangle if p projects at least `margin` inside it,
-// else +inf.
+// else +inf. `foot`, when given, receives p's projection onto the plane.
 double VertexFaceDistance(const Vector3d& p, const std::array<const Vector3d*, 3>& v,
-                          const FaceFrame& frame, double margin) {
+                          const FaceFrame& frame, double margin, Vector3d* foot = nullptr) {
   for (int i = 0; i < 3; ++i) {
     if (frame.inward[i].dot(p - *v[i]) < margin) return kInf;
   }
-  return std::abs(frame.normal.dot(p - *v[0]));
+  const double height = frame.normal.dot(p - *v[0]);
+  if (foot != nullptr) *foot = p - height * frame.normal;
+  return std::abs(height);
 }
 
-// The distance of two triangles known to be disjoint.
-double DisjointDistance(const TrianglePoints& s, const TrianglePoints& t, double scale) {
+// The distance of two triangles known to be disjoint, and where it is attained when `witness`
+// is given (the points of the smallest candidate; the value is the same either way).
+double DisjointDistance(const TrianglePoints& s, const TrianglePoints& t, double scale,
+                        Witness* witness = nullptr) {
   const double margin = kFaceMargin * kEps * scale;
   const std::array<const Vector3d*, 3> sv = {&s.a, &s.b, &s.c};
   const std::array<const Vector3d*, 3> tv = {&t.a, &t.b, &t.c};
-  // Vertex-edge, both ways.
+  // Vertex-edge, both ways. The best pair is remembered by index (the feet are recomputed).
   double best_squared = kInf;
+  int best_vertex = 0, best_edge = 0;
+  bool best_on_t = true;  // the vertex is s's and the edge t's
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
-      best_squared =
-          std::min(best_squared, PointSegmentSquaredDistance(*sv[i], *tv[j], *tv[(j + 1) % 3]));
-      best_squared =
-          std::min(best_squared, PointSegmentSquaredDistance(*tv[i], *sv[j], *sv[(j + 1) % 3]));
+      const double to_t = PointSegmentSquaredDistance(*sv[i], *tv[j], *tv[(j + 1) % 3]);
+      if (to_t < best_squared) {
+        best_squared = to_t;
+        best_vertex = i, best_edge = j, best_on_t = true;
+      }
+      const double to_s = PointSegmentSquaredDistance(*tv[i], *sv[j], *sv[(j + 1) % 3]);
+      if (to_s < best_squared) {
+        best_squared = to_s;
+        best_vertex = i, best_edge = j, best_on_t = false;
+      }
     }
+  }
+  if (witness != nullptr) {
+    const auto& vertices = best_on_t ? sv : tv;
+    const auto& edges = best_on_t ? tv : sv;
+    Vector3d foot;
+    PointSegmentSquaredDistance(*vertices[best_vertex], *edges[best_edge],
+                                *edges[(best_edge + 1) % 3], &foot);
+    *witness = best_on_t ? Witness{*sv[best_vertex], foot} : Witness{foot, *tv[best_vertex]};
   }
   double best = std::sqrt(best_squared);
   // Vertex-face, both ways.
   const FaceFrame frame_s = MakeFaceFrame(sv);
   const FaceFrame frame_t = MakeFaceFrame(tv);
   for (int i = 0; i < 3; ++i) {
-    if (frame_t.valid) best = std::min(best, VertexFaceDistance(*sv[i], tv, frame_t, margin));
-    if (frame_s.valid) best = std::min(best, VertexFaceDistance(*tv[i], sv, frame_s, margin));
+    Vector3d foot;
+    Vector3d* foot_out = witness != nullptr ? &foot : nullptr;
+    if (frame_t.valid) {
+      const double d = VertexFaceDistance(*sv[i], tv, frame_t, margin, foot_out);
+      if (d < best) {
+        best = d;
+        if (witness != nullptr) *witness = Witness{*sv[i], foot};
+      }
+    }
+    if (frame_s.valid) {
+      const double d = VertexFaceDistance(*tv[i], sv, frame_s, margin, foot_out);
+      if (d < best) {
+        best = d;
+        if (witness != nullptr) *witness = Witness{foot, *tv[i]};
+      }
+    }
   }
   // Edge-edge, last: an edge pair whose boxes are farther apart than the best candidate so far
   // cannot be smaller, and is skipped. Its candidate is a vector between points of the two
@@ -193,7 +237,13 @@ double DisjointDistance(const TrianglePoints& s, const TrianglePoints& t, double
       const Eigen::Array3d gap = (c.array().min(d.array()) - a.array().max(b.array()))
                                      .max(a.array().min(b.array()) - c.array().max(d.array()));
       if (gap.maxCoeff() > skip_above) continue;
-      best = std::min(best, EdgeEdgeDistance(a, b, c, d));
+      Witness candidate;
+      const double distance =
+          EdgeEdgeDistance(a, b, c, d, witness != nullptr ? &candidate : nullptr);
+      if (distance < best) {
+        best = distance;
+        if (witness != nullptr) *witness = candidate;
+      }
     }
   }
   return best;
@@ -288,6 +338,20 @@ std::optional<double> TriangleDistanceIfWithin(const TrianglePoints& s, const Tr
   const double distance = DisjointDistance(s, t, scale);
   if (distance <= limit) return distance;
   return std::nullopt;
+}
+
+ClosestPoints TriangleClosestPoints(const TrianglePoints& s, const TrianglePoints& t) {
+  if (Before(t, s)) {
+    const ClosestPoints swapped = TriangleClosestPoints(t, s);
+    return ClosestPoints{swapped.point_b, swapped.point_a};
+  }
+  if (TrianglesIntersect(s, t)) {
+    const Vector3d common = TriangleContactGeometry(s, t).points[0];
+    return ClosestPoints{common, common};
+  }
+  Witness witness;
+  DisjointDistance(s, t, PairBoxes(s, t).Scale(), &witness);
+  return ClosestPoints{witness.on_s, witness.on_t};
 }
 
 bool TrianglesWithinDistance(const TrianglePoints& s, const TrianglePoints& t,

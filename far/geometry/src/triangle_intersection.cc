@@ -28,6 +28,7 @@
 #include <algorithm>
 #include <array>
 
+#include "triangle_shapes.h"
 #include <Eigen/Geometry>
 
 #include "far/geometry/internal/predicates.h"
@@ -42,33 +43,9 @@ using internal::Orient2d;
 using internal::Orient2dProjected;
 using internal::Orient3d;
 using internal::PlaneSide;
+using namespace internal;  // NOLINT: the shared blocks of triangle_shapes.h
 
 // --- Small exact helpers -------------------------------------------------------------------
-
-// A point projected onto a coordinate plane (exact: coordinates are only selected).
-struct P2 {
-  double x, y;
-};
-
-inline P2 Project(const Vector3d& p, int i, int j) { return P2{p[i], p[j]}; }
-
-inline int Orient(const P2& a, const P2& b, const P2& c) {
-  return Orient2d(a.x, a.y, b.x, b.y, c.x, c.y);
-}
-
-// Returns true iff p, known to be collinear with a and b, lies on the closed segment [a, b]
-// (also right when a == b: then p must equal a).
-inline bool WithinBox2(const P2& a, const P2& b, const P2& p) {
-  return std::min(a.x, b.x) <= p.x && p.x <= std::max(a.x, b.x) && std::min(a.y, b.y) <= p.y &&
-         p.y <= std::max(a.y, b.y);
-}
-
-inline bool WithinBox3(const Vector3d& a, const Vector3d& b, const Vector3d& p) {
-  for (int k = 0; k < 3; ++k) {
-    if (p[k] < std::min(a[k], b[k]) || p[k] > std::max(a[k], b[k])) return false;
-  }
-  return true;
-}
 
 // Closed segments [a, b] and [c, d] in the plane; either may be a single point.
 bool SegmentsIntersect2d(const P2& a, const P2& b, const P2& c, const P2& d) {
@@ -84,12 +61,6 @@ bool SegmentsIntersect2d(const P2& a, const P2& b, const P2& c, const P2& d) {
   if (o3 == 0 && WithinBox2(c, d, a)) return true;
   if (o4 == 0 && WithinBox2(c, d, b)) return true;
   return false;
-}
-
-// Closed non-degenerate triangle (a, b, c) with orientation `orientation` (+1 or -1) contains p.
-inline bool PointInTriangle2d(const P2& p, const P2& a, const P2& b, const P2& c, int orientation) {
-  return Orient(a, b, p) * orientation >= 0 && Orient(b, c, p) * orientation >= 0 &&
-         Orient(c, a, p) * orientation >= 0;
 }
 
 // Closed segment [a, b] (possibly a point) against a closed non-degenerate triangle in the plane.
@@ -114,64 +85,6 @@ bool TrianglesIntersect2d(const std::array<P2, 3>& s, int s_orientation, const s
   }
   return PointInTriangle2d(s[0], t[0], t[1], t[2], t_orientation) ||
          PointInTriangle2d(t[0], s[0], s[1], s[2], s_orientation);
-}
-
-// Chooses the coordinate plane to project a non-degenerate triangle (a, b, c) onto: drops the
-// axis k along which its normal has a nonzero component (decided exactly), so that the
-// projection is one-to-one on the triangle's plane. Returns the kept axes (i, j) and the
-// projected orientation (+1 or -1).
-struct Projection {
-  int i, j;
-  int orientation;
-};
-
-Projection ChooseProjection(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-  // Prefer dropping the axis with the largest floating-point normal component (the best
-  // conditioned projection); any axis with a nonzero exact component would be correct.
-  const Vector3d n = (b - a).cross(c - a);
-  int k = 0;
-  if (std::abs(n.y()) > std::abs(n[k])) k = 1;
-  if (std::abs(n.z()) > std::abs(n[k])) k = 2;
-  for (int attempt = 0; attempt < 3; ++attempt, k = (k + 1) % 3) {
-    const int i = (k + 1) % 3;
-    const int j = (k + 2) % 3;
-    const int orientation = Orient2dProjected(a, b, c, i, j);
-    if (orientation != 0) return Projection{i, j, orientation};
-  }
-  return Projection{0, 1, 0};  // degenerate triangle: callers never pass one
-}
-
-// --- Degenerate triangles: what they are -----------------------------------------------------
-
-struct Shape {
-  enum Kind { kTriangle, kSegment, kPoint } kind;
-  Vector3d p, q;  // kSegment: the end points; kPoint: p
-};
-
-Shape Classify(const TrianglePoints& s) {
-  if (!Collinear3d(s.a, s.b, s.c)) return Shape{Shape::kTriangle, {}, {}};
-  // Collinear: the hull is the segment between the extreme points along any axis on which the
-  // points are not all equal (exact comparisons).
-  const std::array<const Vector3d*, 3> v = {&s.a, &s.b, &s.c};
-  for (int k = 0; k < 3; ++k) {
-    const auto [lo, hi] = std::minmax_element(
-        v.begin(), v.end(),
-        [k](const Vector3d* x, const Vector3d* y) { return (*x)[k] < (*y)[k]; });
-    if ((**lo)[k] < (**hi)[k]) return Shape{Shape::kSegment, **lo, **hi};
-  }
-  return Shape{Shape::kPoint, s.a, s.a};
-}
-
-bool PointOnSegment3d(const Vector3d& p, const Vector3d& a, const Vector3d& b) {
-  return Collinear3d(a, b, p) && WithinBox3(a, b, p);
-}
-
-bool PointTriangle3d(const Vector3d& p, const TrianglePoints& t) {
-  if (Orient3d(t.a, t.b, t.c, p) != 0) return false;
-  const Projection proj = ChooseProjection(t.a, t.b, t.c);
-  return PointInTriangle2d(Project(p, proj.i, proj.j), Project(t.a, proj.i, proj.j),
-                           Project(t.b, proj.i, proj.j), Project(t.c, proj.i, proj.j),
-                           proj.orientation);
 }
 
 // Closed segments [a, b], [c, d] in space; a != b and c != d.
@@ -252,29 +165,6 @@ bool CoplanarOrDegenerate(const TrianglePoints& s, const TrianglePoints& t) {
       return big.p == small.p;
   }
   return false;
-}
-
-// Picks the apex of a triangle from the signs of its vertices w.r.t. the other plane: a vertex
-// whose two neighbours are strictly on one side of its level. Returns its index and eps (+1 if
-// the others are below it, -1 if above). @pre the signs are not all equal.
-struct Apex {
-  int index;
-  int eps;
-};
-
-inline Apex FindApex(const std::array<int, 3>& sign) {
-  // A vertex whose strict sign no other vertex shares: the others are on its opposite closed
-  // side, and strictly below or above its level.
-  for (int i = 0; i < 3; ++i) {
-    if (sign[i] != 0 && sign[(i + 1) % 3] != sign[i] && sign[(i + 2) % 3] != sign[i]) {
-      return Apex{i, sign[i]};
-    }
-  }
-  // Otherwise the pattern is (0, s, s) up to rotation: the vertex on the plane is the apex.
-  for (int i = 0; i < 3; ++i) {
-    if (sign[i] == 0) return Apex{i, -sign[(i + 1) % 3]};
-  }
-  return Apex{0, 0};  // unreachable for valid input
 }
 
 inline bool BoxesDisjoint(const TrianglePoints& s, const TrianglePoints& t) {

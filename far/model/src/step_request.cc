@@ -120,6 +120,11 @@ Result<void> CheckStepRequest(const StepRequest& request) {
                                  "' answers contacts only; distance queries need " +
                                  DistanceMethodNames());
   }
+  if (request.geometry && request.output != Output::kContacts &&
+      request.output != Output::kDistancePairs) {
+    return Invalid("geometry", "needs output 'contacts' or 'distance', not '" +
+                                   std::string(ToString(request.output)) + "'");
+  }
   return {};
 }
 

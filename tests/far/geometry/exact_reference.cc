@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <optional>
+#include <vector>
 
 namespace far::reference {
 namespace {
@@ -162,6 +163,106 @@ std::optional<mpq_class> VertexFaceSquared(const QVec& p, const Tri& q) {
   return h * h / Dot(n, n);
 }
 
+// The part of the closed segment [a, b] in the convex hull of q, as its ends (none, one or two
+// points), constructed exactly.
+std::vector<QVec> ClipSegment(const QVec& a, const QVec& b, const Tri& q) {
+  const QVec d = b - a;
+  const QVec n = Cross(q[1] - q[0], q[2] - q[0]);
+  mpq_class lo = 0;
+  mpq_class hi = 1;
+  if (IsZero(n)) {
+    // q is the segment [u, v] (or a point): intersect the two segments.
+    const auto [u, v] = HullSegment(q);
+    const QVec e = v - u;
+    if (IsZero(d)) return PointOnSegment(a, u, v) ? std::vector<QVec>{a} : std::vector<QVec>{};
+    if (IsZero(e)) return PointOnSegment(u, a, b) ? std::vector<QVec>{u} : std::vector<QVec>{};
+    const QVec cross = Cross(d, e);
+    if (!IsZero(cross)) {
+      if (sgn(Dot(u - a, cross)) != 0) return {};
+      const mpq_class cc = Dot(cross, cross);
+      const mpq_class lambda = Dot(Cross(u - a, e), cross) / cc;
+      const mpq_class mu = Dot(Cross(u - a, d), cross) / cc;
+      if (!InUnitInterval(lambda) || !InUnitInterval(mu)) return {};
+      return {a + lambda * d};
+    }
+    if (!IsZero(Cross(u - a, d))) return {};  // parallel lines
+    const mpq_class dd = Dot(d, d);
+    const mpq_class lu = Dot(u - a, d) / dd;
+    const mpq_class lv = Dot(v - a, d) / dd;
+    lo = std::max(lo, mpq_class(std::min(lu, lv)));
+    hi = std::min(hi, mpq_class(std::max(lu, lv)));
+  } else {
+    const mpq_class ha = Dot(n, a - q[0]);
+    const mpq_class hb = Dot(n, b - q[0]);
+    if ((sgn(ha) > 0 && sgn(hb) > 0) || (sgn(ha) < 0 && sgn(hb) < 0)) return {};
+    if (sgn(ha) != 0 || sgn(hb) != 0) {
+      const QVec x = a + mpq_class(ha / (ha - hb)) * d;
+      return InsideTriangle(x, q, n) ? std::vector<QVec>{x} : std::vector<QVec>{};
+    }
+    for (int i = 0; i < 3; ++i) {
+      const QVec m = Cross(n, q[(i + 1) % 3] - q[i]);
+      const mpq_class alpha = Dot(m, a - q[i]);
+      const mpq_class beta = Dot(m, d);
+      if (sgn(beta) == 0) {
+        if (sgn(alpha) < 0) return {};
+      } else if (sgn(beta) > 0) {
+        lo = std::max(lo, mpq_class(-alpha / beta));
+      } else {
+        hi = std::min(hi, mpq_class(-alpha / beta));
+      }
+    }
+  }
+  if (lo > hi) return {};
+  if (lo == hi) return {a + lo * d};
+  return {a + lo * d, a + hi * d};
+}
+
+bool Equal(const QVec& a, const QVec& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+// The extreme points of the convex hull of distinct points.
+std::vector<QVec> HullVertices(const std::vector<QVec>& p) {
+  if (p.size() <= 1) return p;
+  const QVec d = p[1] - p[0];
+  size_t off_line = 0;
+  for (size_t k = 2; k < p.size() && off_line == 0; ++k) {
+    if (!IsZero(Cross(p[k] - p[0], d))) off_line = k;
+  }
+  if (off_line == 0) {  // collinear: the two extremes along d
+    size_t lo = 0, hi = 0;
+    for (size_t k = 1; k < p.size(); ++k) {
+      if (Dot(p[k] - p[0], d) < Dot(p[lo] - p[0], d)) lo = k;
+      if (Dot(p[k] - p[0], d) > Dot(p[hi] - p[0], d)) hi = k;
+    }
+    return {p[lo], p[hi]};
+  }
+  // Coplanar: gift wrapping about the normal, collinear points dropped.
+  const QVec normal = Cross(d, p[off_line] - p[0]);
+  size_t start = 0;
+  for (size_t k = 1; k < p.size(); ++k) {
+    if (p[k].x < p[start].x ||
+        (p[k].x == p[start].x &&
+         (p[k].y < p[start].y || (p[k].y == p[start].y && p[k].z < p[start].z)))) {
+      start = k;
+    }
+  }
+  // The lexicographically smallest point is extreme (a linear functional's unique minimum).
+  std::vector<QVec> hull;
+  size_t current = start;
+  do {
+    hull.push_back(p[current]);
+    size_t next = current == 0 ? 1 : 0;
+    for (size_t k = 0; k < p.size(); ++k) {
+      if (k == current) continue;
+      const int side = sgn(Dot(Cross(p[next] - p[current], p[k] - p[current]), normal));
+      const bool farther = side == 0 && Dot(p[k] - p[current], p[k] - p[current]) >
+                                            Dot(p[next] - p[current], p[next] - p[current]);
+      if (side < 0 || farther) next = k;
+    }
+    current = next;
+  } while (current != start && hull.size() <= p.size());
+  return hull;
+}
+
 }  // namespace
 
 QVec ToQ(const Eigen::Vector3d& p) {
@@ -215,6 +316,28 @@ mpq_class ExactSquaredDistance(const TrianglePoints& s, const TrianglePoints& t)
     if (const auto v = VertexFaceSquared(qt[i], qs)) best = std::min(best, *v);
   }
   return best;
+}
+
+}  // namespace far::reference
+
+namespace far::reference {
+
+std::vector<QVec> ExactIntersectionExtremes(const TrianglePoints& s, const TrianglePoints& t) {
+  const Tri qs = ToQTri(s);
+  const Tri qt = ToQTri(t);
+  std::vector<QVec> candidates;
+  const auto add = [&](const QVec& x) {
+    for (const QVec& y : candidates) {
+      if (Equal(x, y)) return;
+    }
+    candidates.push_back(x);
+  };
+  for (const auto& [mine, other] : {std::pair{&qs, &qt}, std::pair{&qt, &qs}}) {
+    for (int i = 0; i < 3; ++i) {
+      for (const QVec& x : ClipSegment((*mine)[i], (*mine)[(i + 1) % 3], *other)) add(x);
+    }
+  }
+  return HullVertices(candidates);
 }
 
 }  // namespace far::reference

@@ -6,6 +6,8 @@
 // barycentric and parametric tests) instead of reusing far::internal's orientation predicates,
 // so that the two can disagree if either is wrong. Slow (tens of microseconds per pair).
 
+#include <vector>
+
 #include <gmpxx.h>
 
 #include "far/geometry/triangle_tests.h"
@@ -30,6 +32,12 @@ int ExactOrient2d(double ax, double ay, double bx, double by, double cx, double 
 /// Returns true iff the closed triangles (convex hulls of their three points, so degenerate
 /// triangles are the segment or point they are) share a point. Exact.
 bool ExactTrianglesIntersect(const TrianglePoints& s, const TrianglePoints& t);
+
+/// Returns the extreme points of the intersection of the closed triangles (degenerate ones are
+/// the segment or point they are), exactly: none when they are disjoint, one when they touch at
+/// a point, a segment's two ends, or a coplanar overlap polygon's vertices (collinear boundary
+/// points dropped), each once. Built from the edges of each clipped to the other.
+std::vector<QVec> ExactIntersectionExtremes(const TrianglePoints& s, const TrianglePoints& t);
 
 /// Returns the exact squared Euclidean distance of the closed triangles (0 if they intersect).
 mpq_class ExactSquaredDistance(const TrianglePoints& s, const TrianglePoints& t);

@@ -90,7 +90,8 @@ bool NeedsGl(Method method);
 
 /// Checks a request against the limits of far/base/limits.h: resolution in [kMinResolution,
 /// kMaxResolution], subobject_size in [1, kMaxSubobjectSize], a distance that is finite and in
-/// [0, kMaxDistance], output "distance" only with a distance, method "fcl" only without one.
+/// [0, kMaxDistance], output "distance" only with a distance, method "fcl" only without one,
+/// geometry only with output "contacts" or "distance".
 /// The pipeline and the protocol's validation both call it. Errors (kInvalidArgument) start
 /// with the field: "resolution: 5 is outside [8, 8192]".
 Result<void> CheckStepRequest(const StepRequest& request);

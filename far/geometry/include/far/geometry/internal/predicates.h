@@ -67,6 +67,18 @@ class PlaneSide {
     return SideExact(d);
   }
 
+  /// The floating-point value of Orient3d(a, b, c, d)'s determinant, and in `bound` the filter's
+  /// bound on its error: |value - det| <= bound.
+  double Value(const Eigen::Vector3d& d, double& bound) const {
+    const double wx = d.x() - a_.x();
+    const double wy = d.y() - a_.y();
+    const double wz = d.z() - a_.z();
+    const double permanent = std::abs(wx) * permanent_.x() + std::abs(wy) * permanent_.y() +
+                             std::abs(wz) * permanent_.z();
+    bound = kOrient3dBoundA * permanent;
+    return wx * normal_.x() + wy * normal_.y() + wz * normal_.z();
+  }
+
   /// Shewchuk's o3derrboundA = (7 + 56 eps) eps with eps = 2^-53.
   static constexpr double kOrient3dBoundA = (7.0 + 56.0 * 0x1p-53) * 0x1p-53;
 
@@ -87,6 +99,17 @@ class PlaneSide {
 /// accurate to a few ulps even for slivers and nearly parallel edges.
 Eigen::Vector3d RoundedCross(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                              const Eigen::Vector3d& c, const Eigen::Vector3d& d);
+
+/// det[b - a, c - a, d - a] (Orient3d's determinant) as a double within a relative error of
+/// 2^-51: the floating-point value where its error bound certifies that, else the exact
+/// expansion, compressed and rounded. Zero exactly when the points are coplanar; its sign is
+/// Orient3d's. What constructions use (contact points), where the predicates need only signs.
+double Orient3dValue(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                     const Eigen::Vector3d& d);
+
+/// (b - a) x (c - a) in the plane, as Orient3dValue: within a relative error of 2^-51, zero
+/// exactly when collinear.
+double Orient2dValue(double ax, double ay, double bx, double by, double cx, double cy);
 
 /// The exact fallbacks, exposed so that tests can check them without the filter.
 int Orient3dExact(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
