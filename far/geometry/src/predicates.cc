@@ -310,15 +310,18 @@ int Orient3dExact(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eige
   return SignOf(det, det_len);
 }
 
-double Orient3dValue(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                     const Eigen::Vector3d& d) {
-  const PlaneSide plane(a, b, c);
+double PlaneSide::RoundedValue(const Eigen::Vector3d& d) const {
   double bound;
-  const double det = plane.Value(d, bound);
+  const double det = Value(d, bound);
   if (CertifiedToRelative(det, bound)) return det;
   double exact[192];
-  const int len = Orient3dExpansion(a, b, c, d, exact);
+  const int len = Orient3dExpansion(a_, b_, c_, d, exact);
   return RoundExpansion(exact, len);
+}
+
+double Orient3dValue(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                     const Eigen::Vector3d& d) {
+  return PlaneSide(a, b, c).RoundedValue(d);
 }
 
 // --- Orient2d ------------------------------------------------------------------------------

@@ -54,9 +54,9 @@ Vector3d PointBetween(const Vector3d& p, const Vector3d& q, double dp, double dq
   return q + (aq / (ap + aq)) * (p - q);
 }
 
-// Where the segment [p, q] crosses the plane of t. @pre p and q not strictly on one side.
-Vector3d EdgePlaneCrossing(const Vector3d& p, const Vector3d& q, const TrianglePoints& t) {
-  return PointBetween(p, q, Orient3dValue(t.a, t.b, t.c, p), Orient3dValue(t.a, t.b, t.c, q));
+// Where the segment [p, q] crosses `plane`. @pre p and q not strictly on one side.
+Vector3d EdgePlaneCrossing(const Vector3d& p, const Vector3d& q, const PlaneSide& plane) {
+  return PointBetween(p, q, plane.RoundedValue(p), plane.RoundedValue(q));
 }
 
 // Where the segment [p, q] crosses the line through r and s, all in one plane seen through the
@@ -118,7 +118,8 @@ class Candidates {
   int count_ = 0;
 };
 
-// The unit normal of (a, b, c), zero when degenerate.
+// The unit normal of t, zero exactly when t is degenerate (RoundedCross is zero exactly when
+// b - a and c - a are parallel, that is when the corners are collinear or coincide).
 Vector3d UnitNormal(const TrianglePoints& t) {
   const Vector3d n = RoundedCross(t.a, t.b, t.a, t.c);
   const double largest = n.cwiseAbs().maxCoeff();
@@ -135,9 +136,9 @@ Vector3d UnitNormal(const TrianglePoints& t) {
 // with i1 on edge (v, w1), i2 on (v, w2), k1 on (u, z1), k2 on (u, z2), and for a, b in {1, 2}
 // sign((k_b - i_a) . d) = Orient3d(v, w_a, u, z_b). The intersection is [max(i2, k1),
 // min(i1, k2)].
-void GeneralPosition(const TrianglePoints& s, const TrianglePoints& t,
-                     const std::array<int, 3>& sigma, const std::array<int, 3>& tau,
-                     ContactGeometry& out) {
+void GeneralPosition(const TrianglePoints& s, const PlaneSide& plane_s, const TrianglePoints& t,
+                     const PlaneSide& plane_t, const std::array<int, 3>& sigma,
+                     const std::array<int, 3>& tau, ContactGeometry& out) {
   const std::array<const Vector3d*, 3> sv = {&s.a, &s.b, &s.c};
   const std::array<const Vector3d*, 3> tv = {&t.a, &t.b, &t.c};
   const Apex apex_s = FindApex(sigma);
@@ -166,10 +167,12 @@ void GeneralPosition(const TrianglePoints& s, const TrianglePoints& t,
   } else {
     single = Orient3d(v, *w2, u, *z2) == 0;  // i2 == k2
   }
-  out.points[0] = lower_is_k1 ? EdgePlaneCrossing(u, *z1, s) : EdgePlaneCrossing(v, *w2, t);
+  out.points[0] =
+      lower_is_k1 ? EdgePlaneCrossing(u, *z1, plane_s) : EdgePlaneCrossing(v, *w2, plane_t);
   out.num_points = 1;
   if (!single) {
-    out.points[1] = upper_is_k2 ? EdgePlaneCrossing(u, *z2, s) : EdgePlaneCrossing(v, *w1, t);
+    out.points[1] =
+        upper_is_k2 ? EdgePlaneCrossing(u, *z2, plane_s) : EdgePlaneCrossing(v, *w1, plane_t);
     out.num_points = 2;
   }
 }
@@ -266,7 +269,7 @@ void SegmentTriangle(const Vector3d& p, const Vector3d& q, const TrianglePoints&
                      ContactGeometry& out) {
   const PlaneSide plane(t.a, t.b, t.c);
   if (plane.Side(p) != 0 || plane.Side(q) != 0) {
-    out.points[0] = EdgePlaneCrossing(p, q, t);
+    out.points[0] = EdgePlaneCrossing(p, q, plane);
     out.num_points = 1;
     return;
   }
@@ -348,12 +351,12 @@ void Degenerate(const TrianglePoints& s, const Shape& shape_s, const TrianglePoi
 
 ContactGeometry TriangleContactGeometry(const TrianglePoints& s, const TrianglePoints& t) {
   ContactGeometry out;
-  const Shape shape_s = Classify(s);
-  const Shape shape_t = Classify(t);
-  if (shape_s.kind == Shape::kTriangle) out.normal_a = UnitNormal(s);
-  if (shape_t.kind == Shape::kTriangle) out.normal_b = UnitNormal(t);
-  if (shape_s.kind != Shape::kTriangle || shape_t.kind != Shape::kTriangle) {
-    Degenerate(s, shape_s, t, shape_t, out);
+  out.normal_a = UnitNormal(s);
+  out.normal_b = UnitNormal(t);
+  const bool s_degenerate = out.normal_a == Vector3d::Zero();
+  const bool t_degenerate = out.normal_b == Vector3d::Zero();
+  if (s_degenerate || t_degenerate) {
+    Degenerate(s, Classify(s), t, Classify(t), out);
     return out;
   }
   const PlaneSide plane_t(t.a, t.b, t.c);
@@ -364,7 +367,7 @@ ContactGeometry TriangleContactGeometry(const TrianglePoints& s, const TriangleP
   }
   const PlaneSide plane_s(s.a, s.b, s.c);
   const std::array<int, 3> tau = {plane_s.Side(t.a), plane_s.Side(t.b), plane_s.Side(t.c)};
-  GeneralPosition(s, t, sigma, tau, out);
+  GeneralPosition(s, plane_s, t, plane_t, sigma, tau, out);
   return out;
 }
 

@@ -79,6 +79,9 @@ class PlaneSide {
     return wx * normal_.x() + wy * normal_.y() + wz * normal_.z();
   }
 
+  /// Orient3dValue(a, b, c, d) with this plane's shared part computed once.
+  double RoundedValue(const Eigen::Vector3d& d) const;
+
   /// Shewchuk's o3derrboundA = (7 + 56 eps) eps with eps = 2^-53.
   static constexpr double kOrient3dBoundA = (7.0 + 56.0 * 0x1p-53) * 0x1p-53;
 
