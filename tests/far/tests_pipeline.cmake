@@ -5,5 +5,5 @@ far_add_test(far_pipeline_test unit far/pipeline/fcl_baseline_test.cc far/pipeli
              far/pipeline/step_control_test.cc
              far/pipeline/pose_normalization_test.cc far/pipeline/world_coordinates_test.cc
              far/pipeline/cpu_culls_test.cc far/pipeline/slots_test.cc
-             far/pipeline/cpu_cores_test.cc)
+             far/pipeline/cpu_cores_test.cc far/pipeline/geometry_stage_test.cc)
 target_link_libraries(far_pipeline_test PRIVATE far::pipeline far::scenes far_test_scenes fcl)

@@ -296,11 +296,6 @@ int Orient3dExpansion(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const 
   return SumExpansions(xy, xy_len, term_z, z_len, det);
 }
 
-// Whether a floating-point determinant with error bound `bound` is within 2^-52 relative.
-inline bool CertifiedToRelative(double det, double bound) {
-  return bound <= 0x1p-52 * std::abs(det) && det != 0.0;
-}
-
 }  // namespace
 
 int Orient3dExact(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
@@ -310,10 +305,68 @@ int Orient3dExact(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eige
   return SignOf(det, det_len);
 }
 
+namespace {
+
+// A value in double-double, hi + lo, and the permanent its error bound scales with.
+struct Double2 {
+  double hi, lo, permanent;
+};
+
+// x1 y1 - x2 y2 as a double-double within 4 u^2 (|x1 y1| + |x2 y2|) of the exact value: the two
+// products and their difference error-free (TwoProduct, TwoSum), the three small parts summed
+// in double.
+inline Double2 MinorDouble2(double x1, double y1, double x2, double y2) {
+  double p1, e1, p2, e2, s, t;
+  TwoProduct(x1, y1, p1, e1);
+  TwoProduct(x2, y2, p2, e2);
+  TwoSum(p1, -p2, s, t);
+  return {s, t + (e1 - e2), std::abs(p1) + std::abs(p2)};
+}
+
+// The differences b - a, c - a, d - a when all nine are exact in double (TwoDiff leaves no
+// tail: for nearby points always, by Sterbenz's lemma), else false.
+inline bool ExactDifferences(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                             const Eigen::Vector3d& c, const Eigen::Vector3d& d,
+                             Eigen::Matrix3d& diffs) {
+  const Eigen::Vector3d* points[3] = {&b, &c, &d};
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      double x, y;
+      TwoDiff((*points[i])[k], a[k], x, y);
+      if (y != 0.0) return false;
+      diffs(k, i) = x;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
 double PlaneSide::RoundedValue(const Eigen::Vector3d& d) const {
-  double bound;
-  const double det = Value(d, bound);
-  if (CertifiedToRelative(det, bound)) return det;
+  // Double-double evaluation when the differences are exact: det = sum_i w_i n_i with each
+  // minor n_i within 4 u^2 of its permanent, the products and the running sum error-free up to
+  // their small parts, and the nine small parts summed in double (within 27 u^2 P), so that
+  // |result - det| <= u |det| + 32 u^2 P with P = sum_i |w_i| permanent(n_i). Accepted when
+  // 64 u^2 P <= u |det|: then within 2u relative. Else (inexact differences or near
+  // coplanarity) the exact expansion.
+  Eigen::Matrix3d diff;
+  if (ExactDifferences(a_, b_, c_, d, diff)) {
+    const Eigen::Vector3d u = diff.col(0), v = diff.col(1), w = diff.col(2);
+    const Double2 n[3] = {MinorDouble2(u.y(), v.z(), u.z(), v.y()),
+                          MinorDouble2(u.z(), v.x(), u.x(), v.z()),
+                          MinorDouble2(u.x(), v.y(), u.y(), v.x())};
+    double hi = 0.0, small = 0.0, permanent = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      double p, e, sum, carry;
+      TwoProduct(w[i], n[i].hi, p, e);
+      TwoSum(hi, p, sum, carry);
+      hi = sum;
+      small += carry + e + w[i] * n[i].lo;
+      permanent += std::abs(w[i]) * n[i].permanent;
+    }
+    const double det = hi + small;
+    if (64.0 * 0x1p-53 * permanent <= std::abs(det) && det != 0.0) return det;
+  }
   double exact[192];
   const int len = Orient3dExpansion(a_, b_, c_, d, exact);
   return RoundExpansion(exact, len);
@@ -366,12 +419,21 @@ int Orient2dExact(double ax, double ay, double bx, double by, double cx, double 
 }
 
 double Orient2dValue(double ax, double ay, double bx, double by, double cx, double cy) {
-  // Stage A as in Orient2d: |fl(det) - det| <= kOrient2dBoundA (|detleft| + |detright|).
-  const double detleft = (ax - cx) * (by - cy);
-  const double detright = (ay - cy) * (bx - cx);
-  const double det = detleft - detright;
-  if (CertifiedToRelative(det, kOrient2dBoundA * (std::abs(detleft) + std::abs(detright)))) {
-    return det;
+  // With exact differences: (b - a) x (c - a) as a double-double (MinorDouble2), within
+  // u |det| + 4 u^2 (|ux vy| + |uy vx|) after rounding; accepted when that is within 2u relative.
+  double ux, uy, vx, vy, tail = 0.0, y;
+  TwoDiff(bx, ax, ux, y);
+  tail += std::abs(y);
+  TwoDiff(by, ay, uy, y);
+  tail += std::abs(y);
+  TwoDiff(cx, ax, vx, y);
+  tail += std::abs(y);
+  TwoDiff(cy, ay, vy, y);
+  tail += std::abs(y);
+  if (tail == 0.0) {
+    const Double2 minor = MinorDouble2(ux, vy, uy, vx);
+    const double det = minor.hi + minor.lo;
+    if (8.0 * 0x1p-53 * minor.permanent <= std::abs(det) && det != 0.0) return det;
   }
   double exact[16];
   const int len = Orient2dExpansion(ax, ay, bx, by, cx, cy, exact);

@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "geometry_stage.h"
 #include "guarantee.h"
 #include "stop_error.h"
 
@@ -429,6 +430,12 @@ Result<StepResult> Stages::Run() {
     if (state_.request.method == Method::kExact)
       state_.stats.object_pairs = static_cast<int64_t>(result.object_pairs.size());
   }
+  // The geometry stage reads the answer by id (its arrays run parallel to the result's).
+  if (state_.request.geometry && WantsExact(state_.request.output)) {
+    if (auto ok = EnterStage(state_, Stage::kGeometry); !ok) return ok.error();
+    ComputeGeometry(state_.views, world_.cache.ids(), world_.pool, world_.closedness, result);
+    timer.End(Stage::kGeometry);
+  }
   timer.Finish();
   result.stats = std::move(state_.stats);
   return result;
@@ -495,6 +502,7 @@ void StepWorld::Apply(SceneUpdate update) {
   if (gpu) gpu->RemoveSlot(*freed);
   if (compute) compute->RemoveSlot(*freed);
   fcl.Remove(*freed);
+  closedness.Forget(Index(*freed));
 }
 
 Result<StepResult> RunStep(StepWorld& world, const StepRequest& request,

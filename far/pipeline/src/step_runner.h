@@ -4,6 +4,7 @@
 
 #include "compute_stage.h"
 #include "fcl_collider.h"
+#include "geometry_stage.h"
 #include "gpu_culler.h"
 #include "scene_cache.h"
 
@@ -35,6 +36,7 @@ struct StepWorld {
   std::unique_ptr<ComputeStage> compute;  // only with GL
   SweepAndPrune sap;
   FclCollider fcl;
+  ClosednessCache closedness;  // the geometry stage's
 };
 
 /// Runs one step of a concrete method (not auto) on `world`, each stage only if the request's

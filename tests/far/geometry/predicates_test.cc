@@ -72,6 +72,54 @@ TEST(PredicatesTest, Orient3dMatchesExactOnNearlyCoplanarPoints) {
   EXPECT_GT(near_zero, 10000);
 }
 
+// The exact determinant det[b - a, c - a, d - a] as a rational.
+mpq_class ExactDet3(const Vector3d& a, const Vector3d& b, const Vector3d& c, const Vector3d& d) {
+  const auto q = [](double x) { return mpq_class(x); };
+  const mpq_class ux = q(b.x()) - q(a.x()), uy = q(b.y()) - q(a.y()), uz = q(b.z()) - q(a.z());
+  const mpq_class vx = q(c.x()) - q(a.x()), vy = q(c.y()) - q(a.y()), vz = q(c.z()) - q(a.z());
+  const mpq_class wx = q(d.x()) - q(a.x()), wy = q(d.y()) - q(a.y()), wz = q(d.z()) - q(a.z());
+  return ux * (vy * wz - vz * wy) + uy * (vz * wx - vx * wz) + uz * (vx * wy - vy * wx);
+}
+
+// |value - exact| / |exact| (0 when both are 0, infinite when only one is).
+double RelativeError(double value, const mpq_class& exact) {
+  if (sgn(exact) == 0) return value == 0.0 ? 0.0 : HUGE_VAL;
+  const mpq_class error = (mpq_class(value) - exact) / exact;
+  return std::abs(error.get_d());
+}
+
+TEST(PredicatesTest, DeterminantValuesAreWithinTheirRelativeBound) {
+  // Orient3dValue and Orient2dValue promise 2^-51 relative (zero exactly when the points are
+  // coplanar or collinear): checked on generic, nearly degenerate and far-off points, where
+  // both the double-double path and the exact expansions answer.
+  std::mt19937_64 rng(13);
+  double worst3 = 0, worst2 = 0;
+  for (double scale : {1e-6, 1.0, 1e3}) {
+    for (const Vector3d& offset :
+         {Vector3d(0, 0, 0), Vector3d(1e5, -1e5, 1e5), Vector3d(1e9, 1e9, -1e9)}) {
+      for (int i = 0; i < 2000; ++i) {
+        const Vector3d a = RandomPoint(rng, scale, offset);
+        const Vector3d b = RandomPoint(rng, scale, offset);
+        const Vector3d c = RandomPoint(rng, scale, offset);
+        const Vector3d d = i % 3 == 0   ? RandomPoint(rng, scale, offset)
+                           : i % 3 == 1 ? NearlyCoplanar(rng, a, b, c)
+                                        : RandomPoint(rng, scale, Vector3d::Zero());
+        const double e3 = RelativeError(Orient3dValue(a, b, c, d), ExactDet3(a, b, c, d));
+        ASSERT_LE(e3, 0x1p-51) << "scale " << scale << " case " << i;
+        worst3 = std::max(worst3, e3);
+        const mpq_class det2 = (mpq_class(b.x()) - a.x()) * (mpq_class(c.y()) - a.y()) -
+                               (mpq_class(b.y()) - a.y()) * (mpq_class(c.x()) - a.x());
+        const double e2 =
+            RelativeError(Orient2dValue(a.x(), a.y(), b.x(), b.y(), c.x(), c.y()), det2);
+        ASSERT_LE(e2, 0x1p-51) << "scale " << scale << " case " << i;
+        worst2 = std::max(worst2, e2);
+      }
+    }
+  }
+  std::printf("largest relative errors: Orient3dValue %.3g u, Orient2dValue %.3g u\n",
+              worst3 / 0x1p-53, worst2 / 0x1p-53);
+}
+
 TEST(PredicatesTest, Orient3dIsZeroOnGridCoplanarPoints) {
   // Points on the plane z = x/2 + y/4 with dyadic coordinates: exactly coplanar.
   std::mt19937_64 rng(13);

@@ -1,0 +1,268 @@
+// Penetration depth of two closed objects: the deepest vertex of either inside the other.
+//
+// Inside, exactly. A point v is strictly inside a closed mesh iff a segment from v to a point w
+// outside the mesh's box crosses the mesh's triangles an odd number of times, provided every
+// crossing is proper: the segment passes through a triangle's interior, with v and w strictly
+// on opposite sides of its plane. Every part of that is an exact orientation predicate
+// (Orient3d), so the parity is exact whenever no predicate is zero. A zero means the segment
+// touches an edge, a vertex or runs in a face plane (or v lies on a face plane); then v is on
+// the surface (when it lies in the closed triangle: not strictly inside) or another w is tried,
+// from a fixed sequence of slightly tilted rays, until one is in general position. Degenerate
+// triangles (collinear corners) have no interior and cannot be crossed; they are skipped except
+// to find v on the surface.
+//
+// Distance to the surface: the smallest TriangleDistance from v to the other mesh's triangles
+// (its error bound, docs/culling.md), with a branch-and-bound descent of a TriangleBvh, whose
+// boxes hold their triangles in exact arithmetic.
+//
+// Cost: a TriangleBvh of each object (n log n) per call, then for each vertex inside the
+// other's box one ray (axis-aligned first: its box is thin, so the descent visits few nodes) and,
+// for the vertices inside, one nearest-triangle descent.
+
+#include "far/pairs/penetration.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <tuple>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "far/geometry/internal/predicates.h"
+#include "far/geometry/triangle_contact.h"
+#include "far/geometry/triangle_tests.h"
+#include "far/pairs/triangle_bvh.h"
+
+namespace far {
+namespace {
+
+using Eigen::Vector3d;
+using internal::Orient3d;
+
+constexpr int kMaxRayAttempts = 24;
+
+// One object's surface, indexed for ray and nearest-point queries.
+struct Surface {
+  explicit Surface(const WorldObjectView& view) : view(view) {
+    bvh.Build(view.p_WV, view.triangles);
+    for (const Vector3d& p : view.p_WV) box.extend(p);
+    degenerate.resize(view.triangles.size());
+    for (size_t t = 0; t < view.triangles.size(); ++t) {
+      const TrianglePoints tri = Triangle(t);
+      degenerate[t] = internal::Collinear3d(tri.a, tri.b, tri.c);
+    }
+    // Node boxes are compared against query boxes grown by this much, which covers the
+    // rounding of center +- half extent (a few ulps of the coordinates).
+    margin = 0x1p-40 * (box.min().cwiseAbs().maxCoeff() + box.max().cwiseAbs().maxCoeff() + 1.0);
+  }
+
+  TrianglePoints Triangle(size_t t) const {
+    const TriangleIndices& v = view.triangles[t];
+    return {view.p_WV[v[0]], view.p_WV[v[1]], view.p_WV[v[2]]};
+  }
+
+  // Calls visit(triangle) for every triangle whose leaf box may meet the box [lo, hi].
+  template <typename Visit>
+  void ForEachNear(const Vector3d& lo, const Vector3d& hi, Visit&& visit) const {
+    if (bvh.empty()) return;
+    const auto& nodes = bvh.nodes();
+    std::vector<uint32_t> stack = {0};
+    while (!stack.empty()) {
+      const TriangleBvh::Node& node = nodes[stack.back()];
+      stack.pop_back();
+      const Eigen::Array3d far_lo = (node.center - node.half_extent).array() - margin;
+      const Eigen::Array3d far_hi = (node.center + node.half_extent).array() + margin;
+      if ((far_lo > hi.array()).any() || (far_hi < lo.array()).any()) continue;
+      if (!node.leaf()) {
+        stack.push_back(node.first);
+        stack.push_back(node.first + 1);
+        continue;
+      }
+      for (uint32_t k = node.first; k < node.first + node.count; ++k) {
+        if (!visit(bvh.order()[k])) return;
+      }
+    }
+  }
+
+  const WorldObjectView& view;
+  TriangleBvh bvh;
+  Eigen::AlignedBox3d box;
+  std::vector<uint8_t> degenerate;  // by triangle
+  double margin = 0;
+};
+
+enum class Where { kInside, kOutside, kOnSurface };
+enum class Ray { kGeneral, kOnSurface, kDegenerate };
+
+// Counts the proper crossings of the segment [v, w] with the surface's triangles. kOnSurface
+// when v lies on a triangle, kDegenerate when the segment meets an edge, a vertex or a face plane
+// in a way that a proper crossing cannot describe. @pre w outside the surface's box.
+Ray CountCrossings(const Surface& surface, const Vector3d& v, const Vector3d& w, int& crossings) {
+  crossings = 0;
+  Ray verdict = Ray::kGeneral;
+  surface.ForEachNear(v.cwiseMin(w), v.cwiseMax(w), [&](uint32_t t) {
+    const TrianglePoints tri = surface.Triangle(t);
+    const int side_v = Orient3d(tri.a, tri.b, tri.c, v);
+    if (side_v == 0 && TrianglesIntersect({v, v, v}, tri)) {
+      verdict = Ray::kOnSurface;
+      return false;
+    }
+    if (surface.degenerate[t]) return true;
+    const int side_w = Orient3d(tri.a, tri.b, tri.c, w);
+    if (side_v == 0 && side_w == 0) {
+      verdict = Ray::kDegenerate;  // the segment runs in the face's plane
+      return false;
+    }
+    // v on the plane (outside the triangle) or w on it (outside the box, so outside the
+    // triangle): the segment touches the plane only there and does not cross the triangle.
+    if (side_v == 0 || side_w == 0 || side_v == side_w) return true;
+    const int o1 = Orient3d(v, w, tri.a, tri.b);
+    const int o2 = Orient3d(v, w, tri.b, tri.c);
+    const int o3 = Orient3d(v, w, tri.c, tri.a);
+    if ((o1 > 0 && o2 > 0 && o3 > 0) || (o1 < 0 && o2 < 0 && o3 < 0)) {
+      ++crossings;
+    } else if (!((o1 > 0 || o2 > 0 || o3 > 0) && (o1 < 0 || o2 < 0 || o3 < 0))) {
+      verdict = Ray::kDegenerate;  // through an edge or a vertex
+      return false;
+    }
+    return true;
+  });
+  return verdict;
+}
+
+// The far end of ray `attempt` from v: beyond the box along +x, the first exactly along the
+// axis, the others tilted by small amounts that no mesh is likely to line up with.
+Vector3d FarPoint(const Surface& surface, const Vector3d& v, int attempt) {
+  const Vector3d extent = surface.box.sizes();
+  const double size = extent.maxCoeff() + 1.0;
+  const double x = surface.box.max().x() + size;
+  if (attempt == 0) return {x, v.y(), v.z()};
+  // Fractional parts of multiples of irrational numbers: a fixed, well spread sequence.
+  const double fy = std::fmod(attempt * 0.6180339887498949, 1.0) - 0.5;
+  const double fz = std::fmod(attempt * 0.4142135623730951, 1.0) - 0.5;
+  const double tilt = 1e-3 * attempt;
+  return {x, v.y() + tilt * fy * size, v.z() + tilt * fz * size};
+}
+
+Where Locate(const Surface& surface, const Vector3d& v) {
+  if (!surface.box.contains(v)) return Where::kOutside;
+  for (int attempt = 0; attempt < kMaxRayAttempts; ++attempt) {
+    int crossings = 0;
+    switch (CountCrossings(surface, v, FarPoint(surface, v, attempt), crossings)) {
+      case Ray::kOnSurface:
+        return Where::kOnSurface;
+      case Ray::kGeneral:
+        return crossings % 2 == 1 ? Where::kInside : Where::kOutside;
+      case Ray::kDegenerate:
+        break;
+    }
+  }
+  return Where::kOutside;  // no ray in general position: reported as not inside
+}
+
+// The closest point of the surface to v, and its distance.
+std::pair<double, Vector3d> Nearest(const Surface& surface, const Vector3d& v) {
+  double best = std::numeric_limits<double>::infinity();
+  uint32_t best_triangle = 0;
+  const auto& nodes = surface.bvh.nodes();
+  // Depth-first, nearer child first; a node farther than the best is skipped (its box distance
+  // is a lower bound of its triangles', shrunk by the margin to stay one).
+  std::vector<uint32_t> stack = {0};
+  const auto box_distance = [&](const TriangleBvh::Node& node) {
+    const Eigen::Array3d gap = ((v - node.center).cwiseAbs() - node.half_extent).array().max(0.0);
+    return std::max(0.0, gap.matrix().norm() - surface.margin);
+  };
+  while (!stack.empty()) {
+    const TriangleBvh::Node& node = nodes[stack.back()];
+    stack.pop_back();
+    if (box_distance(node) > best) continue;
+    if (!node.leaf()) {
+      const uint32_t near = node.first, far = node.first + 1;
+      const bool swap = box_distance(nodes[near]) > box_distance(nodes[far]);
+      stack.push_back(swap ? near : far);
+      stack.push_back(swap ? far : near);
+      continue;
+    }
+    for (uint32_t k = node.first; k < node.first + node.count; ++k) {
+      const uint32_t t = surface.bvh.order()[k];
+      const double d = TriangleDistance({v, v, v}, surface.Triangle(t));
+      if (d < best) {
+        best = d;
+        best_triangle = t;
+      }
+    }
+  }
+  return {best, TriangleClosestPoints({v, v, v}, surface.Triangle(best_triangle)).point_b};
+}
+
+struct Deepest {
+  double depth = -1;
+  Vector3d vertex, surface_point;
+};
+
+// The deepest vertex of `inner` strictly inside `outer`.
+Deepest DeepestVertex(const WorldObjectView& inner, const Surface& outer) {
+  Deepest deepest;
+  for (const Vector3d& v : inner.p_WV) {
+    if (Locate(outer, v) != Where::kInside) continue;
+    const auto [depth, point] = Nearest(outer, v);
+    if (depth > deepest.depth) deepest = {depth, v, point};
+  }
+  return deepest;
+}
+
+}  // namespace
+
+bool IsClosedMesh(std::span<const TriangleIndices> triangles, size_t num_vertices) {
+  if (triangles.empty()) return false;
+  // Every directed edge as (smaller end, larger end, direction), sorted: a closed mesh has each
+  // undirected edge exactly twice, once in each direction.
+  std::vector<std::tuple<uint32_t, uint32_t, bool>> edges;
+  edges.reserve(3 * triangles.size());
+  for (const TriangleIndices& t : triangles) {
+    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) return false;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t from = t[k], to = t[(k + 1) % 3];
+      if (from >= num_vertices || to >= num_vertices) return false;
+      edges.emplace_back(std::min(from, to), std::max(from, to), from < to);
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  for (size_t i = 0; i < edges.size(); i += 2) {
+    if (i + 1 >= edges.size()) return false;
+    const auto& [a0, b0, forward0] = edges[i];
+    const auto& [a1, b1, forward1] = edges[i + 1];
+    if (a0 != a1 || b0 != b1 || forward0 == forward1) return false;
+    if (i + 2 < edges.size() && std::get<0>(edges[i + 2]) == a0 &&
+        std::get<1>(edges[i + 2]) == b0) {
+      return false;  // a third use of the edge
+    }
+  }
+  return true;
+}
+
+Penetration MeasurePenetration(const WorldObjectView& a, bool a_closed, const WorldObjectView& b,
+                               bool b_closed) {
+  Penetration result;
+  if (!a_closed || !b_closed) return result;
+  result.closed = true;
+  const Surface surface_a(a), surface_b(b);
+  const Deepest b_in_a = DeepestVertex(b, surface_a);
+  const Deepest a_in_b = DeepestVertex(a, surface_b);
+  if (std::max(b_in_a.depth, a_in_b.depth) <= 0) return result;
+  if (b_in_a.depth >= a_in_b.depth) {
+    result.depth = b_in_a.depth;
+    result.point_a = b_in_a.surface_point;
+    result.point_b = b_in_a.vertex;
+  } else {
+    result.depth = a_in_b.depth;
+    result.point_a = a_in_b.vertex;
+    result.point_b = a_in_b.surface_point;
+  }
+  result.direction = (result.point_a - result.point_b).normalized();
+  return result;
+}
+
+}  // namespace far

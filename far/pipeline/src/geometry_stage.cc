@@ -1,0 +1,84 @@
+#include "geometry_stage.h"
+
+#include <unordered_map>
+
+#include "far/geometry/triangle_contact.h"
+#include "far/pairs/penetration.h"
+
+namespace far::internal {
+namespace {
+
+// Contacts and distance pairs are split into chunks of this many pairs across the pool: each
+// pair costs well under a microsecond, so smaller chunks would cost more to hand out than to
+// run, and larger ones would leave threads idle at the end of a few thousand contacts.
+constexpr size_t kPairsPerChunk = 512;
+
+TrianglePoints Triangle(const WorldObjectView& view, uint32_t triangle) {
+  const TriangleIndices& v = view.triangles[triangle];
+  return TrianglePoints{view.p_WV[v[0]], view.p_WV[v[1]], view.p_WV[v[2]]};
+}
+
+}  // namespace
+
+bool ClosednessCache::IsClosed(size_t slot_index, std::span<const TriangleIndices> triangles,
+                               size_t num_vertices) {
+  if (slot_index >= closed_.size()) closed_.resize(slot_index + 1, -1);
+  if (closed_[slot_index] < 0) closed_[slot_index] = IsClosedMesh(triangles, num_vertices) ? 1 : 0;
+  return closed_[slot_index] == 1;
+}
+
+void ClosednessCache::Forget(size_t slot_index) {
+  if (slot_index < closed_.size()) closed_[slot_index] = -1;
+}
+
+void ComputeGeometry(std::span<const WorldObjectView> views, std::span<const uint32_t> id_of_slot,
+                     ThreadPool& pool, ClosednessCache& closedness, StepResult& result) {
+  std::unordered_map<uint32_t, size_t> slot_of_id;
+  for (size_t s = 0; s < views.size(); ++s) {
+    if (!views[s].triangles.empty()) slot_of_id[id_of_slot[s]] = s;
+  }
+  const auto view = [&](uint32_t id) -> const WorldObjectView& { return views[slot_of_id.at(id)]; };
+
+  result.contact_geometry.resize(result.contacts.size());
+  pool.ParallelFor(result.contacts.size(), kPairsPerChunk, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      const ContactPair& c = result.contacts[i];
+      result.contact_geometry[i] = TriangleContactGeometry(
+          Triangle(view(c.object_a), c.triangle_a), Triangle(view(c.object_b), c.triangle_b));
+    }
+  });
+  result.closest_points.resize(result.distance_pairs.size());
+  pool.ParallelFor(result.distance_pairs.size(), kPairsPerChunk, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      const ContactPair& c = result.distance_pairs[i].pair;
+      result.closest_points[i] = TriangleClosestPoints(Triangle(view(c.object_a), c.triangle_a),
+                                                       Triangle(view(c.object_b), c.triangle_b));
+    }
+  });
+
+  // One penetration per object pair with contacts (contacts are sorted by object pair).
+  std::vector<ObjectPair> pairs;
+  for (const ContactPair& c : result.contacts) {
+    if (pairs.empty() || pairs.back() != ObjectPair{c.object_a, c.object_b})
+      pairs.push_back({c.object_a, c.object_b});
+  }
+  // Closedness first, on this thread (the cache is not thread-safe).
+  std::vector<std::pair<bool, bool>> closed(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const size_t a = slot_of_id.at(pairs[i].object_a), b = slot_of_id.at(pairs[i].object_b);
+    closed[i] = {closedness.IsClosed(a, views[a].triangles, views[a].p_WV.size()),
+                 closedness.IsClosed(b, views[b].triangles, views[b].p_WV.size())};
+  }
+  result.penetrations.resize(pairs.size());
+  pool.ParallelFor(pairs.size(), 1, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      Penetration& p = result.penetrations[i];
+      p = MeasurePenetration(view(pairs[i].object_a), closed[i].first, view(pairs[i].object_b),
+                             closed[i].second);
+      p.object_a = pairs[i].object_a;
+      p.object_b = pairs[i].object_b;
+    }
+  });
+}
+
+}  // namespace far::internal
