@@ -43,55 +43,30 @@ using internal::Orient3d;
 
 constexpr int kMaxRayAttempts = 24;
 
-// One object's surface, indexed for ray and nearest-point queries.
-struct Surface {
-  explicit Surface(const WorldObjectView& view) : view(view) {
-    bvh.Build(view.p_WV, view.triangles);
-    for (const Vector3d& p : view.p_WV) box.extend(p);
-    degenerate.resize(view.triangles.size());
-    for (size_t t = 0; t < view.triangles.size(); ++t) {
-      const TrianglePoints tri = Triangle(t);
-      degenerate[t] = internal::Collinear3d(tri.a, tri.b, tri.c);
+// Calls visit(triangle) for every triangle whose leaf box may meet the box [lo, hi], until
+// visit returns false.
+template <typename Visit>
+void ForEachNear(const PenetrationSurface& surface, const Vector3d& lo, const Vector3d& hi,
+                 Visit&& visit) {
+  if (surface.bvh.empty()) return;
+  const auto& nodes = surface.bvh.nodes();
+  std::vector<uint32_t> stack = {0};
+  while (!stack.empty()) {
+    const TriangleBvh::Node& node = nodes[stack.back()];
+    stack.pop_back();
+    const Eigen::Array3d far_lo = (node.center - node.half_extent).array() - surface.margin;
+    const Eigen::Array3d far_hi = (node.center + node.half_extent).array() + surface.margin;
+    if ((far_lo > hi.array()).any() || (far_hi < lo.array()).any()) continue;
+    if (!node.leaf()) {
+      stack.push_back(node.first);
+      stack.push_back(node.first + 1);
+      continue;
     }
-    // Node boxes are compared against query boxes grown by this much, which covers the
-    // rounding of center +- half extent (a few ulps of the coordinates).
-    margin = 0x1p-40 * (box.min().cwiseAbs().maxCoeff() + box.max().cwiseAbs().maxCoeff() + 1.0);
-  }
-
-  TrianglePoints Triangle(size_t t) const {
-    const TriangleIndices& v = view.triangles[t];
-    return {view.p_WV[v[0]], view.p_WV[v[1]], view.p_WV[v[2]]};
-  }
-
-  // Calls visit(triangle) for every triangle whose leaf box may meet the box [lo, hi].
-  template <typename Visit>
-  void ForEachNear(const Vector3d& lo, const Vector3d& hi, Visit&& visit) const {
-    if (bvh.empty()) return;
-    const auto& nodes = bvh.nodes();
-    std::vector<uint32_t> stack = {0};
-    while (!stack.empty()) {
-      const TriangleBvh::Node& node = nodes[stack.back()];
-      stack.pop_back();
-      const Eigen::Array3d far_lo = (node.center - node.half_extent).array() - margin;
-      const Eigen::Array3d far_hi = (node.center + node.half_extent).array() + margin;
-      if ((far_lo > hi.array()).any() || (far_hi < lo.array()).any()) continue;
-      if (!node.leaf()) {
-        stack.push_back(node.first);
-        stack.push_back(node.first + 1);
-        continue;
-      }
-      for (uint32_t k = node.first; k < node.first + node.count; ++k) {
-        if (!visit(bvh.order()[k])) return;
-      }
+    for (uint32_t k = node.first; k < node.first + node.count; ++k) {
+      if (!visit(surface.bvh.order()[k])) return;
     }
   }
-
-  const WorldObjectView& view;
-  TriangleBvh bvh;
-  Eigen::AlignedBox3d box;
-  std::vector<uint8_t> degenerate;  // by triangle
-  double margin = 0;
-};
+}
 
 enum class Where { kInside, kOutside, kOnSurface };
 enum class Ray { kGeneral, kOnSurface, kDegenerate };
@@ -99,10 +74,11 @@ enum class Ray { kGeneral, kOnSurface, kDegenerate };
 // Counts the proper crossings of the segment [v, w] with the surface's triangles. kOnSurface
 // when v lies on a triangle, kDegenerate when the segment meets an edge, a vertex or a face plane
 // in a way that a proper crossing cannot describe. @pre w outside the surface's box.
-Ray CountCrossings(const Surface& surface, const Vector3d& v, const Vector3d& w, int& crossings) {
+Ray CountCrossings(const PenetrationSurface& surface, const Vector3d& v, const Vector3d& w,
+                   int& crossings) {
   crossings = 0;
   Ray verdict = Ray::kGeneral;
-  surface.ForEachNear(v.cwiseMin(w), v.cwiseMax(w), [&](uint32_t t) {
+  ForEachNear(surface, v.cwiseMin(w), v.cwiseMax(w), [&](uint32_t t) {
     const TrianglePoints tri = surface.Triangle(t);
     const int side_v = Orient3d(tri.a, tri.b, tri.c, v);
     if (side_v == 0 && TrianglesIntersect({v, v, v}, tri)) {
@@ -134,7 +110,7 @@ Ray CountCrossings(const Surface& surface, const Vector3d& v, const Vector3d& w,
 
 // The far end of ray `attempt` from v: beyond the box along +x, the first exactly along the
 // axis, the others tilted by small amounts that no mesh is likely to line up with.
-Vector3d FarPoint(const Surface& surface, const Vector3d& v, int attempt) {
+Vector3d FarPoint(const PenetrationSurface& surface, const Vector3d& v, int attempt) {
   const Vector3d extent = surface.box.sizes();
   const double size = extent.maxCoeff() + 1.0;
   const double x = surface.box.max().x() + size;
@@ -146,7 +122,7 @@ Vector3d FarPoint(const Surface& surface, const Vector3d& v, int attempt) {
   return {x, v.y() + tilt * fy * size, v.z() + tilt * fz * size};
 }
 
-Where Locate(const Surface& surface, const Vector3d& v) {
+Where Locate(const PenetrationSurface& surface, const Vector3d& v) {
   if (!surface.box.contains(v)) return Where::kOutside;
   for (int attempt = 0; attempt < kMaxRayAttempts; ++attempt) {
     int crossings = 0;
@@ -163,7 +139,7 @@ Where Locate(const Surface& surface, const Vector3d& v) {
 }
 
 // The closest point of the surface to v, and its distance.
-std::pair<double, Vector3d> Nearest(const Surface& surface, const Vector3d& v) {
+std::pair<double, Vector3d> Nearest(const PenetrationSurface& surface, const Vector3d& v) {
   double best = std::numeric_limits<double>::infinity();
   uint32_t best_triangle = 0;
   const auto& nodes = surface.bvh.nodes();
@@ -199,16 +175,50 @@ std::pair<double, Vector3d> Nearest(const Surface& surface, const Vector3d& v) {
 
 struct Deepest {
   double depth = -1;
+  uint32_t index = 0;  // of the vertex: ties go to the smallest, whatever the search order
   Vector3d vertex, surface_point;
 };
 
-// The deepest vertex of `inner` strictly inside `outer`.
-Deepest DeepestVertex(const WorldObjectView& inner, const Surface& outer) {
+// The deepest vertex of `inner` strictly inside `outer`. With seeds (the inner triangles of
+// the pair's contacts), only the vertices reachable from them, and from one vertex of each
+// connected part of the mesh, through vertices inside: every vertex inside is one of those
+// (see MeasurePenetration's comment in the header). Without seeds, every vertex.
+Deepest DeepestVertex(const PenetrationSurface& inner, const PenetrationSurface& outer,
+                      std::span<const uint32_t> seed_triangles, bool use_seeds) {
   Deepest deepest;
-  for (const Vector3d& v : inner.p_WV) {
-    if (Locate(outer, v) != Where::kInside) continue;
+  const auto& p = inner.view.p_WV;
+  const auto consider = [&](uint32_t index) {
+    const Vector3d& v = p[index];
+    if (Locate(outer, v) != Where::kInside) return false;
     const auto [depth, point] = Nearest(outer, v);
-    if (depth > deepest.depth) deepest = {depth, v, point};
+    if (depth > deepest.depth || (depth == deepest.depth && index < deepest.index)) {
+      deepest = {depth, index, v, point};
+    }
+    return true;
+  };
+  if (!use_seeds) {
+    for (uint32_t v = 0; v < p.size(); ++v) consider(v);
+    return deepest;
+  }
+  std::vector<uint8_t> queued(p.size(), 0);
+  std::vector<uint32_t> queue;
+  const auto push = [&](uint32_t v) {
+    if (!queued[v]) {
+      queued[v] = 1;
+      queue.push_back(v);
+    }
+  };
+  for (uint32_t t : seed_triangles) {
+    for (uint32_t v : inner.view.triangles[t]) push(v);
+  }
+  for (uint32_t v : inner.part_representatives) push(v);
+  while (!queue.empty()) {
+    const uint32_t v = queue.back();
+    queue.pop_back();
+    if (!consider(v)) continue;
+    for (uint32_t k = inner.neighbor_offsets[v]; k < inner.neighbor_offsets[v + 1]; ++k) {
+      push(inner.neighbors[k]);
+    }
   }
   return deepest;
 }
@@ -243,14 +253,69 @@ bool IsClosedMesh(std::span<const TriangleIndices> triangles, size_t num_vertice
   return true;
 }
 
-Penetration MeasurePenetration(const WorldObjectView& a, bool a_closed, const WorldObjectView& b,
-                               bool b_closed) {
+PenetrationSurface::PenetrationSurface(const WorldObjectView& view) : view(view) {
+  bvh.Build(view.p_WV, view.triangles);
+  for (const Vector3d& p : view.p_WV) box.extend(p);
+  degenerate.resize(view.triangles.size());
+  for (size_t t = 0; t < view.triangles.size(); ++t) {
+    const TrianglePoints tri = Triangle(t);
+    degenerate[t] = internal::Collinear3d(tri.a, tri.b, tri.c);
+  }
+  // Vertex neighbors (CSR) and one vertex per connected part, for the seeded search.
+  std::vector<std::pair<uint32_t, uint32_t>> edges;
+  for (const TriangleIndices& t : view.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      edges.emplace_back(t[k], t[(k + 1) % 3]);
+      edges.emplace_back(t[(k + 1) % 3], t[k]);
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  neighbor_offsets.assign(view.p_WV.size() + 1, 0);
+  for (const auto& [from, to] : edges) ++neighbor_offsets[from + 1];
+  for (size_t v = 0; v < view.p_WV.size(); ++v) neighbor_offsets[v + 1] += neighbor_offsets[v];
+  neighbors.reserve(edges.size());
+  for (const auto& [from, to] : edges) neighbors.push_back(to);
+  std::vector<uint8_t> reached(view.p_WV.size(), 0);
+  std::vector<uint32_t> stack;
+  for (uint32_t start = 0; start < view.p_WV.size(); ++start) {
+    if (reached[start] || neighbor_offsets[start] == neighbor_offsets[start + 1]) continue;
+    part_representatives.push_back(start);
+    reached[start] = 1;
+    stack.push_back(start);
+    while (!stack.empty()) {
+      const uint32_t v = stack.back();
+      stack.pop_back();
+      for (uint32_t k = neighbor_offsets[v]; k < neighbor_offsets[v + 1]; ++k) {
+        if (!reached[neighbors[k]]) {
+          reached[neighbors[k]] = 1;
+          stack.push_back(neighbors[k]);
+        }
+      }
+    }
+  }
+  // Node boxes are compared against query boxes grown by this much, which covers the rounding
+  // of center +- half extent (a few ulps of the coordinates).
+  margin = 0x1p-40 * (box.min().cwiseAbs().maxCoeff() + box.max().cwiseAbs().maxCoeff() + 1.0);
+}
+
+TrianglePoints PenetrationSurface::Triangle(size_t t) const {
+  const TriangleIndices& v = view.triangles[t];
+  return {view.p_WV[v[0]], view.p_WV[v[1]], view.p_WV[v[2]]};
+}
+
+Penetration MeasurePenetration(const PenetrationSurface& a, const PenetrationSurface& b,
+                               std::span<const ContactPair> contacts) {
+  std::vector<uint32_t> seeds_a, seeds_b;
+  for (const ContactPair& c : contacts) {
+    seeds_a.push_back(c.triangle_a);
+    seeds_b.push_back(c.triangle_b);
+  }
+  const bool use_seeds = !contacts.empty();
   Penetration result;
-  if (!a_closed || !b_closed) return result;
   result.closed = true;
-  const Surface surface_a(a), surface_b(b);
-  const Deepest b_in_a = DeepestVertex(b, surface_a);
-  const Deepest a_in_b = DeepestVertex(a, surface_b);
+  const Deepest b_in_a = DeepestVertex(b, a, seeds_b, use_seeds);
+  const Deepest a_in_b = DeepestVertex(a, b, seeds_a, use_seeds);
   if (std::max(b_in_a.depth, a_in_b.depth) <= 0) return result;
   if (b_in_a.depth >= a_in_b.depth) {
     result.depth = b_in_a.depth;
@@ -263,6 +328,12 @@ Penetration MeasurePenetration(const WorldObjectView& a, bool a_closed, const Wo
   }
   result.direction = (result.point_a - result.point_b).normalized();
   return result;
+}
+
+Penetration MeasurePenetration(const WorldObjectView& a, bool a_closed, const WorldObjectView& b,
+                               bool b_closed) {
+  if (!a_closed || !b_closed) return Penetration{};
+  return MeasurePenetration(PenetrationSurface(a), PenetrationSurface(b), {});
 }
 
 }  // namespace far

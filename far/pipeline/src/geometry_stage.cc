@@ -1,5 +1,6 @@
 #include "geometry_stage.h"
 
+#include <optional>
 #include <unordered_map>
 
 #include "far/geometry/triangle_contact.h"
@@ -56,25 +57,46 @@ void ComputeGeometry(std::span<const WorldObjectView> views, std::span<const uin
     }
   });
 
-  // One penetration per object pair with contacts (contacts are sorted by object pair).
+  // One penetration per object pair with contacts (contacts are sorted by object pair): the
+  // pair and where its contacts start.
   std::vector<ObjectPair> pairs;
-  for (const ContactPair& c : result.contacts) {
-    if (pairs.empty() || pairs.back() != ObjectPair{c.object_a, c.object_b})
+  std::vector<size_t> first_contact;
+  for (size_t i = 0; i < result.contacts.size(); ++i) {
+    const ContactPair& c = result.contacts[i];
+    if (pairs.empty() || pairs.back() != ObjectPair{c.object_a, c.object_b}) {
       pairs.push_back({c.object_a, c.object_b});
+      first_contact.push_back(i);
+    }
   }
-  // Closedness first, on this thread (the cache is not thread-safe).
-  std::vector<std::pair<bool, bool>> closed(pairs.size());
+  first_contact.push_back(result.contacts.size());
+  // Closedness first, on this thread (the cache is not thread-safe); then one surface per
+  // closed object in a pair of closed objects, shared by its pairs.
+  std::vector<char> pair_closed(pairs.size());
+  std::unordered_map<uint32_t, size_t> surface_of_id;
+  std::vector<uint32_t> surface_ids;
   for (size_t i = 0; i < pairs.size(); ++i) {
     const size_t a = slot_of_id.at(pairs[i].object_a), b = slot_of_id.at(pairs[i].object_b);
-    closed[i] = {closedness.IsClosed(a, views[a].triangles, views[a].p_WV.size()),
-                 closedness.IsClosed(b, views[b].triangles, views[b].p_WV.size())};
+    pair_closed[i] = closedness.IsClosed(a, views[a].triangles, views[a].p_WV.size()) &&
+                     closedness.IsClosed(b, views[b].triangles, views[b].p_WV.size());
+    if (!pair_closed[i]) continue;
+    for (uint32_t id : {pairs[i].object_a, pairs[i].object_b}) {
+      if (surface_of_id.emplace(id, surface_ids.size()).second) surface_ids.push_back(id);
+    }
   }
+  std::vector<std::optional<PenetrationSurface>> surfaces(surface_ids.size());
+  pool.ParallelFor(surface_ids.size(), 1, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) surfaces[i].emplace(view(surface_ids[i]));
+  });
   result.penetrations.resize(pairs.size());
   pool.ParallelFor(pairs.size(), 1, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       Penetration& p = result.penetrations[i];
-      p = MeasurePenetration(view(pairs[i].object_a), closed[i].first, view(pairs[i].object_b),
-                             closed[i].second);
+      if (pair_closed[i]) {
+        const std::span<const ContactPair> contacts(result.contacts.data() + first_contact[i],
+                                                    first_contact[i + 1] - first_contact[i]);
+        p = MeasurePenetration(*surfaces[surface_of_id.at(pairs[i].object_a)],
+                               *surfaces[surface_of_id.at(pairs[i].object_b)], contacts);
+      }
       p.object_a = pairs[i].object_a;
       p.object_b = pairs[i].object_b;
     }
