@@ -15,6 +15,7 @@
 
 #include "far/client/client.h"
 #include "far/io/scene_io.h"
+#include "far/pipeline/pipeline.h"
 #include "far/protocol/convert.h"
 
 namespace far::integration {
@@ -173,6 +174,68 @@ TEST_F(EndToEndTest, LibraryStepWithADistanceAndNoOutputGivesTheDistancePairs) {
   EXPECT_TRUE(pcs->distance_pairs.empty());
   EXPECT_TRUE(pcs->contacts.empty());
   EXPECT_FALSE(pcs->pcs_primitives.empty());
+}
+
+// Contact geometry through the daemon (StepRequest::geometry, protocol version 4) is the
+// in-process pipeline's, bit for bit, for contacts and distance pairs, and far-client collide
+// --geometry prints it.
+TEST_F(EndToEndTest, GeometryThroughTheDaemonIsThePipelinesBitForBit) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  TempDir dir;
+  const auto path = dir.path() / "soup.json";
+  const std::vector<SceneObject> objects = WriteAndReadBack(ContactSoup(3), path);
+  ASSERT_FALSE(objects.empty());
+  auto client = client::Client::Connect(TestClientOptions("geometry"));
+  ASSERT_TRUE(client.ok()) << far::ToString(client.error());
+  ASSERT_TRUE((*client)->LoadScene(Scene{objects, {}}).ok());
+  PipelineOptions options;
+  options.use_gl = false;
+  auto pipeline = Pipeline::Create(options);
+  ASSERT_TRUE(pipeline.ok());
+  ASSERT_TRUE((*pipeline)->LoadScene(Scene{objects, {}}).ok());
+
+  StepRequest request = SmallRequest(Method::kBvh);
+  request.distance = 0.05;
+  request.output = Output::kDistancePairs;
+  request.geometry = true;
+  auto remote = (*client)->Step(request);
+  ASSERT_TRUE(remote.ok()) << far::ToString(remote.error());
+  auto local = (*pipeline)->Step(request);
+  ASSERT_TRUE(local.ok()) << far::ToString(local.error());
+  ASSERT_FALSE(remote->contacts.empty());
+  ASSERT_EQ(remote->contacts, local->contacts);
+  ASSERT_EQ(remote->contact_geometry.size(), remote->contacts.size());
+  for (size_t i = 0; i < remote->contacts.size(); ++i) {
+    const ContactGeometry& r = remote->contact_geometry[i];
+    const ContactGeometry& l = local->contact_geometry[i];
+    ASSERT_EQ(r.num_points, l.num_points) << i;
+    for (int k = 0; k < r.num_points; ++k) EXPECT_EQ(r.points[k], l.points[k]) << i;
+    EXPECT_EQ(r.normal_a, l.normal_a);
+    EXPECT_EQ(r.normal_b, l.normal_b);
+  }
+  ASSERT_EQ(remote->closest_points.size(), remote->distance_pairs.size());
+  for (size_t i = 0; i < remote->closest_points.size(); ++i) {
+    EXPECT_EQ(remote->closest_points[i].point_a, local->closest_points[i].point_a);
+    EXPECT_EQ(remote->closest_points[i].point_b, local->closest_points[i].point_b);
+  }
+  ASSERT_EQ(remote->penetrations.size(), local->penetrations.size());
+  EXPECT_EQ(remote->stats.stages.back().stage, Stage::kGeometry);
+
+  const ProcessResult run =
+      RunFarClient({"collide", path.string(), "--method", "bvh", "--geometry"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const json out = json::parse(run.out, nullptr, false);
+  ASSERT_FALSE(out.is_discarded()) << run.out;
+  ASSERT_EQ(out.at("contact_geometry").size(), out.at("contacts").size());
+  const json& first = out.at("contact_geometry").at(0);
+  EXPECT_GE(first.at("points").size(), 1u);
+  EXPECT_EQ(first.at("normal_a").size(), 3u);
+  EXPECT_TRUE(out.contains("penetrations"));
+  // Geometry with an output that has no pairs is refused with the field named.
+  const ProcessResult refused =
+      RunFarClient({"collide", path.string(), "--output", "pcs", "--geometry"});
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("geometry"), std::string::npos) << refused.err;
 }
 
 TEST_F(EndToEndTest, PlayRunsEveryFrameOfAMadeScene) {
