@@ -323,46 +323,49 @@ inline Double2 MinorDouble2(double x1, double y1, double x2, double y2) {
   return {s, t + (e1 - e2), std::abs(p1) + std::abs(p2)};
 }
 
-// The differences b - a, c - a, d - a when all nine are exact in double (TwoDiff leaves no
-// tail: for nearby points always, by Sterbenz's lemma), else false.
-inline bool ExactDifferences(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                             const Eigen::Vector3d& c, const Eigen::Vector3d& d,
-                             Eigen::Matrix3d& diffs) {
-  const Eigen::Vector3d* points[3] = {&b, &c, &d};
-  for (int i = 0; i < 3; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      double x, y;
-      TwoDiff((*points[i])[k], a[k], x, y);
-      if (y != 0.0) return false;
-      diffs(k, i) = x;
-    }
-  }
-  return true;
-}
-
 }  // namespace
 
-double PlaneSide::RoundedValue(const Eigen::Vector3d& d) const {
+PlaneValue::PlaneValue(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c)
+    : a_(a), b_(b), c_(c) {
+  double u[3], v[3], tail = 0.0, y;
+  for (int k = 0; k < 3; ++k) {
+    TwoDiff(b[k], a[k], u[k], y);
+    tail += std::abs(y);
+    TwoDiff(c[k], a[k], v[k], y);
+    tail += std::abs(y);
+  }
+  exact_edges_ = tail == 0.0;
+  if (!exact_edges_) return;
+  const Double2 n[3] = {MinorDouble2(u[1], v[2], u[2], v[1]), MinorDouble2(u[2], v[0], u[0], v[2]),
+                        MinorDouble2(u[0], v[1], u[1], v[0])};
+  for (int k = 0; k < 3; ++k) {
+    normal_hi_[k] = n[k].hi;
+    normal_lo_[k] = n[k].lo;
+    normal_permanent_[k] = n[k].permanent;
+  }
+}
+
+double PlaneValue::Value(const Eigen::Vector3d& d) const {
   // Double-double evaluation when the differences are exact: det = sum_i w_i n_i with each
   // minor n_i within 4 u^2 of its permanent, the products and the running sum error-free up to
   // their small parts, and the nine small parts summed in double (within 27 u^2 P), so that
   // |result - det| <= u |det| + 32 u^2 P with P = sum_i |w_i| permanent(n_i). Accepted when
   // 64 u^2 P <= u |det|: then within 2u relative. Else (inexact differences or near
   // coplanarity) the exact expansion.
-  Eigen::Matrix3d diff;
-  if (ExactDifferences(a_, b_, c_, d, diff)) {
-    const Eigen::Vector3d u = diff.col(0), v = diff.col(1), w = diff.col(2);
-    const Double2 n[3] = {MinorDouble2(u.y(), v.z(), u.z(), v.y()),
-                          MinorDouble2(u.z(), v.x(), u.x(), v.z()),
-                          MinorDouble2(u.x(), v.y(), u.y(), v.x())};
+  double w[3], tail = 0.0, y;
+  for (int k = 0; k < 3; ++k) {
+    TwoDiff(d[k], a_[k], w[k], y);
+    tail += std::abs(y);
+  }
+  if (exact_edges_ && tail == 0.0) {
     double hi = 0.0, small = 0.0, permanent = 0.0;
     for (int i = 0; i < 3; ++i) {
       double p, e, sum, carry;
-      TwoProduct(w[i], n[i].hi, p, e);
+      TwoProduct(w[i], normal_hi_[i], p, e);
       TwoSum(hi, p, sum, carry);
       hi = sum;
-      small += carry + e + w[i] * n[i].lo;
-      permanent += std::abs(w[i]) * n[i].permanent;
+      small += carry + e + w[i] * normal_lo_[i];
+      permanent += std::abs(w[i]) * normal_permanent_[i];
     }
     const double det = hi + small;
     if (64.0 * 0x1p-53 * permanent <= std::abs(det) && det != 0.0) return det;
@@ -374,7 +377,7 @@ double PlaneSide::RoundedValue(const Eigen::Vector3d& d) const {
 
 double Orient3dValue(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                      const Eigen::Vector3d& d) {
-  return PlaneSide(a, b, c).RoundedValue(d);
+  return PlaneValue(a, b, c).Value(d);
 }
 
 // --- Orient2d ------------------------------------------------------------------------------

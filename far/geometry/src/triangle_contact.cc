@@ -55,8 +55,8 @@ Vector3d PointBetween(const Vector3d& p, const Vector3d& q, double dp, double dq
 }
 
 // Where the segment [p, q] crosses `plane`. @pre p and q not strictly on one side.
-Vector3d EdgePlaneCrossing(const Vector3d& p, const Vector3d& q, const PlaneSide& plane) {
-  return PointBetween(p, q, plane.RoundedValue(p), plane.RoundedValue(q));
+Vector3d EdgePlaneCrossing(const Vector3d& p, const Vector3d& q, const PlaneValue& plane) {
+  return PointBetween(p, q, plane.Value(p), plane.Value(q));
 }
 
 // Where the segment [p, q] crosses the line through r and s, all in one plane seen through the
@@ -136,9 +136,9 @@ Vector3d UnitNormal(const TrianglePoints& t) {
 // with i1 on edge (v, w1), i2 on (v, w2), k1 on (u, z1), k2 on (u, z2), and for a, b in {1, 2}
 // sign((k_b - i_a) . d) = Orient3d(v, w_a, u, z_b). The intersection is [max(i2, k1),
 // min(i1, k2)].
-void GeneralPosition(const TrianglePoints& s, const PlaneSide& plane_s, const TrianglePoints& t,
-                     const PlaneSide& plane_t, const std::array<int, 3>& sigma,
-                     const std::array<int, 3>& tau, ContactGeometry& out) {
+void GeneralPosition(const TrianglePoints& s, const TrianglePoints& t,
+                     const std::array<int, 3>& sigma, const std::array<int, 3>& tau,
+                     ContactGeometry& out) {
   const std::array<const Vector3d*, 3> sv = {&s.a, &s.b, &s.c};
   const std::array<const Vector3d*, 3> tv = {&t.a, &t.b, &t.c};
   const Apex apex_s = FindApex(sigma);
@@ -167,12 +167,13 @@ void GeneralPosition(const TrianglePoints& s, const PlaneSide& plane_s, const Tr
   } else {
     single = Orient3d(v, *w2, u, *z2) == 0;  // i2 == k2
   }
+  const PlaneValue value_s(s.a, s.b, s.c), value_t(t.a, t.b, t.c);
   out.points[0] =
-      lower_is_k1 ? EdgePlaneCrossing(u, *z1, plane_s) : EdgePlaneCrossing(v, *w2, plane_t);
+      lower_is_k1 ? EdgePlaneCrossing(u, *z1, value_s) : EdgePlaneCrossing(v, *w2, value_t);
   out.num_points = 1;
   if (!single) {
     out.points[1] =
-        upper_is_k2 ? EdgePlaneCrossing(u, *z2, plane_s) : EdgePlaneCrossing(v, *w1, plane_t);
+        upper_is_k2 ? EdgePlaneCrossing(u, *z2, value_s) : EdgePlaneCrossing(v, *w1, value_t);
     out.num_points = 2;
   }
 }
@@ -269,7 +270,7 @@ void SegmentTriangle(const Vector3d& p, const Vector3d& q, const TrianglePoints&
                      ContactGeometry& out) {
   const PlaneSide plane(t.a, t.b, t.c);
   if (plane.Side(p) != 0 || plane.Side(q) != 0) {
-    out.points[0] = EdgePlaneCrossing(p, q, plane);
+    out.points[0] = EdgePlaneCrossing(p, q, PlaneValue(t.a, t.b, t.c));
     out.num_points = 1;
     return;
   }
@@ -367,7 +368,7 @@ ContactGeometry TriangleContactGeometry(const TrianglePoints& s, const TriangleP
   }
   const PlaneSide plane_s(s.a, s.b, s.c);
   const std::array<int, 3> tau = {plane_s.Side(t.a), plane_s.Side(t.b), plane_s.Side(t.c)};
-  GeneralPosition(s, plane_s, t, plane_t, sigma, tau, out);
+  GeneralPosition(s, t, sigma, tau, out);
   return out;
 }
 

@@ -1,5 +1,6 @@
 #include "geometry_stage.h"
 
+#include <cstdint>
 #include <optional>
 #include <unordered_map>
 
@@ -39,21 +40,32 @@ void ComputeGeometry(std::span<const WorldObjectView> views, std::span<const uin
     if (!views[s].triangles.empty()) slot_of_id[id_of_slot[s]] = s;
   }
   const auto view = [&](uint32_t id) -> const WorldObjectView& { return views[slot_of_id.at(id)]; };
+  // Pairs come sorted by object pair: a chunk looks each object up once per run of pairs.
+  struct LastViews {
+    uint32_t a = UINT32_MAX, b = UINT32_MAX;
+    const WorldObjectView* view_a = nullptr;
+    const WorldObjectView* view_b = nullptr;
+  };
+  const auto triangles = [&](const ContactPair& c, LastViews& last) {
+    if (c.object_a != last.a) last = {c.object_a, last.b, &view(c.object_a), last.view_b};
+    if (c.object_b != last.b) last = {last.a, c.object_b, last.view_a, &view(c.object_b)};
+    return std::pair{Triangle(*last.view_a, c.triangle_a), Triangle(*last.view_b, c.triangle_b)};
+  };
 
   result.contact_geometry.resize(result.contacts.size());
   pool.ParallelFor(result.contacts.size(), kPairsPerChunk, [&](size_t begin, size_t end) {
+    LastViews last;
     for (size_t i = begin; i < end; ++i) {
-      const ContactPair& c = result.contacts[i];
-      result.contact_geometry[i] = TriangleContactGeometry(
-          Triangle(view(c.object_a), c.triangle_a), Triangle(view(c.object_b), c.triangle_b));
+      const auto [a, b] = triangles(result.contacts[i], last);
+      result.contact_geometry[i] = TriangleContactGeometry(a, b);
     }
   });
   result.closest_points.resize(result.distance_pairs.size());
   pool.ParallelFor(result.distance_pairs.size(), kPairsPerChunk, [&](size_t begin, size_t end) {
+    LastViews last;
     for (size_t i = begin; i < end; ++i) {
-      const ContactPair& c = result.distance_pairs[i].pair;
-      result.closest_points[i] = TriangleClosestPoints(Triangle(view(c.object_a), c.triangle_a),
-                                                       Triangle(view(c.object_b), c.triangle_b));
+      const auto [a, b] = triangles(result.distance_pairs[i].pair, last);
+      result.closest_points[i] = TriangleClosestPoints(a, b);
     }
   });
 

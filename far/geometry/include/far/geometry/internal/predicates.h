@@ -79,9 +79,6 @@ class PlaneSide {
     return wx * normal_.x() + wy * normal_.y() + wz * normal_.z();
   }
 
-  /// Orient3dValue(a, b, c, d) with this plane's shared part computed once.
-  double RoundedValue(const Eigen::Vector3d& d) const;
-
   /// Shewchuk's o3derrboundA = (7 + 56 eps) eps with eps = 2^-53.
   static constexpr double kOrient3dBoundA = (7.0 + 56.0 * 0x1p-53) * 0x1p-53;
 
@@ -93,6 +90,23 @@ class PlaneSide {
   const Eigen::Vector3d& c_;
   Eigen::Vector3d normal_;     // fl((b - a) x (c - a)), each component a difference of products
   Eigen::Vector3d permanent_;  // per component, the sum of the magnitudes of those two products
+};
+
+/// Orient3dValue against one plane for many points, with the plane's share of the work (its
+/// edge differences and their cross product in double-double) done once. Keeps references:
+/// a, b, c must outlive *this.
+class PlaneValue {
+ public:
+  PlaneValue(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+  /// Orient3dValue(a, b, c, d): within 2^-51 relative, zero exactly when coplanar.
+  double Value(const Eigen::Vector3d& d) const;
+
+ private:
+  const Eigen::Vector3d& a_;
+  const Eigen::Vector3d& b_;
+  const Eigen::Vector3d& c_;
+  bool exact_edges_ = false;  // b - a and c - a are exact in double
+  double normal_hi_[3] = {0, 0, 0}, normal_lo_[3] = {0, 0, 0}, normal_permanent_[3] = {0, 0, 0};
 };
 
 /// Returns (b - a) x (d - c) with every component accurate to a relative error of at most
