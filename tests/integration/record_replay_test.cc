@@ -227,6 +227,36 @@ TEST_F(RecordReplayTest, ATamperedReplyOrOtherContentIsAMismatchNamingTheStep) {
   EXPECT_NE(differs.out.find("recorded, not replayed"), std::string::npos) << differs.out;
 }
 
+// A play with --geometry records the contact geometry in its replies; a replay compares it,
+// and a recorded contact point moved by a micrometre is a mismatch that names the contact.
+TEST_F(RecordReplayTest, ContactGeometryIsRecordedAndCompared) {
+  ASSERT_NE(StartDaemon(), nullptr);
+  TempDir dir;
+  const auto scene = MakeDemoScene(dir, 4);
+  const auto recording = dir.path() / "geometry.farrec";
+  ASSERT_EQ(RecordPlay(recording, scene, {"--method", "bvh", "--geometry"}).exit_code, 0);
+  std::vector<protocol::LcmLogEvent> events = ReadEvents(recording);
+  int with_geometry = 0;
+  for (auto& event : events) {
+    if (event.channel != protocol::kRecordingReplyChannel) continue;
+    wire::step_reply_t reply;
+    ASSERT_TRUE(DecodesAs(event, &reply));
+    if (reply.num_contact_geometry == 0) continue;
+    EXPECT_EQ(reply.num_contact_geometry, reply.num_contacts);
+    if (with_geometry++ == 0) {
+      reply.contact_points[0] += 1e-6;
+      event.data = *protocol::EncodeMessage(reply);
+    }
+  }
+  ASSERT_GT(with_geometry, 0) << "the demo scene has contacts";
+  ASSERT_EQ(RunFarClient({"replay", recording.string()}).exit_code, 0);
+  const auto moved = dir.path() / "moved-point.farrec";
+  WriteEvents(moved, events);
+  const ProcessResult replayed = RunFarClient({"replay", moved.string()});
+  EXPECT_EQ(replayed.exit_code, 1) << replayed.out << replayed.err;
+  EXPECT_NE(replayed.out.find("contact geometry of (object"), std::string::npos) << replayed.out;
+}
+
 TEST_F(RecordReplayTest, AnUnreadableRecordingIsAClearErrorNotAReplay) {
   ASSERT_NE(StartDaemon(), nullptr);
   TempDir dir;
