@@ -23,9 +23,12 @@
 //     vertices: those changes are skipped.
 //
 // Oracles besides the sanitizers: every update is accepted; every step succeeds; bvh, aabb and
-// auto answer what exact answers, pair for pair. The reading of the bytes and the oracle are in
+// auto answer what exact answers, pair for pair; the geometry of bvh's answer is well formed
+// (CheckGeometry). The reading of the bytes and the oracle are in
 // fuzz_scene.h, shared with gl_methods.
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 
@@ -37,6 +40,44 @@
 namespace far::fuzz {
 namespace {
 
+// The geometry stage on the same step: arrays parallel to the pairs, counts in range, normals
+// unit or zero, every number finite, closest points as far apart as the reported distance,
+// depths >= 0 with unit directions. (Points against the exact intersection are checked by
+// far_geometry_test's rational reference; here the sanitizers watch the stage on hostile
+// scenes: tiny scales, degenerate and coincident triangles, objects removed and added again.)
+void CheckGeometry(Pipeline& pipeline, StepRequest request) {
+  request.method = Method::kBvh;
+  request.geometry = true;
+  const Result<StepResult> found = pipeline.Step(request);
+  FAR_FUZZ_CHECK(found.ok());
+  const StepResult& r = *found;
+  FAR_FUZZ_CHECK(r.contact_geometry.size() == r.contacts.size());
+  FAR_FUZZ_CHECK(r.closest_points.size() == r.distance_pairs.size());
+  const auto finite = [](const Eigen::Vector3d& p) { return p.allFinite(); };
+  const auto unit_or_zero = [](const Eigen::Vector3d& n) {
+    return n == Eigen::Vector3d::Zero() || std::abs(n.norm() - 1.0) < 1e-12;
+  };
+  for (const ContactGeometry& g : r.contact_geometry) {
+    FAR_FUZZ_CHECK(g.num_points >= 1 && g.num_points <= ContactGeometry::kMaxPoints);
+    for (int k = 0; k < g.num_points; ++k) FAR_FUZZ_CHECK(finite(g.points[k]));
+    FAR_FUZZ_CHECK(unit_or_zero(g.normal_a) && unit_or_zero(g.normal_b));
+  }
+  for (size_t i = 0; i < r.closest_points.size(); ++i) {
+    const ClosestPoints& c = r.closest_points[i];
+    FAR_FUZZ_CHECK(finite(c.point_a) && finite(c.point_b));
+    const double length = (c.point_b - c.point_a).norm();
+    const double d = r.distance_pairs[i].distance;
+    const double scale =
+        std::max({c.point_a.cwiseAbs().maxCoeff(), c.point_b.cwiseAbs().maxCoeff(), d});
+    FAR_FUZZ_CHECK(std::abs(length - d) <= 1e-12 * scale + 1e-300);
+  }
+  for (const Penetration& p : r.penetrations) {
+    FAR_FUZZ_CHECK(std::isfinite(p.depth) && p.depth >= 0);
+    FAR_FUZZ_CHECK(p.depth == 0 ? p.direction == Eigen::Vector3d::Zero()
+                                : std::abs(p.direction.norm() - 1.0) < 1e-12);
+  }
+}
+
 // Every reliable CPU method against exact, on the scene as it stands.
 void CheckStep(Pipeline& pipeline, const std::optional<double>& distance) {
   StepRequest request;
@@ -47,6 +88,7 @@ void CheckStep(Pipeline& pipeline, const std::optional<double>& distance) {
     request.method = method;
     CheckAnswer(pipeline, request, expected);
   }
+  CheckGeometry(pipeline, request);
 }
 
 }  // namespace
