@@ -349,6 +349,14 @@ ClosestPoints TriangleClosestPoints(const TrianglePoints& s, const TrianglePoint
     const Vector3d common = TriangleContactGeometry(s, t).points[0];
     return ClosestPoints{common, common};
   }
+  return DisjointClosestPoints(s, t);
+}
+
+ClosestPoints DisjointClosestPoints(const TrianglePoints& s, const TrianglePoints& t) {
+  if (Before(t, s)) {
+    const ClosestPoints swapped = DisjointClosestPoints(t, s);
+    return ClosestPoints{swapped.point_b, swapped.point_a};
+  }
   Witness witness;
   DisjointDistance(s, t, PairBoxes(s, t).Scale(), &witness);
   return ClosestPoints{witness.on_s, witness.on_t};

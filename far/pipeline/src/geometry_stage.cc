@@ -65,7 +65,10 @@ void ComputeGeometry(std::span<const WorldObjectView> views, std::span<const uin
     LastViews last;
     for (size_t i = begin; i < end; ++i) {
       const auto [a, b] = triangles(result.distance_pairs[i].pair, last);
-      result.closest_points[i] = TriangleClosestPoints(a, b);
+      // The exact stage reports 0 for intersecting pairs and only for them.
+      result.closest_points[i] = result.distance_pairs[i].distance > 0
+                                     ? DisjointClosestPoints(a, b)
+                                     : TriangleClosestPoints(a, b);
     }
   });
 
