@@ -6,8 +6,9 @@
 // on opposite sides of its plane. Every part of that is an exact orientation predicate
 // (Orient3d), so the parity is exact whenever no predicate is zero. A zero means the segment
 // touches an edge, a vertex or runs in a face plane (or v lies on a face plane); then v is on
-// the surface (when it lies in the closed triangle: not strictly inside) or another w is tried,
-// from a fixed sequence of slightly tilted rays, until one is in general position. Degenerate
+// the surface (when it lies in the closed triangle: not strictly inside; every ray finds that)
+// or another w is tried, from a fixed sequence of slightly tilted rays whose ends lie on a
+// parabola, which reaches one in general position within 8 T + 2 rays (FarPoints). Degenerate
 // triangles (collinear corners) have no interior and cannot be crossed; they are skipped except
 // to find v on the surface.
 //
@@ -15,21 +16,26 @@
 // (its error bound, docs/culling.md), with a branch-and-bound descent of a TriangleBvh, whose
 // boxes hold their triangles in exact arithmetic.
 //
+// For a closed mesh that passes through itself, "inside" is odd parity (winding number odd).
+//
 // Cost: a TriangleBvh of each object (n log n) per call, then for each vertex inside the
-// other's box one ray (axis-aligned first: its box is thin, so the descent visits few nodes) and,
-// for the vertices inside, one nearest-triangle descent.
+// other's box one ray (axis-aligned first: its box is thin, so the descent visits few nodes;
+// a second, nearly axis-aligned one when the first is degenerate) and, for the vertices inside,
+// one nearest-triangle descent.
 
 #include "far/pairs/penetration.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <tuple>
 #include <vector>
 
 #include <Eigen/Geometry>
 
+#include "far/base/assert.h"
 #include "far/geometry/internal/predicates.h"
 #include "far/geometry/triangle_contact.h"
 #include "far/geometry/triangle_tests.h"
@@ -40,8 +46,6 @@ namespace {
 
 using Eigen::Vector3d;
 using internal::Orient3d;
-
-constexpr int kMaxRayAttempts = 24;
 
 // Calls visit(triangle) for every triangle whose leaf box may meet the box [lo, hi], until
 // visit returns false.
@@ -72,8 +76,10 @@ enum class Where { kInside, kOutside, kOnSurface };
 enum class Ray { kGeneral, kOnSurface, kDegenerate };
 
 // Counts the proper crossings of the segment [v, w] with the surface's triangles. kOnSurface
-// when v lies on a triangle, kDegenerate when the segment meets an edge, a vertex or a face plane
-// in a way that a proper crossing cannot describe. @pre w outside the surface's box.
+// when v lies on a triangle (checked on every triangle near the segment, whatever else the ray
+// meets: so a point on the surface is found by its first ray), kDegenerate when the segment
+// meets an edge, a vertex or a face plane in a way that a proper crossing cannot describe.
+// @pre w outside the surface's box.
 Ray CountCrossings(const PenetrationSurface& surface, const Vector3d& v, const Vector3d& w,
                    int& crossings) {
   crossings = 0;
@@ -85,11 +91,12 @@ Ray CountCrossings(const PenetrationSurface& surface, const Vector3d& v, const V
       verdict = Ray::kOnSurface;
       return false;
     }
-    if (surface.degenerate[t]) return true;
+    // Once the ray is known to be degenerate only the on-surface check above matters.
+    if (verdict == Ray::kDegenerate || surface.degenerate[t]) return true;
     const int side_w = Orient3d(tri.a, tri.b, tri.c, w);
     if (side_v == 0 && side_w == 0) {
       verdict = Ray::kDegenerate;  // the segment runs in the face's plane
-      return false;
+      return true;
     }
     // v on the plane (outside the triangle) or w on it (outside the box, so outside the
     // triangle): the segment touches the plane only there and does not cross the triangle.
@@ -101,32 +108,61 @@ Ray CountCrossings(const PenetrationSurface& surface, const Vector3d& v, const V
       ++crossings;
     } else if (!((o1 > 0 || o2 > 0 || o3 > 0) && (o1 < 0 || o2 < 0 || o3 < 0))) {
       verdict = Ray::kDegenerate;  // through an edge or a vertex
-      return false;
     }
     return true;
   });
   return verdict;
 }
 
-// The far end of ray `attempt` from v: beyond the box along +x, the first exactly along the
-// axis, the others tilted by small amounts that no mesh is likely to line up with.
-Vector3d FarPoint(const PenetrationSurface& surface, const Vector3d& v, int attempt) {
-  const Vector3d extent = surface.box.sizes();
-  const double size = extent.maxCoeff() + 1.0;
-  const double x = surface.box.max().x() + size;
-  if (attempt == 0) return {x, v.y(), v.z()};
-  // Fractional parts of multiples of irrational numbers: a fixed, well spread sequence.
-  const double fy = std::fmod(attempt * 0.6180339887498949, 1.0) - 0.5;
-  const double fz = std::fmod(attempt * 0.4142135623730951, 1.0) - 0.5;
-  const double tilt = 1e-3 * attempt;
-  return {x, v.y() + tilt * fy * size, v.z() + tilt * fz * size};
-}
+// The far ends of the rays from v, all in the plane x = X beyond the surface's box. Ray 0 runs
+// along +x (its box is thin, so the descent visits few nodes). Ray k >= 1 ends at
+//   (X, h (n_y + k), h (n_z + k^2))  with h a power of two and n_y, n_z integers near v / h,
+// computed exactly (integers below 2^53 times a power of two), so these ends lie exactly on one
+// parabola of the plane x = X. Why that terminates: when v is not on the surface, a ray is
+// degenerate only when w lies in a face plane through v, or in the plane through v and an edge
+// of a triangle whose plane misses v (v is then off that edge's line). Each such plane meets
+// x = X in a line (a plane through v parallel to x = X is x = v.x < X and holds no w), so the
+// degenerate ends lie on at most 4 T lines for T triangles, and a line meets a parabola in at
+// most 2 points: among rays 1 .. 8 T + 1 one is in general position. h is 2^-40 of v's and the
+// box's magnitude: the first tilted rays are nearly axis-aligned too.
+class FarPoints {
+ public:
+  FarPoints(const PenetrationSurface& surface, const Vector3d& v) : v_(v) {
+    const Vector3d extent = surface.box.sizes();
+    const double size = extent.maxCoeff() + 1.0;
+    x_ = surface.box.max().x() + size;  // > box.max().x(): coordinates are at most 3e12
+    const double scale = std::max({std::abs(v.y()), std::abs(v.z()), size, 0x1p-200});
+    int exponent = 0;
+    std::frexp(scale, &exponent);  // scale < 2^exponent
+    h_ = std::ldexp(1.0, exponent - 40);
+    n_y_ = std::nearbyint(v.y() / h_);  // |n| <= 2^40
+    n_z_ = std::nearbyint(v.z() / h_);
+  }
+
+  Vector3d operator()(int64_t k) const {
+    if (k == 0) return {x_, v_.y(), v_.z()};
+    const double kd = static_cast<double>(k);
+    return {x_, h_ * (n_y_ + kd), h_ * (n_z_ + kd * kd)};
+  }
+
+  // The most rays Locate tries: 8 T + 2 (rays 0 .. 8 T + 1), enough by the argument above;
+  // capped at 2^26 so that n + k^2 stays below 2^53 (exact), which covers T up to 8 million.
+  static int64_t MaxRays(size_t num_triangles) {
+    return std::min<int64_t>(8 * static_cast<int64_t>(num_triangles) + 2, int64_t{1} << 26);
+  }
+
+ private:
+  Vector3d v_;
+  double x_ = 0, h_ = 0, n_y_ = 0, n_z_ = 0;
+};
 
 Where Locate(const PenetrationSurface& surface, const Vector3d& v) {
   if (!surface.box.contains(v)) return Where::kOutside;
-  for (int attempt = 0; attempt < kMaxRayAttempts; ++attempt) {
+  const FarPoints far_points(surface, v);
+  const int64_t max_rays = FarPoints::MaxRays(surface.view.triangles.size());
+  for (int64_t k = 0; k < max_rays; ++k) {
     int crossings = 0;
-    switch (CountCrossings(surface, v, FarPoint(surface, v, attempt), crossings)) {
+    switch (CountCrossings(surface, v, far_points(k), crossings)) {
       case Ray::kOnSurface:
         return Where::kOnSurface;
       case Ray::kGeneral:
@@ -135,7 +171,8 @@ Where Locate(const PenetrationSurface& surface, const Vector3d& v) {
         break;
     }
   }
-  return Where::kOutside;  // no ray in general position: reported as not inside
+  FAR_ASSERT(false, "no ray in general position (impossible below 8 million triangles)");
+  return Where::kOutside;
 }
 
 // The closest point of the surface to v, and its distance.
