@@ -32,12 +32,17 @@ bool IsClosedMesh(std::span<const TriangleIndices> triangles, size_t num_vertice
 struct PenetrationSurface {
   explicit PenetrationSurface(const WorldObjectView& view);
   TrianglePoints Triangle(size_t t) const;
+  /// A lower bound of the distance from v to triangle t's plane, less than TriangleDistance's
+  /// value for v and t (0 or less for a degenerate triangle): what prunes nearest-point queries.
+  double PlaneGap(size_t t, const Eigen::Vector3d& v) const;
 
   WorldObjectView view;  ///< spans into the caller's vertices and triangles
   TriangleBvh bvh;
   Eigen::AlignedBox3d box;
-  std::vector<uint8_t> degenerate;  ///< by triangle: collinear corners (no interior)
-  double margin = 0;                ///< node boxes are grown by this (their rounding)
+  std::vector<uint8_t> degenerate;            ///< by triangle: collinear corners (no interior)
+  std::vector<Eigen::Vector3d> unit_normals;  ///< by triangle; zero when degenerate
+  std::vector<double> extents;  ///< by triangle: |b - a|_1 + |c - a|_1 (PlaneGap's slack)
+  double margin = 0;            ///< node boxes are grown by this (their rounding)
   std::vector<uint32_t> neighbor_offsets, neighbors;  ///< vertex neighbors by edge (CSR)
   std::vector<uint32_t> part_representatives;         ///< one vertex per connected part
 };
