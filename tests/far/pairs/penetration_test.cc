@@ -111,8 +111,8 @@ TEST(PenetrationTest, OverlappingBoxesGiveTheOverlapAlongTheFaceNormal) {
     EXPECT_TRUE(p.closed);
     EXPECT_NEAR(p.depth, 0.3, 1e-15);
     EXPECT_EQ(p.direction, Vector3d(1, 0, 0));  // moving b along +x by 0.3 separates them
-    EXPECT_EQ(p.point_a.x(), 1.0);              // a's corner
-    EXPECT_EQ(p.point_b.x(), 0.7);              // on b's face
+    EXPECT_EQ(p.point_a, Vector3d(1, 0, 0));    // a's corner with the smallest index
+    EXPECT_EQ(p.point_b, Vector3d(0.7, 0, 0));  // on b's face
     EXPECT_EQ((p.point_a - p.point_b).norm(), p.depth);
   }
   // Touching face to face: nothing strictly inside.
@@ -262,6 +262,17 @@ TEST(PenetrationTest, AVertexWhoseFirstRayRunsThroughAnEdgeIsStillLocated) {
   EXPECT_EQ(q.point_a, Vector3d(1, 0.5, 0.5));
   // The apex on the face plane y = 0 but inside the face: on the surface.
   EXPECT_EQ(Measure(box, Spike({0.75, 0, 0.5}), false).depth, 0.0);
+}
+
+TEST(PenetrationTest, ARodThroughAWallGetsItsTipDepthNotTheSeparatingDistance) {
+  // What docs/contact-geometry.md says the number is not: the rod's tip is 0.1 from the far
+  // face, so depth = 0.1 toward it, though separating the objects takes 0.5 sideways.
+  const Mesh box = BoxMesh({0, 0, 0}, {1, 1, 1});
+  const Mesh rod = BoxMesh({-1, 0.49, 0.49}, {0.9, 0.51, 0.51});
+  const Penetration p = Measure(box, rod, true);
+  EXPECT_NEAR(p.depth, 0.1, 1e-15);
+  EXPECT_EQ(p.direction, Vector3d(1, 0, 0));
+  EXPECT_EQ(p.point_b.x(), 0.9);  // a vertex of the rod's tip
 }
 
 // The brute-force reference: `v` strictly inside `mesh` by the parity of a segment's crossings

@@ -61,9 +61,9 @@ Penetration MeasurePenetration(const PenetrationSurface& a, const PenetrationSur
 /// both closed: a Penetration with closed false and zeros. Otherwise the deepest vertex v of
 /// either object strictly inside the other (exact parity of a ray's crossings with the other's
 /// triangles), with depth = its distance to the other's surface, point_a and point_b the vertex
-/// and its closest surface point (each on its own object), direction = (point_a - point_b) /
-/// depth; depth 0 and zero vectors when no vertex is strictly inside. object_a and object_b
-/// are left for the caller. Thread-safe (pure function).
+/// and its closest surface point (each on its own object), direction = the unit vector of
+/// point_a - point_b; depth 0 and zero vectors when no vertex is strictly inside. object_a and
+/// object_b are left for the caller. Thread-safe (pure function).
 Penetration MeasurePenetration(const WorldObjectView& a, bool a_closed, const WorldObjectView& b,
                                bool b_closed);
 
