@@ -22,9 +22,9 @@
 // other's box one ray (axis-aligned first: its box is thin, so the descent visits few nodes;
 // a second, nearly axis-aligned one when the first is degenerate) and, for the vertices inside,
 // one nearest-triangle descent, pruned by boxes and face planes and abandoned as soon as the
-// vertex is shallower than the deepest so far. Two 19,800-triangle spheres, one core: 26 ms per
-// surface, then 5 ms (overlap 0.3), 26 ms (overlap 1.5) or 80 ms (one inside the other)
-// (docs/contact-geometry.md).
+// vertex is shallower than the deepest so far. Two 19,800-triangle spheres, one core: about
+// 30 ms per surface, then 5 ms (overlap 0.3), 30 ms (overlap 1.5) or 100 ms (one inside the
+// other) (docs/contact-geometry.md, "Cost").
 
 #include "far/pairs/penetration.h"
 
