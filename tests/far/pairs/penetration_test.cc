@@ -1,11 +1,16 @@
 // Penetration depth of closed meshes (far/pairs/penetration.h): which meshes are closed, the
-// overlap of two boxes along the face normal, far from the origin, and random overlapping
-// convex meshes against an independent reference (inside: strictly behind every face plane;
-// depth: the nearest face plane), with the contact-seeded search equal to the all-vertex one.
+// overlap of two boxes along the face normal, far from the origin, vertices exactly on the other
+// surface and rays through edges, random overlapping convex meshes against an independent
+// reference (inside: strictly behind every face plane; depth: the nearest face plane), and
+// random non-convex meshes at random poses against a brute-force reference (inside: parity of
+// crossings along random rays, over every triangle; depth: the nearest of every triangle), with
+// the contact-seeded search equal to the all-vertex one.
 
 #include "far/pairs/penetration.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -106,8 +111,8 @@ TEST(PenetrationTest, OverlappingBoxesGiveTheOverlapAlongTheFaceNormal) {
     EXPECT_TRUE(p.closed);
     EXPECT_NEAR(p.depth, 0.3, 1e-15);
     EXPECT_EQ(p.direction, Vector3d(1, 0, 0));  // moving b along +x by 0.3 separates them
-    EXPECT_EQ(p.point_a.x(), 1.0);              // a's corner
-    EXPECT_EQ(p.point_b.x(), 0.7);              // on b's face
+    EXPECT_EQ(p.point_a, Vector3d(1, 0, 0));    // a's corner with the smallest index
+    EXPECT_EQ(p.point_b, Vector3d(0.7, 0, 0));  // on b's face
     EXPECT_EQ((p.point_a - p.point_b).norm(), p.depth);
   }
   // Touching face to face: nothing strictly inside.
@@ -145,9 +150,12 @@ TEST(PenetrationTest, FarFromTheOriginTheDecisionsHoldAndTheDepthStaysWithinItsB
     const Penetration p = Measure(a, b, true);
     // The exact depth of the rounded input: a's face x = fl(o + 1) to b's x = fl(o + 0.75).
     const double exact = a.p_MV[1].x() - b.p_MV[0].x();
-    const double bound = 128 * 0x1p-53 * 2 * offset;  // the distance bound, L <= 2 |o|
+    // The distance bound (docs/contact-geometry.md): 128 u L, L the diagonal of the box around
+    // the vertex and its nearest triangle (here at most 0.25 + 2 sqrt(2)): independent of |o|.
+    const double bound = 128 * 0x1p-53 * (exact + 2 * std::sqrt(2.0));
     EXPECT_TRUE(p.closed);
     EXPECT_NEAR(p.depth, exact, bound) << offset;
+    EXPECT_EQ(p.point_a, a.p_MV[1]) << offset;  // the corner of a with the smallest index
     EXPECT_NEAR(p.direction.x(), 1.0, 1e-12) << offset;
   }
 }
@@ -193,6 +201,219 @@ TEST(PenetrationTest, MatchesAConvexReferenceOnRandomOverlappingSpheres) {
     overlapping += reference > 0;
   }
   EXPECT_GT(overlapping, 20);
+}
+
+// A tetrahedron with apex `apex` and base triangle (p1, p2, p3), closed.
+Mesh Tetrahedron(const Vector3d& apex, const Vector3d& p1, const Vector3d& p2, const Vector3d& p3) {
+  Mesh mesh;
+  mesh.p_MV = {apex, p1, p2, p3};
+  mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {1, 3, 2}};
+  return mesh;
+}
+
+// A tetrahedron pointing along -x with its apex at `apex` and its base at x = apex.x + 1.
+Mesh Spike(const Vector3d& apex) {
+  return Tetrahedron(apex, apex + Vector3d(1, -0.2, -0.2), apex + Vector3d(1, 0.3, -0.1),
+                     apex + Vector3d(1, 0, 0.3));
+}
+
+TEST(PenetrationTest, AVertexExactlyOnTheOtherSurfaceIsNotInside) {
+  const Mesh box = BoxMesh({0, 0, 0}, {1, 1, 1});
+  // The apex on a face's interior, on the diagonal shared by the face's two triangles, on an
+  // edge and on a corner of the box; the rest of the spike outside.
+  for (const Vector3d& apex :
+       {Vector3d(1, 0.25, 0.4), Vector3d(1, 0.5, 0.5), Vector3d(1, 1, 0.5), Vector3d(1, 1, 1)}) {
+    const Mesh spike = Spike(apex);
+    ASSERT_TRUE(Closed(spike));
+    for (bool seeded : {false, true}) {
+      const Penetration p = Measure(box, spike, seeded);
+      EXPECT_TRUE(p.closed);
+      EXPECT_EQ(p.depth, 0.0) << apex.transpose();
+      EXPECT_EQ(p.direction, Vector3d::Zero());
+      EXPECT_EQ(p.point_a, Vector3d::Zero());
+      EXPECT_EQ(p.point_b, Vector3d::Zero());
+    }
+  }
+}
+
+TEST(PenetrationTest, AVertexWhoseFirstRayRunsThroughAnEdgeIsStillLocated) {
+  // The apex (0.75, 0.5, 0.5): its ray along +x meets the face x = 1 on the diagonal its two
+  // triangles share (y + z = 1), a degenerate ray; the next one decides. Then the apex at
+  // (0.75, 0, 0.5): its ray runs in the face plane y = 0 (on the surface? no: x < 1 is inside
+  // the face, so the apex IS on the surface). Then y = 0.5, z = 0 likewise on the surface.
+  const Mesh box = BoxMesh({0, 0, 0}, {1, 1, 1});
+  const Penetration p = Measure(box, Spike({0.75, 0.5, 0.5}), false);
+  EXPECT_EQ(p.depth, 0.25);
+  EXPECT_EQ(p.point_b, Vector3d(0.75, 0.5, 0.5));  // the spike's apex, inside the box
+  EXPECT_EQ(p.point_a, Vector3d(1, 0.5, 0.5));     // on the box's face
+  EXPECT_EQ(p.direction, Vector3d(1, 0, 0));       // moving the spike by +0.25 x frees it
+  // Rays through a vertex: a box whose face x = 1 is split at its center (an octahedral cap
+  // would do as well); the apex (0.75, 0.5, 0.5) looks straight at the new vertex.
+  Mesh split = box;
+  split.p_MV.emplace_back(1, 0.5, 0.5);                                        // vertex 8
+  split.triangles.erase(split.triangles.begin() + 10, split.triangles.end());  // x = 1 face
+  for (TriangleIndices t : {TriangleIndices{1, 3, 8}, TriangleIndices{3, 7, 8},
+                            TriangleIndices{7, 5, 8}, TriangleIndices{5, 1, 8}}) {
+    split.triangles.push_back(t);
+  }
+  ASSERT_TRUE(Closed(split));
+  const Penetration q = Measure(split, Spike({0.75, 0.5, 0.5}), true);
+  EXPECT_EQ(q.depth, 0.25);
+  EXPECT_EQ(q.point_a, Vector3d(1, 0.5, 0.5));
+  // The apex on the face plane y = 0 but inside the face: on the surface.
+  EXPECT_EQ(Measure(box, Spike({0.75, 0, 0.5}), false).depth, 0.0);
+}
+
+TEST(PenetrationTest, ARodThroughAWallGetsItsTipDepthNotTheSeparatingDistance) {
+  // What docs/contact-geometry.md says the number is not: the rod's tip is 0.1 from the far
+  // face, so depth = 0.1 toward it, though separating the objects takes 0.5 sideways.
+  const Mesh box = BoxMesh({0, 0, 0}, {1, 1, 1});
+  const Mesh rod = BoxMesh({-1, 0.49, 0.49}, {0.9, 0.51, 0.51});
+  const Penetration p = Measure(box, rod, true);
+  EXPECT_NEAR(p.depth, 0.1, 1e-15);
+  EXPECT_EQ(p.direction, Vector3d(1, 0, 0));
+  EXPECT_EQ(p.point_b.x(), 0.9);  // a vertex of the rod's tip
+}
+
+// The brute-force reference: `v` strictly inside `mesh` by the parity of a segment's crossings
+// with every triangle, the segment's far end in a random direction (a new one whenever an
+// orientation is zero); on the surface (not inside) when the point lies on a triangle.
+bool BruteForceInside(const Mesh& mesh, const Vector3d& v, std::mt19937_64& rng) {
+  for (const TriangleIndices& t : mesh.triangles) {
+    if (TrianglesIntersect({v, v, v}, {mesh.p_MV[t[0]], mesh.p_MV[t[1]], mesh.p_MV[t[2]]})) {
+      return false;
+    }
+  }
+  Eigen::AlignedBox3d box;
+  for (const Vector3d& p : mesh.p_MV) box.extend(p);
+  const double reach = 2 * (box.diagonal().norm() + (v - box.center()).norm()) + 1;
+  std::normal_distribution<double> gauss;
+  for (;;) {
+    const Vector3d w = v + reach * Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+    int crossings = 0;
+    bool degenerate = false;
+    for (const TriangleIndices& t : mesh.triangles) {
+      const Vector3d &a = mesh.p_MV[t[0]], &b = mesh.p_MV[t[1]], &c = mesh.p_MV[t[2]];
+      if (internal::Collinear3d(a, b, c)) continue;
+      const int sv = internal::Orient3d(a, b, c, v), sw = internal::Orient3d(a, b, c, w);
+      if (sv == 0 || sw == 0) {
+        degenerate = true;
+        break;
+      }
+      if (sv == sw) continue;
+      const int o1 = internal::Orient3d(v, w, a, b), o2 = internal::Orient3d(v, w, b, c),
+                o3 = internal::Orient3d(v, w, c, a);
+      if (o1 == 0 || o2 == 0 || o3 == 0) {
+        degenerate = true;
+        break;
+      }
+      crossings += o1 == o2 && o2 == o3;
+    }
+    if (!degenerate) return crossings % 2 == 1;
+  }
+}
+
+struct Reference {
+  double depth = -1;
+  Vector3d vertex = Vector3d::Zero();
+};
+
+// The deepest vertex of `inner` strictly inside `outer` and its distance to every triangle of
+// `outer` (ties: the smallest vertex index, as MeasurePenetration).
+Reference BruteForceDeepest(const Mesh& inner, const Mesh& outer, std::mt19937_64& rng) {
+  Reference deepest;
+  for (const Vector3d& v : inner.p_MV) {
+    if (!BruteForceInside(outer, v, rng)) continue;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const TriangleIndices& t : outer.triangles) {
+      nearest = std::min(nearest, TriangleDistance({v, v, v}, {outer.p_MV[t[0]], outer.p_MV[t[1]],
+                                                               outer.p_MV[t[2]]}));
+    }
+    if (nearest > deepest.depth) deepest = {nearest, v};
+  }
+  return deepest;
+}
+
+// A closed non-convex mesh: a UV sphere with every vertex moved along its ray from the center by
+// a random factor in [0.55, 1.15] (star-shaped, so it does not pass through itself).
+Mesh BumpySphere(double radius, int stacks, int slices, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> factor(0.55, 1.15);
+  Mesh mesh = scenes::SphereMesh({0, 0, 0}, radius, stacks, slices);
+  for (Vector3d& p : mesh.p_MV) p *= factor(rng);
+  return mesh;
+}
+
+Mesh Posed(Mesh mesh, const Eigen::Quaterniond& rotation, const Vector3d& translation) {
+  for (Vector3d& p : mesh.p_MV) p = rotation * p + translation;
+  return mesh;
+}
+
+TEST(PenetrationTest, MatchesABruteForceReferenceOnRandomNonConvexMeshesAtRandomPoses) {
+  std::mt19937_64 rng(4344);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::normal_distribution<double> gauss;
+  const auto random_rotation = [&] {
+    return Eigen::Quaterniond(gauss(rng), gauss(rng), gauss(rng), gauss(rng)).normalized();
+  };
+  int overlapping = 0;
+  for (int i = 0; i < 36; ++i) {
+    const double offset = std::array{0.0, 1e6, 1e9}[i % 3];
+    const Vector3d origin = offset * Vector3d(1, -0.5, 0.25);
+    const Mesh a = Posed(BumpySphere(1.0, 7, 11, rng), random_rotation(), origin);
+    const Mesh b = i % 2 == 0
+                       ? Posed(BumpySphere(0.6, 5, 8, rng), random_rotation(),
+                               origin + 1.3 * Vector3d(u(rng), u(rng), u(rng)))
+                       : Posed(BoxMesh({-0.4, -0.3, -0.5}, {0.4, 0.3, 0.5}), random_rotation(),
+                               origin + 1.2 * Vector3d(u(rng), u(rng), u(rng)));
+    ASSERT_TRUE(Closed(a) && Closed(b));
+    const Reference b_in_a = BruteForceDeepest(b, a, rng);
+    const Reference a_in_b = BruteForceDeepest(a, b, rng);
+    const Penetration all = Measure(a, b, false);
+    const Penetration seeded = Measure(a, b, true);
+    const Penetration by_view = MeasurePenetration(View(a), true, View(b), true);
+    const double depth = std::max({0.0, b_in_a.depth, a_in_b.depth});
+    EXPECT_EQ(all.depth, depth) << "case " << i;
+    EXPECT_EQ(seeded.depth, all.depth) << "case " << i;
+    EXPECT_EQ(by_view.depth, all.depth) << "case " << i;
+    EXPECT_EQ(seeded.point_a, all.point_a) << "case " << i;
+    EXPECT_EQ(seeded.point_b, all.point_b) << "case " << i;
+    if (depth > 0) {
+      ++overlapping;
+      // The witness: b's vertex inside a (b wins ties), or a's inside b; the other point is on
+      // the other surface, depth away (up to the closest point's rounding, 64 u M).
+      const bool b_deeper = b_in_a.depth >= a_in_b.depth;
+      EXPECT_EQ(b_deeper ? all.point_b : all.point_a, b_deeper ? b_in_a.vertex : a_in_b.vertex)
+          << "case " << i;
+      const double point_bound = 256 * 0x1p-53 * (offset + 4);
+      EXPECT_NEAR((all.point_a - all.point_b).norm(), depth, point_bound) << "case " << i;
+      EXPECT_NEAR(all.direction.norm(), 1.0, 1e-12);
+    } else {
+      EXPECT_EQ(all.direction, Vector3d::Zero());
+    }
+  }
+  EXPECT_GT(overlapping, 18);
+}
+
+TEST(PenetrationTest, ATetrahedronPokingASphereGivesItsApexDepth) {
+  const Mesh sphere = scenes::SphereMesh({0, 0, 0}, 1.0, 24, 32);
+  ASSERT_TRUE(Closed(sphere));
+  std::mt19937_64 rng(4345);
+  for (const Vector3d& apex :
+       {Vector3d(0.8, 0.1, 0.05), Vector3d(0.95, -0.02, 0.1), Vector3d(0.5, 0.0, 0.0)}) {
+    const Mesh spike = Spike(apex);
+    ASSERT_TRUE(Closed(spike));
+    const Reference reference = BruteForceDeepest(spike, sphere, rng);
+    for (bool seeded : {false, true}) {
+      const Penetration p = Measure(sphere, spike, seeded);
+      EXPECT_EQ(p.depth, reference.depth) << apex.transpose();
+      EXPECT_EQ(p.point_b, apex);  // the spike's apex is the only vertex inside
+      // The polyhedral sphere is a little inside the unit sphere: the depth is at most 1 - |v|.
+      EXPECT_LE(p.depth, 1 - apex.norm());
+      EXPECT_GT(p.depth, 1 - apex.norm() - 0.01);
+      // Its direction points out of the sphere, about along the apex's ray.
+      EXPECT_GT(p.direction.dot(apex.normalized()), 0.99);
+    }
+  }
 }
 
 }  // namespace

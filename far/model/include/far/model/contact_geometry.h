@@ -39,8 +39,9 @@ struct ClosestPoints {
 };
 
 /// How deep two objects in contact interpenetrate (one entry per object pair with contacts,
-/// object_a < object_b). Defined only when both meshes are closed (docs/culling.md says how
-/// that is decided); otherwise `closed` is false and the rest is zero.
+/// object_a < object_b). Defined only when both meshes are closed (docs/contact-geometry.md,
+/// "Penetration depth", says how that is decided, what depth means, where it is not the true
+/// penetration depth, and its error bound); otherwise `closed` is false and the rest is zero.
 struct Penetration {
   uint32_t object_a = 0;
   uint32_t object_b = 0;
@@ -49,8 +50,9 @@ struct Penetration {
   /// its distance to the other object's surface: depth >= 0 (0 when no vertex is strictly
   /// inside, for example two boxes touching face to face or crossing edge through edge).
   double depth = 0;
-  /// (point_a - point_b) / depth: moving object_b by depth * direction carries point_b onto
-  /// point_a, which brings the deepest vertex to the other object's surface. Zero when depth is 0.
+  /// The unit vector of point_a - point_b ((point_a - point_b) / depth up to rounding): moving
+  /// object_b by depth * direction carries point_b onto point_a, which brings the deepest
+  /// vertex to the other object's surface. Zero when depth is 0.
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();
   /// Witness points: the deepest vertex (of either object) and its closest point on the other
   /// object's surface; point_a lies on object_a (its vertex or surface), point_b on object_b.

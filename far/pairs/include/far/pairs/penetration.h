@@ -32,12 +32,17 @@ bool IsClosedMesh(std::span<const TriangleIndices> triangles, size_t num_vertice
 struct PenetrationSurface {
   explicit PenetrationSurface(const WorldObjectView& view);
   TrianglePoints Triangle(size_t t) const;
+  /// A lower bound of the distance from v to triangle t's plane, less than TriangleDistance's
+  /// value for v and t (0 or less for a degenerate triangle): what prunes nearest-point queries.
+  double PlaneGap(size_t t, const Eigen::Vector3d& v) const;
 
   WorldObjectView view;  ///< spans into the caller's vertices and triangles
   TriangleBvh bvh;
   Eigen::AlignedBox3d box;
-  std::vector<uint8_t> degenerate;  ///< by triangle: collinear corners (no interior)
-  double margin = 0;                ///< node boxes are grown by this (their rounding)
+  std::vector<uint8_t> degenerate;            ///< by triangle: collinear corners (no interior)
+  std::vector<Eigen::Vector3d> unit_normals;  ///< by triangle; zero when degenerate
+  std::vector<double> extents;  ///< by triangle: |b - a|_1 + |c - a|_1 (PlaneGap's slack)
+  double margin = 0;            ///< node boxes are grown by this (their rounding)
   std::vector<uint32_t> neighbor_offsets, neighbors;  ///< vertex neighbors by edge (CSR)
   std::vector<uint32_t> part_representatives;         ///< one vertex per connected part
 };
@@ -56,9 +61,9 @@ Penetration MeasurePenetration(const PenetrationSurface& a, const PenetrationSur
 /// both closed: a Penetration with closed false and zeros. Otherwise the deepest vertex v of
 /// either object strictly inside the other (exact parity of a ray's crossings with the other's
 /// triangles), with depth = its distance to the other's surface, point_a and point_b the vertex
-/// and its closest surface point (each on its own object), direction = (point_a - point_b) /
-/// depth; depth 0 and zero vectors when no vertex is strictly inside. object_a and object_b
-/// are left for the caller. Thread-safe (pure function).
+/// and its closest surface point (each on its own object), direction = the unit vector of
+/// point_a - point_b; depth 0 and zero vectors when no vertex is strictly inside. object_a and
+/// object_b are left for the caller. Thread-safe (pure function).
 Penetration MeasurePenetration(const WorldObjectView& a, bool a_closed, const WorldObjectView& b,
                                bool b_closed);
 
