@@ -58,9 +58,9 @@ int main(int argc, char** argv) {
       }
       auto result = client.Step(request);
       if (!result) return Fail("step", result.error());
-      const auto us = std::chrono::duration<double, std::micro>(
-                          std::chrono::steady_clock::now() - start)
-                          .count();
+      const auto us =
+          std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start)
+              .count();
       line += std::to_string(us) + " " + std::to_string(result->contacts.size()) + " ";
     }
     std::printf("%s\n", line.c_str());

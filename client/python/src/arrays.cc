@@ -13,8 +13,7 @@ namespace {
 
 std::string Describe(const py::array& a) {
   std::string shape = "(";
-  for (py::ssize_t i = 0; i < a.ndim(); ++i)
-    shape += (i ? ", " : "") + std::to_string(a.shape(i));
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(a.shape(i));
   if (a.ndim() == 1) shape += ",";
   return std::string(py::str(a.dtype())) + " array of shape " + shape + ")";
 }
@@ -23,8 +22,8 @@ std::string Describe(const py::array& a) {
 // three packed elements, aligned for T.
 template <typename T>
 py::array CheckRows3(const py::handle& handle, const char* argument, const char* dtype_name) {
-  const std::string expected = std::string("expected a C-contiguous numpy ") + dtype_name +
-                               " array of shape (N, 3)";
+  const std::string expected =
+      std::string("expected a C-contiguous numpy ") + dtype_name + " array of shape (N, 3)";
   if (!py::isinstance<py::array>(handle)) {
     ThrowArgument(argument, expected + ", got " +
                                 std::string(py::str(py::type::handle_of(handle).attr("__name__"))) +
@@ -37,7 +36,9 @@ py::array CheckRows3(const py::handle& handle, const char* argument, const char*
                                 " (never converted: numpy.ascontiguousarray(x, dtype=numpy." +
                                 dtype_name + ") makes the copy explicit)");
   }
-  if (a.ndim() != 2 || a.shape(1) != 3) ThrowArgument(argument, expected + ", got a " + Describe(a));
+  if (a.ndim() != 2 || a.shape(1) != 3)
+    ThrowArgument(argument, expected + ", got a " + Describe(a));
+  if (a.shape(0) == 0) return a;  // nothing is read: any strides and address do
   const auto elem = static_cast<py::ssize_t>(sizeof(T));
   const bool rows_packed = a.shape(0) <= 1 || a.strides(0) == 3 * elem;
   if (!rows_packed || a.strides(1) != elem ||
@@ -51,10 +52,11 @@ py::array CheckRows3(const py::handle& handle, const char* argument, const char*
 }  // namespace
 
 std::span<const Eigen::Vector3d> Vector3Span(const py::handle& handle, const char* argument) {
-  static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double) &&
-                    alignof(Eigen::Vector3d) == alignof(double),
-                "Vector3d is three packed doubles");
+  static_assert(
+      sizeof(Eigen::Vector3d) == 3 * sizeof(double) && alignof(Eigen::Vector3d) == alignof(double),
+      "Vector3d is three packed doubles");
   py::array a = CheckRows3<double>(handle, argument, "float64");
+  if (a.shape(0) == 0) return {};
   return {static_cast<const Eigen::Vector3d*>(a.data()), static_cast<size_t>(a.shape(0))};
 }
 

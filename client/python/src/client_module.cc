@@ -6,36 +6,48 @@
 #include <optional>
 #include <string>
 
-#include <pybind11/chrono.h>
-#include <pybind11/pybind11.h>
-#include <pybind11/stl.h>
-
 #include "arrays.h"
 #include "errors.h"
-#include "far/client/client.h"
-#include "far/io/scene_io.h"
-#include "far/model/version.h"
 #include "pose.h"
 #include "request.h"
 #include "result.h"
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "far/client/client.h"
+#include "far/io/scene_io.h"
+#include "far/model/version.h"
 
 namespace py = pybind11;
 
 namespace far::python {
 namespace {
 
-using Seconds = std::chrono::duration<double>;
+// A duration argument: seconds (an int or a float) or a datetime.timedelta; >= 0.
+std::chrono::milliseconds ToMilliseconds(const py::handle& value, const char* argument) {
+  double seconds = -1;
+  if (py::hasattr(value, "total_seconds")) {
+    seconds = value.attr("total_seconds")().cast<double>();
+  } else if ((py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)) &&
+             !py::isinstance<py::bool_>(value)) {
+    seconds = value.cast<double>();
+  } else {
+    ThrowArgument(argument, "expected seconds (a number) or a datetime.timedelta, got " +
+                                std::string(py::str(py::repr(value))));
+  }
+  if (!(seconds >= 0) || seconds > 1e9)
+    ThrowArgument(argument,
+                  "expected a duration of 0 seconds or more, got " + FormatDouble(seconds));
+  return std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000 + 0.5));
+}
 using client::Client;
 using client::ClientOptions;
 
 ClientOptions ToOptions(const std::string& daemon, const std::string& socket_path,
                         const std::string& lcm_url, const std::string& client_name,
-                        Seconds connect_timeout, Seconds hear_timeout, Seconds timeout,
-                        std::optional<std::string> record_path) {
-  auto ms = [](const char* argument, Seconds s) {
-    if (!(s.count() >= 0)) ThrowArgument(argument, "must be a duration >= 0 seconds");
-    return std::chrono::duration_cast<std::chrono::milliseconds>(s);
-  };
+                        const py::handle& connect_timeout, const py::handle& hear_timeout,
+                        const py::handle& timeout, std::optional<std::string> record_path) {
+  auto ms = [](const char* argument, const py::handle& s) { return ToMilliseconds(s, argument); };
   ClientOptions options;
   options.daemon = daemon;
   options.socket_path = socket_path;
@@ -50,12 +62,12 @@ ClientOptions ToOptions(const std::string& daemon, const std::string& socket_pat
 
 // The options of far::client::ClientOptions, by the same names; durations in seconds (a float
 // or a datetime.timedelta).
-#define FAR_PYTHON_CLIENT_OPTIONS                                                          \
-  py::kw_only(), py::arg("daemon") = std::string(far::client::kDefaultDaemonName),              \
-      py::arg("socket_path") = "", py::arg("lcm_url") = "",                                \
-      py::arg("client_name") = "far-python", py::arg("connect_timeout") = Seconds(1.0),    \
-      py::arg("hear_timeout") = Seconds(1.0), py::arg("timeout") = Seconds(60.0),          \
-      py::arg("record_path") = py::none()
+#define FAR_PYTHON_CLIENT_OPTIONS                                                         \
+  py::kw_only(), py::arg("daemon") = std::string(far::client::kDefaultDaemonName),        \
+                 py::arg("socket_path") = "", py::arg("lcm_url") = "",                    \
+                 py::arg("client_name") = "far-python", py::arg("connect_timeout") = 1.0, \
+                 py::arg("hear_timeout") = 1.0, py::arg("timeout") = 60.0,                \
+                 py::arg("record_path") = py::none()
 
 // One far::client::Client. Its rule, one thread at a time per Client, is kept by `mutex_`,
 // taken with the GIL released: Python threads may share a far.Client (their calls take turns)
@@ -121,12 +133,12 @@ class PyClient {
 py::dict StatusDict(const client::DaemonStatus& s) {
   py::list sessions;
   for (const auto& session : s.sessions) {
-    sessions.append(py::dict(
-        py::arg("id") = session.id, py::arg("uid") = session.uid,
-        py::arg("client_name") = session.client_name, py::arg("steps") = session.steps,
-        py::arg("objects") = session.objects, py::arg("triangles") = session.triangles,
-        py::arg("latency_p50_ms") = session.latency_p50_ms,
-        py::arg("latency_p99_ms") = session.latency_p99_ms));
+    sessions.append(py::dict(py::arg("id") = session.id, py::arg("uid") = session.uid,
+                             py::arg("client_name") = session.client_name,
+                             py::arg("steps") = session.steps, py::arg("objects") = session.objects,
+                             py::arg("triangles") = session.triangles,
+                             py::arg("latency_p50_ms") = session.latency_p50_ms,
+                             py::arg("latency_p99_ms") = session.latency_p99_ms));
   }
   py::dict errors;
   for (const auto& [kind, count] : s.errors_by_kind) errors[py::str(kind)] = count;
@@ -173,11 +185,11 @@ connect_timeout, hear_timeout, timeout (seconds or datetime.timedelta), record_p
 Every wait (connect, step, close, status) runs with the GIL released. Errors: far.Error.)doc")
       .def(py::init([](const std::string& daemon, const std::string& socket_path,
                        const std::string& lcm_url, const std::string& client_name,
-                       Seconds connect_timeout, Seconds hear_timeout, Seconds timeout,
-                       std::optional<std::string> record_path) {
-             return std::make_unique<PyClient>(ToOptions(daemon, socket_path, lcm_url,
-                                                         client_name, connect_timeout,
-                                                         hear_timeout, timeout, record_path));
+                       const py::handle& connect_timeout, const py::handle& hear_timeout,
+                       const py::handle& timeout, std::optional<std::string> record_path) {
+             return std::make_unique<PyClient>(ToOptions(daemon, socket_path, lcm_url, client_name,
+                                                         connect_timeout, hear_timeout, timeout,
+                                                         record_path));
            }),
            FAR_PYTHON_CLIENT_OPTIONS)
       .def("add_object", &PyClient::AddObject, py::arg("id"), py::arg("vertices"),
@@ -217,8 +229,7 @@ Every wait (connect, step, close, status) runs with the GIL released. Errors: fa
           FAR_PYTHON_STEP_ARGS,
           "Runs one step and waits for the reply (GIL released): a far.StepResult. The "
           "options are far-client collide's.")
-      .def("close",
-           [](PyClient& self) { Check(self.Locked([](Client& c) { return c.Close(); })); })
+      .def("close", [](PyClient& self) { Check(self.Locked([](Client& c) { return c.Close(); })); })
       .def_property_readonly("session_id",
                              [](PyClient& self) { return self.client().session_id(); })
       .def_property_readonly("recording_path",
@@ -231,9 +242,9 @@ Every wait (connect, step, close, status) runs with the GIL released. Errors: fa
            })
       .def_static(
           "status",
-          [](const std::string& daemon, const std::string& socket_path,
-             const std::string& lcm_url, const std::string& client_name,
-             Seconds connect_timeout, Seconds hear_timeout, Seconds timeout,
+          [](const std::string& daemon, const std::string& socket_path, const std::string& lcm_url,
+             const std::string& client_name, const py::handle& connect_timeout,
+             const py::handle& hear_timeout, const py::handle& timeout,
              std::optional<std::string> record_path) {
             const auto options = ToOptions(daemon, socket_path, lcm_url, client_name,
                                            connect_timeout, hear_timeout, timeout, record_path);

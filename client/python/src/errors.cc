@@ -14,8 +14,8 @@ void ThrowNamed(const char* class_name, const std::string& message) {
 
 void Throw(const Error& error) {
   py::object by_code = py::module_::import("far._errors").attr("BY_CODE");
-  py::object cls = by_code.attr("get")(ToString(error.code),
-                                       py::module_::import("far._errors").attr("Error"));
+  py::object cls =
+      by_code.attr("get")(ToString(error.code), py::module_::import("far._errors").attr("Error"));
   PyErr_SetString(cls.ptr(), error.message.c_str());
   throw py::error_already_set();
 }

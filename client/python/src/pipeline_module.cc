@@ -7,16 +7,16 @@
 #include <string>
 #include <thread>
 
-#include <pybind11/pybind11.h>
-#include <pybind11/stl.h>
-
 #include "arrays.h"
 #include "errors.h"
-#include "far/io/scene_io.h"
-#include "far/pipeline/pipeline.h"
 #include "pose.h"
 #include "request.h"
 #include "result.h"
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "far/io/scene_io.h"
+#include "far/pipeline/pipeline.h"
 
 namespace py = pybind11;
 
@@ -127,8 +127,8 @@ PYBIND11_MODULE(_pipeline, m) {
 The FAR step pipeline in this process (far::Pipeline): one scene, a GL context (unless
 use_gl=False: CPU methods only) and a CPU pool. The same object, pose, vertex and step API as
 far.Client. Use it only on the thread that made it (far.WrongThreadError otherwise).)doc")
-      .def(py::init([](const std::string& platform, int gpu_device, int num_threads,
-                       int cpu_cores, bool use_gl) {
+      .def(py::init([](const std::string& platform, int gpu_device, int num_threads, int cpu_cores,
+                       bool use_gl) {
              return std::make_unique<PyPipeline>(
                  ToPipelineOptions(platform, gpu_device, num_threads, cpu_cores, use_gl));
            }),
@@ -140,8 +140,7 @@ far.Client. Use it only on the thread that made it (far.WrongThreadError otherwi
            py::arg("rotation_wxyz") = py::make_tuple(1.0, 0.0, 0.0, 0.0))
       .def(
           "remove_object",
-          [](PyPipeline& self, uint32_t id) { Check(self.Get().RemoveObject(id)); },
-          py::arg("id"))
+          [](PyPipeline& self, uint32_t id) { Check(self.Get().RemoveObject(id)); }, py::arg("id"))
       .def(
           "set_pose",
           [](PyPipeline& self, uint32_t id, const py::handle& translation,
@@ -162,10 +161,12 @@ far.Client. Use it only on the thread that made it (far.WrongThreadError otherwi
                                            subobject_size, distance, output, geometry));
           },
           FAR_PYTHON_STEP_ARGS)
-      .def_property_readonly("num_objects", [](PyPipeline& self) { return self.Get().num_objects(); })
+      .def_property_readonly("num_objects",
+                             [](PyPipeline& self) { return self.Get().num_objects(); })
       .def_property_readonly("num_triangles",
                              [](PyPipeline& self) { return self.Get().num_triangles(); })
-      .def_property_readonly("cpu_threads", [](PyPipeline& self) { return self.Get().cpu_threads(); })
+      .def_property_readonly("cpu_threads",
+                             [](PyPipeline& self) { return self.Get().cpu_threads(); })
       .def_property_readonly("gl_renderer",
                              [](PyPipeline& self) { return self.Get().gl_renderer(); });
 }

@@ -2,9 +2,8 @@
 
 #include <array>
 
-#include <pybind11/numpy.h>
-
 #include "errors.h"
+#include <pybind11/numpy.h>
 
 namespace py = pybind11;
 
@@ -17,8 +16,8 @@ std::array<double, N> Numbers(const py::handle& value, const char* argument) {
   if (py::isinstance<py::array>(value)) {
     py::array a = py::reinterpret_borrow<py::array>(value);
     if (!a.dtype().equal(py::dtype::of<double>()))
-      ThrowArgument(argument, expected + " as float64, got a " +
-                                  std::string(py::str(a.dtype())) + " array (never converted)");
+      ThrowArgument(argument, expected + " as float64, got a " + std::string(py::str(a.dtype())) +
+                                  " array (never converted)");
     if (a.ndim() != 1 || a.shape(0) != static_cast<py::ssize_t>(N))
       ThrowArgument(argument, expected + ", got an array of " + std::to_string(a.size()) +
                                   " elements in " + std::to_string(a.ndim()) + " dimensions");

@@ -4,8 +4,8 @@
 
 namespace far::python {
 
-StepRequest ToStepRequest(const std::string& method, const std::string& mechanism,
-                          int resolution, const std::string& depth_format, int subobject_size,
+StepRequest ToStepRequest(const std::string& method, const std::string& mechanism, int resolution,
+                          const std::string& depth_format, int subobject_size,
                           std::optional<double> distance, std::optional<std::string> output,
                           bool geometry) {
   StepRequest request;

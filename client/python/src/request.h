@@ -14,17 +14,17 @@ namespace far::python {
 /// Checks the names and CheckStepRequest; errors (far.InvalidArgumentError) start with the
 /// argument ("method: unknown 'x'; ...", "resolution: 5 is outside [8, 8192]").
 /// output None: "contacts", or "distance" when a distance is given (as far-client).
-StepRequest ToStepRequest(const std::string& method, const std::string& mechanism,
-                          int resolution, const std::string& depth_format, int subobject_size,
+StepRequest ToStepRequest(const std::string& method, const std::string& mechanism, int resolution,
+                          const std::string& depth_format, int subobject_size,
                           std::optional<double> distance, std::optional<std::string> output,
                           bool geometry);
 
 /// Adds the step's keyword arguments (after `*`) to a pybind11 method definition.
-#define FAR_PYTHON_STEP_ARGS                                                                \
-  pybind11::kw_only(), pybind11::arg("method") = "auto",                                   \
-      pybind11::arg("mechanism") = "id-buffer", pybind11::arg("resolution") = 1024,         \
-      pybind11::arg("depth_format") = "depth24", pybind11::arg("subobject_size") = 1,       \
-      pybind11::arg("distance") = pybind11::none(), pybind11::arg("output") = pybind11::none(), \
-      pybind11::arg("geometry") = false
+#define FAR_PYTHON_STEP_ARGS                                                             \
+  pybind11::kw_only(),                                                                   \
+      pybind11::arg("method") = "auto", pybind11::arg("mechanism") = "id-buffer",        \
+      pybind11::arg("resolution") = 1024, pybind11::arg("depth_format") = "depth24",     \
+      pybind11::arg("subobject_size") = 1, pybind11::arg("distance") = pybind11::none(), \
+      pybind11::arg("output") = pybind11::none(), pybind11::arg("geometry") = false
 
 }  // namespace far::python
