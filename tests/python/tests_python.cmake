@@ -18,3 +18,12 @@ far_add_python_test(test_arrays.py unit)
 far_add_python_test(test_pipeline.py gpu)
 far_add_python_test(test_client.py integration)
 far_add_python_test(test_threads.py integration)
+
+# The python3-far .deb beside far's (deploy/debian/python3-far.cpack.in), unpacked into a
+# scratch root and used from there with the packaged daemon. In a network namespace (LCM).
+add_test(NAME PythonPackageTest.DebUnpacksBesideFarAndStepsAScene
+         COMMAND ${PROJECT_SOURCE_DIR}/deploy/netns-run.sh
+                 ${CMAKE_CURRENT_SOURCE_DIR}/python/package_test.sh ${PROJECT_BINARY_DIR}
+                 ${PROJECT_SOURCE_DIR} ${PROJECT_VERSION})
+set_tests_properties(PythonPackageTest.DebUnpacksBesideFarAndStepsAScene PROPERTIES
+                     LABELS "integration;package;python" TIMEOUT 600)
