@@ -20,6 +20,9 @@ packages=(
   liblcm-bin libglib2.0-dev patch libboost-dev libsodium-dev
   # files (far-snapshot writes PNG through libpng), command lines, logs
   nlohmann-json3-dev libpng-dev libcli11-dev libspdlog-dev
+  # the Python package `far` (client/python, docs/python.md): pybind11 and Debian's python3
+  # with NumPy; pytest runs its tests
+  pybind11-dev python3-dev python3-numpy python3-pytest
   # tests, benchmarks, plots
   libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
   # private network namespaces for the LCM (udpm) tests
