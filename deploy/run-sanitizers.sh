@@ -7,7 +7,8 @@
 #   tsan  build/ci-tsan: ThreadSanitizer. The protocol, server and pairs unit tests (the last:
 #         the CPU pool and the stages that run on it) and the integration tests of the daemon's
 #         threads (sessions opening and closing, dispatch, hostile clients writing shared
-#         memory while the daemon reads it).
+#         memory while the daemon reads it, one process stepping many sessions from many
+#         threads).
 #   bash deploy/run-sanitizers.sh            # both
 #   bash deploy/run-sanitizers.sh asan       # one
 # Assumes deploy/install-deps.sh has run. Prints each stage's wall and CPU time.
@@ -29,7 +30,7 @@ asan_unit_targets=(far_protocol_test far_server_test far_io_test far_model_test 
 # error path when its multicast group has no route (a use-after-free fixed in far's LCM patch).
 asan_integration='^(BadInputTest|LimitsTest|LcmForgedDatagramTest|LcmRouteErrorTest)\.'
 tsan_unit_targets=(far_protocol_test far_server_test far_pairs_test far-client far-snapshot)
-tsan_integration='^(SessionLifetimeTest|DispatchTest|BadInputTest|LimitsTest)\.'
+tsan_integration='^(SessionLifetimeTest|DispatchTest|BadInputTest|LimitsTest|ManyThreadsTest)\.'
 
 configure() {
   cmake --preset "$1" >/dev/null

@@ -86,8 +86,12 @@ struct Client::Impl {
   int64_t session_id = 0;
   std::string request_channel, reply_channel;
   std::unique_ptr<protocol::ShmSegment> segment;
-  std::unique_ptr<protocol::UpdateWriter> updates;
-  std::unique_ptr<protocol::RingReader> replies;  // receive thread only
+  // The update ring's writer: one record at a time (update_mutex), from any caller's thread.
+  // A step reads committed_sequence (under send_mutex) instead of the writer, so that it never
+  // waits for a write that waits for room in a full ring, which only a step can make.
+  std::mutex update_mutex;
+  std::unique_ptr<protocol::UpdateWriter> updates;  // under update_mutex
+  std::unique_ptr<protocol::RingReader> replies;    // receive thread only
   protocol::SessionKey key{};
   int64_t last_sealed_id = 0;  // receive thread only: the daemon's sequence, strictly growing
 
@@ -97,9 +101,12 @@ struct Client::Impl {
   std::string daemon_lcm_url;        // the one the daemon serves
   bool not_heard = false;            // the daemon answered no probe (Listen)
 
+  // Lock order: update_mutex, then send_mutex, then mutex (none is held while user code runs,
+  // but on_progress, which runs on the receive thread with none held).
   std::mutex send_mutex;  // request ids are assigned and published in one order
   int64_t next_request_id = 1;
   int64_t next_step_id = 0;
+  uint64_t committed_sequence = 0;  // the last update record written whole (WriteUpdate)
 
   std::mutex mutex;  // pending steps, the probe and the closed state
   std::condition_variable heard_probe;
@@ -118,6 +125,7 @@ struct Client::Impl {
   std::optional<Error> closed;         // set when the session ended
 
   std::thread receiver;
+  std::thread::id receiving_thread;  // receiver's, set once before Connect returns
   std::atomic<bool> stopping{false};
   std::unique_ptr<internal::SessionRecorder> recorder;  // null: not recording
 
@@ -198,10 +206,38 @@ struct Client::Impl {
     }
   }
 
-  int64_t NextStepId() {
-    std::lock_guard lock(send_mutex);
-    return next_step_id;
+  // Writes update records with `write` (one thread at a time), then makes them part of the next
+  // step: the records' sequence and the step that commits them are read together, under
+  // send_mutex, so that a step sent meanwhile by another thread either includes a record or
+  // leaves it to the next, and the recording says which. `record(sequence, step_id)` records
+  // a record written (in ring order: still under update_mutex).
+  template <typename Write, typename Record>
+  auto WriteUpdate(Write&& write, Record&& record) {
+    std::lock_guard update_lock(update_mutex);
+    auto written = write(*updates);
+    int64_t step_id = 0;
+    {
+      std::lock_guard send_lock(send_mutex);
+      committed_sequence = updates->last_sequence();
+      step_id = next_step_id;
+    }
+    if (written && recorder) record(written->sequence, step_id);
+    return written;
   }
+
+  // Refuses a call that would wait for the receive thread from the receive thread itself (an
+  // on_progress callback): it would wait out its timeout.
+  Result<void> CheckNotReceiving(const char* what) const {
+    if (std::this_thread::get_id() != receiving_thread) return {};
+    return MakeError(ErrorCode::kInvalidArgument,
+                     std::string(what) +
+                         " called from an on_progress callback of the same client: the callback "
+                         "runs on the thread that receives the replies (use StepAsync)");
+  }
+
+  // Sends a step (StepAsync); its step id, and the future of its reply.
+  std::pair<int64_t, std::future<Result<StepResult>>> Send(const StepRequest& request,
+                                                           ProgressCallback on_progress);
 
   // Records how a pending step ended without a reply of its own (call with `mutex` held).
   void RecordError(int64_t step_id, const Pending& p, const Error& error) {
@@ -428,6 +464,7 @@ Result<void> Client::Impl::Listen() {
   bus->Subscribe(reply_channel,
                  [this](std::string_view, std::span<const uint8_t> b) { OnReply(b); });
   receiver = std::thread([this] { Receive(); });
+  receiving_thread = receiver.get_id();
   // The daemon must hear this client's steps, and the client its replies: a probe proves both
   // before the first step, instead of a first step that waits out its timeout.
   const auto start = Clock::now();
@@ -508,17 +545,19 @@ Result<void> Client::AddObject(uint32_t id, const Mesh& mesh, Motion motion, con
   if (auto ok = c.CheckOpen(); !ok) return ok;
   const Result<Pose> unit = UnitPose(X_WO, "add_object", id);
   if (!unit) return unit.error();
-  auto written = c.updates->AddObject(id, mesh, motion, *unit, kRingWait);
-  if (written && c.recorder) {
-    c.recorder->AddObject(written->sequence, c.NextStepId(), id, mesh, motion, *unit);
-  }
+  auto written = c.WriteUpdate(
+      [&](protocol::UpdateWriter& w) { return w.AddObject(id, mesh, motion, *unit, kRingWait); },
+      [&](uint64_t sequence, int64_t step_id) {
+        c.recorder->AddObject(sequence, step_id, id, mesh, motion, *unit);
+      });
   return Written(written, "add_object");
 }
 Result<void> Client::RemoveObject(uint32_t id) {
   Impl& c = *impl_;
   if (auto ok = c.CheckOpen(); !ok) return ok;
-  auto written = c.updates->RemoveObject(id, kRingWait);
-  if (written && c.recorder) c.recorder->RemoveObject(written->sequence, c.NextStepId(), id);
+  auto written = c.WriteUpdate(
+      [&](protocol::UpdateWriter& w) { return w.RemoveObject(id, kRingWait); },
+      [&](uint64_t sequence, int64_t step_id) { c.recorder->RemoveObject(sequence, step_id, id); });
   return Written(written, "remove_object");
 }
 Result<void> Client::SetPose(uint32_t id, const Pose& X_WO) {
@@ -526,17 +565,21 @@ Result<void> Client::SetPose(uint32_t id, const Pose& X_WO) {
   if (auto ok = c.CheckOpen(); !ok) return ok;
   const Result<Pose> unit = UnitPose(X_WO, "set_pose", id);
   if (!unit) return unit.error();
-  auto written = c.updates->SetPose(id, *unit, kRingWait);
-  if (written && c.recorder) c.recorder->SetPose(written->sequence, c.NextStepId(), id, *unit);
+  auto written =
+      c.WriteUpdate([&](protocol::UpdateWriter& w) { return w.SetPose(id, *unit, kRingWait); },
+                    [&](uint64_t sequence, int64_t step_id) {
+                      c.recorder->SetPose(sequence, step_id, id, *unit);
+                    });
   return Written(written, "set_pose");
 }
 Result<void> Client::SetVertices(uint32_t id, std::span<const Eigen::Vector3d> p_MV) {
   Impl& c = *impl_;
   if (auto ok = c.CheckOpen(); !ok) return ok;
-  auto written = c.updates->SetVertices(id, p_MV, kRingWait);
-  if (written && c.recorder) {
-    c.recorder->SetVertices(written->sequence, c.NextStepId(), id, p_MV);
-  }
+  auto written =
+      c.WriteUpdate([&](protocol::UpdateWriter& w) { return w.SetVertices(id, p_MV, kRingWait); },
+                    [&](uint64_t sequence, int64_t step_id) {
+                      c.recorder->SetVertices(sequence, step_id, id, p_MV);
+                    });
   return Written(written, "set_vertices");
 }
 
@@ -563,25 +606,26 @@ Result<void> Client::ApplyFrame(const FrameUpdate& frame) {
   return {};
 }
 
-std::future<Result<StepResult>> Client::StepAsync(const StepRequest& request,
-                                                  ProgressCallback on_progress) {
-  Impl& c = *impl_;
+std::pair<int64_t, std::future<Result<StepResult>>> Client::Impl::Send(
+    const StepRequest& request, ProgressCallback on_progress) {
   std::promise<Result<StepResult>> promise;
   auto future = promise.get_future();
-  if (auto ok = c.CheckOpen(); !ok) {
-    promise.set_value(ok.error());
-    return future;
-  }
-  std::lock_guard send_lock(c.send_mutex);
-  const int64_t step_id = c.next_step_id++;
+  std::lock_guard send_lock(send_mutex);
+  const int64_t step_id = next_step_id++;
   const auto timeout_ms = static_cast<int32_t>(
-      std::min<int64_t>(c.options.timeout.count(), std::numeric_limits<int32_t>::max()));
-  auto message =
-      protocol::MakeStepRequest(c.session_id, c.next_request_id++, step_id,
-                                c.updates->last_sequence(), RequestToSend(request), timeout_ms);
+      std::min<int64_t>(options.timeout.count(), std::numeric_limits<int32_t>::max()));
+  auto message = protocol::MakeStepRequest(session_id, next_request_id++, step_id,
+                                           committed_sequence, RequestToSend(request), timeout_ms);
   {
-    std::lock_guard lock(c.mutex);
-    Impl::Pending& p = c.pending[step_id];
+    // Checked where the step becomes pending: a Close on another thread either fails it with
+    // the rest (FailAll) or has closed the session already, and the step fails now instead of
+    // waiting out its timeout for a reply no thread receives.
+    std::lock_guard lock(mutex);
+    if (closed) {
+      promise.set_value(*closed);
+      return {step_id, std::move(future)};
+    }
+    Pending& p = pending[step_id];
     p.message = message;
     p.promise = std::move(promise);
     p.on_progress = std::move(on_progress);
@@ -589,17 +633,19 @@ std::future<Result<StepResult>> Client::StepAsync(const StepRequest& request,
   }
   // Recorded before it is sent, so that the request comes before its reply in the file; a
   // request sent again is the same step, recorded once.
-  if (c.recorder) c.recorder->Request(message);
-  if (auto sent = c.Publish(message, "request"); !sent) c.Fail(step_id, sent.error());
-  return future;
+  if (recorder) recorder->Request(message);
+  if (auto sent = Publish(message, "request"); !sent) Fail(step_id, sent.error());
+  return {step_id, std::move(future)};
+}
+
+std::future<Result<StepResult>> Client::StepAsync(const StepRequest& request,
+                                                  ProgressCallback on_progress) {
+  return impl_->Send(request, std::move(on_progress)).second;
 }
 
 Result<StepResult> Client::Step(const StepRequest& request, const ProgressCallback& on_progress) {
-  const int64_t step_id = [&] {
-    std::lock_guard lock(impl_->send_mutex);
-    return impl_->next_step_id;
-  }();
-  auto future = StepAsync(request, on_progress);
+  if (auto ok = impl_->CheckNotReceiving("Step"); !ok) return ok.error();
+  auto [step_id, future] = impl_->Send(request, on_progress);
   if (future.wait_for(impl_->options.timeout) == std::future_status::ready) return future.get();
   const Error error = MakeError(ErrorCode::kTimeout, impl_->Unanswered(step_id));
   // Answered between the wait and now: the answer stands.
@@ -609,6 +655,7 @@ Result<StepResult> Client::Step(const StepRequest& request, const ProgressCallba
 
 Result<void> Client::Close() {
   Impl& c = *impl_;
+  if (auto ok = c.CheckNotReceiving("Close"); !ok) return ok;
   if (c.stopping.exchange(true)) return {};
   if (c.receiver.joinable()) c.receiver.join();
   // Closing the connection ends the session: the daemon frees it at once.
@@ -625,7 +672,16 @@ std::string Client::recording_path() const {
 
 namespace internal {
 
-protocol::UpdateWriter& ClientAccess::Updates(Client& client) { return *client.impl_->updates; }
+Result<void> ClientAccess::WriteUpdates(
+    Client& client, const std::function<Result<void>(protocol::UpdateWriter&)>& write) {
+  Client::Impl& c = *client.impl_;
+  if (auto ok = c.CheckOpen(); !ok) return ok;
+  std::lock_guard update_lock(c.update_mutex);
+  auto written = write(*c.updates);
+  std::lock_guard send_lock(c.send_mutex);
+  c.committed_sequence = c.updates->last_sequence();
+  return written;
+}
 
 void SetDatagramLoss(std::function<bool(const Datagram&)> lose) {
   std::lock_guard lock(g_loss_mutex);

@@ -12,7 +12,7 @@ endif()
 
 # The support files, and the test files. CI's sanitizer trees run only the hostile-client and
 # thread subsets of deploy/run-sanitizers.sh (BadInputTest, LimitsTest, LcmForgedDatagramTest,
-# LcmRouteErrorTest, SessionLifetimeTest, DispatchTest): with FAR_INTEGRATION_SANITIZER_SUBSET
+# LcmRouteErrorTest, SessionLifetimeTest, DispatchTest, ManyThreadsTest): with FAR_INTEGRATION_SANITIZER_SUBSET
 # (their presets) they build only those files, which cuts a few minutes of CI's 2 cores.
 option(FAR_INTEGRATION_SANITIZER_SUBSET "build only the integration tests CI runs under sanitizers" OFF)
 set(far_integration_support
@@ -29,6 +29,7 @@ set(far_integration_sanitizer_subset
   integration/lcm_route_error_test.cc
   integration/session_lifetime_test.cc
   integration/dispatch_test.cc
+  integration/many_threads_test.cc
 )
 set(far_integration_tests
   integration/end_to_end_test.cc

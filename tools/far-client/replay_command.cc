@@ -35,23 +35,27 @@ int Error2(const Error& error) {
 // Writes the records step `step` commits into the session's ring, as recorded.
 Result<void> WriteRecords(protocol::LcmLogReader& log, const protocol::RecordedStep& step,
                           client::Client& session) {
-  protocol::UpdateWriter& writer = client::internal::ClientAccess::Updates(session);
-  for (uint64_t offset : step.ring_record_offsets) {
-    auto recorded = protocol::ReadRecordedUpdate(log, offset);
-    if (!recorded) return recorded.error();
-    auto written = protocol::WriteRecordedUpdate(writer, recorded->update, kRingWait);
-    if (!written) {
-      return MakeError(written.error().code, "ring record " + std::to_string(recorded->sequence) +
-                                                 ": " + written.error().message);
-    }
-  }
-  if (writer.last_sequence() != step.command.ring_commit_sequence) {
-    return MakeError(ErrorCode::kInternal, "the ring holds records up to " +
-                                               std::to_string(writer.last_sequence()) +
-                                               ", the recorded step committed " +
-                                               std::to_string(step.command.ring_commit_sequence));
-  }
-  return {};
+  return client::internal::ClientAccess::WriteUpdates(
+      session, [&](protocol::UpdateWriter& writer) -> Result<void> {
+        for (uint64_t offset : step.ring_record_offsets) {
+          auto recorded = protocol::ReadRecordedUpdate(log, offset);
+          if (!recorded) return recorded.error();
+          auto written = protocol::WriteRecordedUpdate(writer, recorded->update, kRingWait);
+          if (!written) {
+            return MakeError(written.error().code, "ring record " +
+                                                       std::to_string(recorded->sequence) + ": " +
+                                                       written.error().message);
+          }
+        }
+        if (writer.last_sequence() != step.command.ring_commit_sequence) {
+          return MakeError(ErrorCode::kInternal,
+                           "the ring holds records up to " +
+                               std::to_string(writer.last_sequence()) +
+                               ", the recorded step committed " +
+                               std::to_string(step.command.ring_commit_sequence));
+        }
+        return {};
+      });
 }
 
 void PrintHeader(const ReplayFlags& flags, const protocol::RecordingIndex& index,

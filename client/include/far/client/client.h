@@ -98,9 +98,33 @@ struct DaemonStatus {
 /// it does), a shared-memory ring for mesh updates, and LCM for step requests and replies.
 /// Updates (AddObject, ...) are written to the ring at once and take effect at the next Step.
 ///
-/// Thread safety: one thread at a time per Client (a background thread of its own receives
-/// replies and watches the daemon). Errors are far::Error: kUnavailable when no daemon runs or
-/// it went away, kTimeout when a reply does not come in time, the daemon's own error otherwise.
+/// Threads (docs/client.md says why, and how one process steps many sessions):
+///  - One Client may be used from several threads at once: every call but the destructor is
+///    thread-safe. Updates (AddObject, ..., ApplyFrame) are written to the ring one record at a
+///    time, in the order the calls take the client's update lock; a step includes every record
+///    written whole before it was sent, and a record written while it is being sent goes with
+///    it or with the next step (order steps and updates across threads yourself when it
+///    matters: the session has one scene). Concurrent Step and StepAsync calls each get their
+///    own step, answered in the order they were sent (one session's steps run one at a time).
+///    LoadScene and ApplyFrame are not atomic: another thread's step may see part of them.
+///  - Close may be called from any thread while others step: their steps fail at once with
+///    kUnavailable ("the session is closed"), and so does every later call. The destructor
+///    must not run while another thread is inside a call of the same Client.
+///  - on_progress runs on the client's receiving thread. It must not block, and must not call
+///    Step or Close on the same Client (they would wait for that very thread: both return
+///    kInvalidArgument instead); StepAsync and the update calls are allowed.
+///  - Distinct Clients share no mutable state: each has its own connection, segment, LCM
+///    instance and receiving thread, so N threads each stepping their own Client (their own
+///    session) run side by side, in one process or several. Process-wide state, all
+///    initialized thread-safely on first use: libsodium (sodium_init, once), one SIGBUS handler
+///    for the shared-memory segments (installed once; a SIGBUS outside a segment goes to the
+///    handler that was there before), the loss seam of the tests. Connect reads the
+///    environment (FAR_RECORD, FAR_SOCKET_DIR, XDG_RUNTIME_DIR, HOME): do not setenv while
+///    another thread connects. The library logs nothing and changes no signal disposition but
+///    SIGBUS's (sends use MSG_NOSIGNAL: no SIGPIPE).
+///
+/// Errors are far::Error: kUnavailable when no daemon runs or it went away, kTimeout when a
+/// reply does not come in time, the daemon's own error otherwise.
 class Client {
  public:
   /// Opens a session, retrying with backoff for options.connect_timeout while no daemon

@@ -15,8 +15,11 @@ namespace far::client::internal {
 /// Replay writes recorded ring records into a session's update ring bit for bit (the public
 /// calls normalize poses, which may change the last bit of a recorded quaternion).
 struct ClientAccess {
-  /// The session's update ring; aliased, lives as long as `client`.
-  static protocol::UpdateWriter& Updates(Client& client);
+  /// Runs `write` on the session's update ring, as the update calls do: under the client's
+  /// update lock (other threads' updates wait), and what it wrote is part of the next step.
+  /// Errors: kUnavailable when the session is closed, else those `write` returns.
+  static Result<void> WriteUpdates(
+      Client& client, const std::function<Result<void>(protocol::UpdateWriter&)>& write);
 };
 
 /// An LCM message of a session as the loss seam sees it: one the client is about to publish,
