@@ -69,9 +69,10 @@ ClientOptions ToOptions(const std::string& daemon, const std::string& socket_pat
                  py::arg("hear_timeout") = 1.0, py::arg("timeout") = 60.0,                \
                  py::arg("record_path") = py::none()
 
-// One far::client::Client. Its rule, one thread at a time per Client, is kept by `mutex_`,
-// taken with the GIL released: Python threads may share a far.Client (their calls take turns)
-// while other threads run Python during the waits.
+// One far::client::Client. Every call of it is thread-safe (client.h), so Python threads may
+// share a far.Client without a lock of ours. Every call runs with the GIL released (an update
+// may wait for room in the ring), so other threads run Python meanwhile. (Keeping the GIL over
+// a pose's ring write measured no faster in the step benchmark, bench/RESULTS.md.)
 class PyClient {
  public:
   explicit PyClient(const ClientOptions& options) {
@@ -82,11 +83,10 @@ class PyClient {
     client_ = Unwrap(std::move(connected));
   }
 
-  // Runs `call` on the client with the GIL released and the client's turn taken.
+  // Runs `call` on the client with the GIL released.
   template <typename Call>
-  auto Locked(Call&& call) {
+  auto Released(Call&& call) {
     py::gil_scoped_release release;
-    std::lock_guard lock(mutex_);
     return call(*client_);
   }
 
@@ -99,18 +99,18 @@ class PyClient {
     mesh.triangles = Triangles(triangles, "triangles");
     const Motion m = ToMotion(motion);
     const Pose pose = ToPose(translation, rotation_wxyz);
-    Check(Locked([&](Client& c) { return c.AddObject(id, mesh, m, pose); }));
+    Check(Released([&](Client& c) { return c.AddObject(id, mesh, m, pose); }));
   }
 
   void SetVertices(uint32_t id, const py::handle& vertices) {
     // No copy: the span is the array's memory, read straight into the shared-memory ring.
     // `vertices` (a reference held by this call's arguments) outlives the call.
     const auto p_MV = Vector3Span(vertices, "vertices");
-    Check(Locked([&](Client& c) { return c.SetVertices(id, p_MV); }));
+    Check(Released([&](Client& c) { return c.SetVertices(id, p_MV); }));
   }
 
   py::object Step(const StepRequest& request) {
-    Result<StepResult> result = Locked([&](Client& c) { return c.Step(request); });
+    Result<StepResult> result = Released([&](Client& c) { return c.Step(request); });
     return ToPython(Unwrap(std::move(result)));
   }
 
@@ -120,14 +120,13 @@ class PyClient {
       return ReadScene(path);
     }();
     const Scene loaded = Unwrap(std::move(scene));
-    Check(Locked([&](Client& c) { return c.LoadScene(loaded); }));
+    Check(Released([&](Client& c) { return c.LoadScene(loaded); }));
   }
 
   Client& client() { return *client_; }
 
  private:
   std::unique_ptr<Client> client_;
-  std::mutex mutex_;
 };
 
 py::dict StatusDict(const client::DaemonStatus& s) {
@@ -200,16 +199,13 @@ Every wait (connect, step, close, status) runs with the GIL released. Errors: fa
            "motion 'static', 'rigid' or 'deformable', and its pose.")
       .def(
           "remove_object",
-          [](PyClient& self, uint32_t id) {
-            Check(self.Locked([&](Client& c) { return c.RemoveObject(id); }));
-          },
-          py::arg("id"))
+          [](PyClient& self, uint32_t id) { Check(self.client().RemoveObject(id)); }, py::arg("id"))
       .def(
           "set_pose",
           [](PyClient& self, uint32_t id, const py::handle& translation,
              const py::handle& rotation_wxyz) {
             const far::Pose pose = ToPose(translation, rotation_wxyz);
-            Check(self.Locked([&](Client& c) { return c.SetPose(id, pose); }));
+            Check(self.Released([&](Client& c) { return c.SetPose(id, pose); }));
           },
           py::arg("id"), py::arg("translation"),
           py::arg("rotation_wxyz") = py::make_tuple(1.0, 0.0, 0.0, 0.0))
@@ -229,7 +225,8 @@ Every wait (connect, step, close, status) runs with the GIL released. Errors: fa
           FAR_PYTHON_STEP_ARGS,
           "Runs one step and waits for the reply (GIL released): a far.StepResult. The "
           "options are far-client collide's.")
-      .def("close", [](PyClient& self) { Check(self.Locked([](Client& c) { return c.Close(); })); })
+      .def("close",
+           [](PyClient& self) { Check(self.Released([](Client& c) { return c.Close(); })); })
       .def_property_readonly("session_id",
                              [](PyClient& self) { return self.client().session_id(); })
       .def_property_readonly("recording_path",
@@ -238,7 +235,7 @@ Every wait (connect, step, close, status) runs with the GIL released. Errors: fa
       .def("__exit__",
            [](PyClient& self, const py::args&) {
              // Close errors (the daemon already gone) do not hide the block's own exception.
-             (void)self.Locked([](Client& c) { return c.Close(); });
+             (void)self.Released([](Client& c) { return c.Close(); });
            })
       .def_static(
           "status",

@@ -25,6 +25,24 @@ py::array_t<double> Points(const Items& items, Get get) {
   return out;
 }
 
+// A class of far._result, looked up once (a step builds one StepResult: the import and the
+// attribute lookups were a measurable part of the binding's time per step). Deliberately
+// leaked: a py::object destroyed after the interpreter would crash at exit.
+py::handle ResultClass(const char* name) {
+  static py::module_* module = new py::module_(py::module_::import("far._result"));
+  return py::object(module->attr(name)).release();
+}
+
+py::handle StepResultClass() {
+  static const py::handle cls = ResultClass("StepResult");
+  return cls;
+}
+
+py::handle PenetrationsClass() {
+  static const py::handle cls = ResultClass("Penetrations");
+  return cls;
+}
+
 template <typename Pair>
 void PutPair(int64_t*& p, const Pair& c) {
   *p++ = c.object_a, *p++ = c.triangle_a, *p++ = c.object_b, *p++ = c.triangle_b;
@@ -42,12 +60,11 @@ py::object Penetrations(const std::vector<Penetration>& penetrations) {
     closed.mutable_data()[i] = p.closed;
     depth.mutable_data()[i] = p.depth;
   }
-  return py::module_::import("far._result")
-      .attr("Penetrations")(
-          py::arg("objects") = objects, py::arg("closed") = closed, py::arg("depth") = depth,
-          py::arg("direction") = Points(penetrations, [](const auto& p) { return p.direction; }),
-          py::arg("point_a") = Points(penetrations, [](const auto& p) { return p.point_a; }),
-          py::arg("point_b") = Points(penetrations, [](const auto& p) { return p.point_b; }));
+  return PenetrationsClass()(
+      py::arg("objects") = objects, py::arg("closed") = closed, py::arg("depth") = depth,
+      py::arg("direction") = Points(penetrations, [](const auto& p) { return p.direction; }),
+      py::arg("point_a") = Points(penetrations, [](const auto& p) { return p.point_a; }),
+      py::arg("point_b") = Points(penetrations, [](const auto& p) { return p.point_b; }));
 }
 
 }  // namespace
@@ -130,21 +147,20 @@ py::object ToPython(const StepResult& result) {
     }
   }
 
-  return py::module_::import("far._result")
-      .attr("StepResult")(
-          py::arg("contacts") = contacts, py::arg("distance_pairs") = distance_pairs,
-          py::arg("distances") = distances, py::arg("pcs_objects") = pcs_objects,
-          py::arg("object_pairs") = object_pairs, py::arg("pcs_primitives") = pcs_primitives,
-          py::arg("contact_point_counts") = counts, py::arg("contact_points") = points,
-          py::arg("normals_a") = Points(geometry, [](const auto& g) { return g.normal_a; }),
-          py::arg("normals_b") = Points(geometry, [](const auto& g) { return g.normal_b; }),
-          py::arg("coplanar") = coplanar,
-          py::arg("closest_points_a") =
-              Points(result.closest_points, [](const auto& c) { return c.point_a; }),
-          py::arg("closest_points_b") =
-              Points(result.closest_points, [](const auto& c) { return c.point_b; }),
-          py::arg("penetrations") = Penetrations(result.penetrations),
-          py::arg("stats") = StatsDict(result.stats));
+  return StepResultClass()(
+      py::arg("contacts") = contacts, py::arg("distance_pairs") = distance_pairs,
+      py::arg("distances") = distances, py::arg("pcs_objects") = pcs_objects,
+      py::arg("object_pairs") = object_pairs, py::arg("pcs_primitives") = pcs_primitives,
+      py::arg("contact_point_counts") = counts, py::arg("contact_points") = points,
+      py::arg("normals_a") = Points(geometry, [](const auto& g) { return g.normal_a; }),
+      py::arg("normals_b") = Points(geometry, [](const auto& g) { return g.normal_b; }),
+      py::arg("coplanar") = coplanar,
+      py::arg("closest_points_a") =
+          Points(result.closest_points, [](const auto& c) { return c.point_a; }),
+      py::arg("closest_points_b") =
+          Points(result.closest_points, [](const auto& c) { return c.point_b; }),
+      py::arg("penetrations") = Penetrations(result.penetrations),
+      py::arg("stats") = StatsDict(result.stats));
 }
 
 }  // namespace far::python
