@@ -139,18 +139,9 @@ Vector3d UnitNormal(const TrianglePoints& t) {
 void GeneralPosition(const TrianglePoints& s, const TrianglePoints& t,
                      const std::array<int, 3>& sigma, const std::array<int, 3>& tau,
                      ContactGeometry& out) {
-  const std::array<const Vector3d*, 3> sv = {&s.a, &s.b, &s.c};
-  const std::array<const Vector3d*, 3> tv = {&t.a, &t.b, &t.c};
-  const Apex apex_s = FindApex(sigma);
-  const Apex apex_t = FindApex(tau);
-  const Vector3d& v = *sv[apex_s.index];
-  const Vector3d* w1 = sv[(apex_s.index + 1) % 3];
-  const Vector3d* w2 = sv[(apex_s.index + 2) % 3];
-  const Vector3d& u = *tv[apex_t.index];
-  const Vector3d* z1 = tv[(apex_t.index + 1) % 3];
-  const Vector3d* z2 = tv[(apex_t.index + 2) % 3];
-  if (apex_t.eps < 0) std::swap(w1, w2);
-  if (apex_s.eps < 0) std::swap(z1, z2);
+  const ApexLabels l = LabelApexes(s, t, sigma, tau);
+  const Vector3d &v = *l.v, &u = *l.u;
+  const Vector3d *w1 = l.w1, *w2 = l.w2, *z1 = l.z1, *z2 = l.z2;
 
   // The lower end: k1 when it lies beyond i2 along d, else i2 (equal when the sign is 0).
   const bool lower_is_k1 = Orient3d(v, *w2, u, *z1) > 0;
@@ -159,9 +150,9 @@ void GeneralPosition(const TrianglePoints& s, const TrianglePoints& t,
   // Whether the two ends coincide: decided for the pair of points they are.
   bool single;
   if (!lower_is_k1 && !upper_is_k2) {
-    single = sigma[apex_s.index] == 0;  // i2 == i1: v lies on T's plane
+    single = sigma[l.apex_s] == 0;  // i2 == i1: v lies on T's plane
   } else if (lower_is_k1 && upper_is_k2) {
-    single = tau[apex_t.index] == 0;  // k1 == k2: u lies on S's plane
+    single = tau[l.apex_t] == 0;  // k1 == k2: u lies on S's plane
   } else if (lower_is_k1) {
     single = Orient3d(v, *w1, u, *z1) == 0;  // k1 == i1
   } else {

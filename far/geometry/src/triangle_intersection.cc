@@ -193,19 +193,8 @@ bool IntersectAfterBoxTest(const TrianglePoints& s, const TrianglePoints& t) {
   }
   // General position: both triangles non-degenerate, their planes meet in a line L that both
   // triangles touch. Compare the two intervals on L (derivation at the top of this file).
-  const std::array<const Vector3d*, 3> sv = {&s.a, &s.b, &s.c};
-  const std::array<const Vector3d*, 3> tv = {&t.a, &t.b, &t.c};
-  const Apex apex_s = FindApex(sigma);
-  const Apex apex_t = FindApex(tau);
-  const Vector3d& v = *sv[apex_s.index];
-  const Vector3d* w1 = sv[(apex_s.index + 1) % 3];
-  const Vector3d* w2 = sv[(apex_s.index + 2) % 3];
-  const Vector3d& u = *tv[apex_t.index];
-  const Vector3d* z1 = tv[(apex_t.index + 1) % 3];
-  const Vector3d* z2 = tv[(apex_t.index + 2) % 3];
-  if (apex_t.eps < 0) std::swap(w1, w2);
-  if (apex_s.eps < 0) std::swap(z1, z2);
-  return Orient3d(v, *w1, u, *z1) <= 0 && Orient3d(v, *w2, u, *z2) >= 0;
+  const ApexLabels l = LabelApexes(s, t, sigma, tau);
+  return Orient3d(*l.v, *l.w1, *l.u, *l.z1) <= 0 && Orient3d(*l.v, *l.w2, *l.u, *l.z2) >= 0;
 }
 
 }  // namespace

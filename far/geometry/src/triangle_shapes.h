@@ -129,4 +129,38 @@ inline Apex FindApex(const std::array<int, 3>& sign) {
   return Apex{0, 0};  // unreachable for valid input
 }
 
+// Guigue and Devillers' labelling of a pair in general position (triangle_intersection.cc
+// derives it): each triangle's apex (v of s, u of t) and its other two corners, ordered so that
+// both apexes have eps = +1. Then s cuts [i2, i1] and t cuts [k1, k2] from the line where the
+// planes meet, i1 on edge (v, w1), i2 on (v, w2), k1 on (u, z1), k2 on (u, z2).
+struct ApexLabels {
+  const Vector3d* v;
+  const Vector3d* w1;
+  const Vector3d* w2;
+  const Vector3d* u;
+  const Vector3d* z1;
+  const Vector3d* z2;
+  int apex_s, apex_t;  // the apexes' indices in s and t
+};
+
+// @pre sigma (s's corners against t's plane) and tau (t's against s's) are not all equal.
+inline ApexLabels LabelApexes(const TrianglePoints& s, const TrianglePoints& t,
+                              const std::array<int, 3>& sigma, const std::array<int, 3>& tau) {
+  const std::array<const Vector3d*, 3> sv = {&s.a, &s.b, &s.c};
+  const std::array<const Vector3d*, 3> tv = {&t.a, &t.b, &t.c};
+  const Apex apex_s = FindApex(sigma);
+  const Apex apex_t = FindApex(tau);
+  ApexLabels labels{sv[apex_s.index],
+                    sv[(apex_s.index + 1) % 3],
+                    sv[(apex_s.index + 2) % 3],
+                    tv[apex_t.index],
+                    tv[(apex_t.index + 1) % 3],
+                    tv[(apex_t.index + 2) % 3],
+                    apex_s.index,
+                    apex_t.index};
+  if (apex_t.eps < 0) std::swap(labels.w1, labels.w2);
+  if (apex_s.eps < 0) std::swap(labels.z1, labels.z2);
+  return labels;
+}
+
 }  // namespace far::internal

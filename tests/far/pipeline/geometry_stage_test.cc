@@ -10,23 +10,13 @@
 
 #include "far/geometry/triangle_tests.h"
 #include "far/pipeline/pipeline.h"
+#include "far/scenes/scenes.h"
 
 namespace far {
 namespace {
 
 using Eigen::Vector3d;
-
-// An axis-aligned box [lo, hi] as 12 outward-facing triangles.
-Mesh BoxMesh(const Vector3d& lo, const Vector3d& hi) {
-  Mesh mesh;
-  for (int k = 0; k < 8; ++k) {
-    mesh.p_MV.emplace_back(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(),
-                           k & 4 ? hi.z() : lo.z());
-  }
-  mesh.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                    {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  return mesh;
-}
+using scenes::BoxMesh;
 
 class GeometryStageTest : public ::testing::Test {
  protected:

@@ -21,6 +21,10 @@ std::vector<SceneObject> RandomSoup(uint64_t seed, int num_objects, int triangle
                                     double world_size, double triangle_size,
                                     const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
 
+/// A closed axis-aligned box [lo, hi]: 8 vertices (vertex k has hi's x when bit 0 of k is set,
+/// y for bit 1, z for bit 2) and 12 triangles, counterclockwise seen from outside.
+Mesh BoxMesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi);
+
 /// A closed UV sphere of radius `radius` at `center` (2 * slices * (stacks - 1) triangles).
 Mesh SphereMesh(const Eigen::Vector3d& center, double radius, int stacks, int slices);
 
