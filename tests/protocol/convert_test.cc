@@ -191,7 +191,9 @@ TEST(ConvertTest, ContactGeometryRoundTripsThroughTheWire) {
   result.contact_geometry = {point, hexagon};
   result.closest_points = {{{0, 0, 0}, {0, 0, 0.5}}, {{1, 1, 1}, {1, 1, 1 + 1e-9}}};
   Penetration closed{1, 2, true, 0.25, {0, 0, 1}, {0, 0, 1}, {0, 0, 0.75}};
-  Penetration open{2, 7, false, 0, {}, {}, {}};
+  Penetration open;  // not closed: zeros
+  open.object_a = 2;
+  open.object_b = 7;
   result.penetrations = {closed, open};
   auto reply = MakeStepReply({4, 9, 100, 55}, Output::kDistancePairs, result);
   ASSERT_TRUE(reply) << reply.error().message;
