@@ -180,6 +180,10 @@ constexpr std::array kStepReply{
     Array("level_world_max_y", 8, 73),       // 85
     Array("level_world_max_z", 8, 73),       // 86
 };
+// The pre-scanner keeps every count it reads by field index: no schema may have more fields.
+// (Protocol version 4's step_reply_t has 87; the array was 64 before, and UBSan caught the
+// scanner writing past it.)
+constexpr size_t kMaxSchemaFields = 128;
 constexpr std::array kError{
     Scalar("protocol_version", 4),
     Scalar("session_id", 8),
@@ -247,6 +251,14 @@ constexpr std::array kRingRecord{
     Count("num_indices"),           // 9
     Array("triangles", 4, 9),       // 10
 };
+static_assert(kOpenSession.size() <= kMaxSchemaFields &&
+              kOpenSessionReply.size() <= kMaxSchemaFields && kSealed.size() <= kMaxSchemaFields &&
+              kStepStatus.size() <= kMaxSchemaFields && kStepRequest.size() <= kMaxSchemaFields &&
+              kStepReply.size() <= kMaxSchemaFields && kError.size() <= kMaxSchemaFields &&
+              kStatusRequest.size() <= kMaxSchemaFields &&
+              kStatusReply.size() <= kMaxSchemaFields &&
+              kRecordingHeader.size() <= kMaxSchemaFields &&
+              kRingRecord.size() <= kMaxSchemaFields);
 
 struct TypeInfo {
   MessageType type;
@@ -421,8 +433,8 @@ class PreScanner {
   const TypeInfo& info_;
   const uint8_t* data_;
   size_t size_;
-  size_t pos_ = 8;  // after the fingerprint
-  std::array<int64_t, 64> counts_{};
+  size_t pos_ = 8;                                  // after the fingerprint
+  std::array<int64_t, kMaxSchemaFields> counts_{};  // by field index: the counts read so far
 };
 
 Result<void> PreScan(const TypeInfo& info, const uint8_t* data, size_t size) {
