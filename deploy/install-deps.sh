@@ -23,6 +23,12 @@ packages=(
   # the Python package `far` (client/python, docs/python.md): pybind11 and Debian's python3
   # with NumPy; pytest runs its tests
   pybind11-dev python3-dev python3-numpy python3-pytest
+  # metrics in Prometheus' text format (docs/cluster.md): prometheus-cpp writes and serves them,
+  # python3-prometheus-client parses them in the test
+  prometheus-cpp-dev python3-prometheus-client
+  # the one-node Slurm cluster test (tests/slurm/) and the offline check of the Kubernetes
+  # manifests against the API schema (tests/kubernetes/)
+  slurm-wlm munge python3-jsonschema python3-yaml
   # tests, benchmarks, plots
   libgtest-dev libgmock-dev libbenchmark-dev gnuplot-nox
   # private network namespaces for the LCM (udpm) tests
