@@ -3,9 +3,10 @@
 
   metrics_test.py values FAR_DAEMON FAR_CLIENT
     A daemon with --metrics-file (rewritten every second) and --metrics-port serves clients'
-    steps and a few malformed connections; once it is idle, the file and the port's body parse
-    with prometheus_client's parser, every family has HELP and TYPE, the latency quantiles are
-    ordered, and the values equal `far-client status --json` taken at the same quiet moment.
+    steps (by auto, and by far) and a few malformed connections; once it is idle, the file and
+    the port's body parse with prometheus_client's parser, every family has HELP and TYPE, the
+    latency quantiles are ordered, and the values equal `far-client status --json` taken at the
+    same quiet moment (resident memory within 64 MiB: it moves with every status asked).
     Another process reads the file in a tight loop while the daemon rewrites it: every read is
     a whole file. After SIGTERM the last file stays, saying far_up 0 and no session. A file in a
     directory that does not exist is refused at start (exit status 2).
@@ -36,8 +37,13 @@ PORT = 9464
 FAR_FAMILIES = {
     "far_up", "far_info", "far_uptime_seconds", "far_sessions_open", "far_sessions_max",
     "far_sessions_max_per_user", "far_scene_objects", "far_scene_triangles", "far_steps",
-    "far_step_latency_seconds", "far_errors", "far_rejected_messages",
+    "far_step_latency_seconds", "far_errors", "far_rejected_messages", "far_gpu_info",
+    "far_memory_rss_bytes", "far_segment_bytes", "far_opens_refused", "far_steps_by_method",
 }
+# What the daemon's scheduler calls its GPU (--serves-gpus), added to what it detects.
+SERVES_GPUS = ["3", "GPU-metrics-test"]
+# The methods that run on the GPU (far::NeedsGl); the others run on the CPU.
+GPU_METHODS = {"far", "far-exact-offset", "cullide", "gpu"}
 
 
 class Failure(Exception):
@@ -151,11 +157,19 @@ def check_against_status(families, status, where):
     check(sample(families, "far_up") == 1, f"{where}: far_up is not 1")
     info = families["far_info"].samples[0].labels
     for label, key in (("version", "daemon_version"), ("gl_renderer", "gl_renderer"),
-                       ("gl_device", "gl_device")):
-        check(info[label] == status[key], f"{where}: far_info {label} {info[label]!r}")
+                       ("gl_device", "gl_device"), ("pid", "daemon_pid")):
+        check(info[label] == str(status[key]), f"{where}: far_info {label} {info[label]!r}")
+    gpus = sorted(s.labels["gpu"] for s in families["far_gpu_info"].samples)
+    check(gpus == sorted(status["gpu_names"]) and set(SERVES_GPUS) <= set(gpus),
+          f"{where}: far_gpu_info {gpus} != {status['gpu_names']}")
+    # Resident memory moves a little with every status asked; the rest may not move.
+    rss = sample(families, "far_memory_rss_bytes")
+    check(abs(rss - status["memory_rss_bytes"]) < 64 << 20,
+          f"{where}: far_memory_rss_bytes {rss} far from {status['memory_rss_bytes']}")
     uptime = sample(families, "far_uptime_seconds")
     check(0 < uptime <= status["uptime_ms"] / 1000, f"{where}: far_uptime_seconds {uptime}")
     for family, value in (("far_sessions_open", status["sessions_open"]),
+                          ("far_segment_bytes", status["segment_bytes"]),
                           ("far_sessions_max", status["max_sessions"]),
                           ("far_sessions_max_per_user", status["max_sessions_per_user"]),
                           ("far_scene_objects", sum(s["objects"] for s in status["sessions"])),
@@ -166,6 +180,14 @@ def check_against_status(families, status, where):
           f"{where}: far_steps_total != {status['steps_total']}")
     check(sample(families, "far_rejected_messages", "_total") ==
           status["rejected_messages_total"], f"{where}: far_rejected_messages_total")
+    check(sample(families, "far_opens_refused", "_total") == status["opens_refused_total"],
+          f"{where}: far_opens_refused_total")
+    by_method = {s.labels["method"]: s.value for s in families["far_steps_by_method"].samples}
+    check(by_method == status["steps_by_method"],
+          f"{where}: far_steps_by_method_total {by_method} != {status['steps_by_method']}")
+    for s in families["far_steps_by_method"].samples:
+        device = "gpu" if s.labels["method"] in GPU_METHODS else "cpu"
+        check(s.labels["device"] == device, f"{where}: {s.labels} is not on the {device}")
     errors = {s.labels["kind"]: s.value for s in families["far_errors"].samples}
     check(errors == status["errors_by_kind"],
           f"{where}: far_errors_total {errors} != {status['errors_by_kind']}")
@@ -209,7 +231,9 @@ def quiet_status(daemon, file_path, steps):
     deadline = time.monotonic() + 60
     while True:
         status = daemon.status()
-        if (status["sessions_open"] == 0 and status["steps_total"] == steps and
+        # (a closed session's segment is given back when its worker is reaped, a little after)
+        if (status["sessions_open"] == 0 and status["segment_bytes"] == 0 and
+                status["steps_total"] == steps and
                 status["errors_by_kind"].get("parse_error") == 3):
             break
         check(time.monotonic() < deadline, f"the daemon did not settle: {status}")
@@ -223,7 +247,7 @@ def quiet_status(daemon, file_path, steps):
 
 
 def without_uptime(status):
-    return {k: v for k, v in status.items() if k != "uptime_ms"}
+    return {k: v for k, v in status.items() if k not in ("uptime_ms", "memory_rss_bytes")}
 
 
 def test_values(daemon_path, client_path, work):
@@ -239,18 +263,20 @@ def test_values(daemon_path, client_path, work):
     t0 = time.monotonic()
     daemon = Daemon(daemon_path, client_path, work, DAEMON_NAME,
                     ["--metrics-file", file_path, "--metrics-port", str(PORT),
-                     "--metrics-interval-s", "1"])
+                     "--metrics-interval-s", "1", "--serves-gpus", ",".join(SERVES_GPUS)])
     try:
         # Written before the daemon answered.
         first = families_of(read_file(file_path), "first file")
         check(sample(first, "far_up") == 1, "first file: far_up is not 1")
-        # Steps of 3 clients, and 3 connections that send what is neither open nor status.
+        # Steps of 3 clients (auto's choice, on the CPU here) and of one client stepping far
+        # (on the GPU), and 3 connections that send what is neither open nor status.
         daemon.run_client("load", "--clients", "3", "--steps", "20")
+        daemon.run_client("load", "--clients", "1", "--steps", "10", "--method", "far")
         for _ in range(3):
             with socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET) as s:
                 s.connect(os.path.join(daemon.env["FAR_SOCKET_DIR"], DAEMON_NAME + ".sock"))
                 s.send(b"not a far message")
-        before = quiet_status(daemon, file_path, 60)
+        before = quiet_status(daemon, file_path, 70)
         file_text = read_file(file_path)
         port_text = scrape(PORT)
         after = daemon.status()
@@ -260,7 +286,8 @@ def test_values(daemon_path, client_path, work):
         port = families_of(port_text, "port")
         check_against_status(port, after, "port")
         print(f"file and port match the status: {after['steps_total']} steps, errors "
-              f"{after['errors_by_kind']}, p50 {after['latency_ms']['p50']:.3f} ms "
+              f"{after['errors_by_kind']}, by method {after['steps_by_method']}, "
+              f"GPU names {after['gpu_names']}, p50 {after['latency_ms']['p50']:.3f} ms "
               f"({time.monotonic() - t0:.1f} s)")
 
         # Another process reads the file while the daemon rewrites it every second.

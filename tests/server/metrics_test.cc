@@ -49,6 +49,16 @@ far_lcm::status_reply_t SampleStatus() {
   status.num_error_kinds = 2;
   status.error_kind = {"busy", "parse_error"};
   status.error_count = {5, 2};
+  status.daemon_pid = 4242;
+  status.opens_refused_total = 3;
+  status.memory_rss_bytes = 123'456'789;
+  status.segment_bytes = 2 * 84'938'752;
+  status.num_gpu_names = 2;
+  status.gpu_name = {"1", "GPU-8f2c"};
+  status.num_methods = 3;
+  status.method_name = {"bvh", "far", "gpu"};
+  status.method_steps = {700, 200, 100};
+  status.session_pid = {100, 200};
   return status;
 }
 
@@ -83,7 +93,9 @@ TEST(MetricFamiliesTest, EveryFamilyHasHelpATypeAndTheDaemonLabelOnEverySample) 
   for (const char* name :
        {"far_up", "far_info", "far_uptime_seconds", "far_sessions_open", "far_sessions_max",
         "far_sessions_max_per_user", "far_scene_objects", "far_scene_triangles", "far_steps_total",
-        "far_step_latency_seconds", "far_errors_total", "far_rejected_messages_total"}) {
+        "far_step_latency_seconds", "far_errors_total", "far_rejected_messages_total",
+        "far_gpu_info", "far_memory_rss_bytes", "far_segment_bytes", "far_opens_refused_total",
+        "far_steps_by_method_total"}) {
     EXPECT_EQ(seen.count(name), 1u) << name;
   }
 }
@@ -95,6 +107,24 @@ TEST(MetricFamiliesTest, ValuesAreTheStatusInBaseUnits) {
   EXPECT_EQ(Label(info, "version"), "0.1.0");
   EXPECT_EQ(Label(info, "gl_renderer"), R"(NVIDIA "H100")");
   EXPECT_EQ(Label(info, "gl_device"), "EGL device 1");
+  EXPECT_EQ(Label(info, "pid"), "4242");
+  const MetricFamily& gpus = Find(families, "far_gpu_info");
+  ASSERT_EQ(gpus.metric.size(), 2u);
+  EXPECT_EQ(Label(gpus.metric[0], "gpu"), "1");
+  EXPECT_EQ(Label(gpus.metric[1], "gpu"), "GPU-8f2c");
+  EXPECT_EQ(gpus.metric[1].gauge.value, 1);
+  EXPECT_EQ(Find(families, "far_memory_rss_bytes").metric.at(0).gauge.value, 123'456'789);
+  EXPECT_EQ(Find(families, "far_segment_bytes").metric.at(0).gauge.value, 2 * 84'938'752);
+  EXPECT_EQ(Find(families, "far_opens_refused_total").metric.at(0).counter.value, 3);
+  // Steps by the method that ran, and where it ran: the raster methods and gpu need the GPU.
+  const MetricFamily& methods = Find(families, "far_steps_by_method_total");
+  ASSERT_EQ(methods.metric.size(), 3u);
+  const std::string devices[] = {"cpu", "gpu", "gpu"};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(Label(methods.metric[i], "method"), SampleStatus().method_name[i]);
+    EXPECT_EQ(Label(methods.metric[i], "device"), devices[i]) << i;
+    EXPECT_EQ(methods.metric[i].counter.value, SampleStatus().method_steps[i]);
+  }
   EXPECT_DOUBLE_EQ(Find(families, "far_uptime_seconds").metric.at(0).gauge.value, 12.345);
   EXPECT_EQ(Find(families, "far_sessions_open").metric.at(0).gauge.value, 2);
   EXPECT_EQ(Find(families, "far_sessions_max").metric.at(0).gauge.value, 64);
@@ -158,6 +188,8 @@ TEST(MetricsTextTest, IsPrometheusTextWithEscapedLabels) {
            "far_step_latency_seconds_sum{daemon=\"gpu1\"} 2.5\n",
            "far_step_latency_seconds{daemon=\"gpu1\",quantile=\"0.99\"} 0.00925\n",
            "far_errors_total{daemon=\"gpu1\",kind=\"busy\"} 5\n",
+           "far_steps_by_method_total{daemon=\"gpu1\",method=\"far\",device=\"gpu\"} 200\n",
+           "far_memory_rss_bytes{daemon=\"gpu1\"} 123456789\n",
            "gl_renderer=\"NVIDIA \\\"H100\\\"\"",
        }) {
     EXPECT_NE(text.find(line), std::string::npos) << line << "\nin:\n" << text;
