@@ -11,6 +11,7 @@
 #include "daemon_stats.h"
 #include "log_limiter.h"
 #include "message_handlers.h"
+#include "metrics_export.h"
 #include "replier.h"
 #include "session_registry.h"
 #include "session_worker.h"
@@ -220,6 +221,10 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   }
   d.status = std::make_unique<StatusSources>(StatusSources{
       d.config, d.stats, d.sessions, d.budget, d.renderer, device, gpu_names, d.created});
+  // The metrics file's first write and the port come before the daemon is ready: a file that
+  // cannot be written or a port taken is a start-up error, not a silent gap in the metrics.
+  auto metrics = MetricsExport::Start(d.config, *d.status);
+  if (!metrics) return metrics.error();
   SocketServer server(std::move(d.listener), d.config, d.sessions, d.stats, *d.workers, *d.status);
   // Both lines come before the socket answers: whoever finds the daemon ready finds them logged.
   spdlog::info(
@@ -245,6 +250,8 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   socket_thread.join();
   spdlog::info("event=daemon_stopping sessions={}", d.sessions.size());
   d.CloseEverySession();
+  // Every session closed: the last metrics file says so (sessions 0, far_up 0).
+  (*metrics)->Stop();
   ClientLogLimiter().Flush(LogLimiter::Clock::now(), /*all=*/true);
   spdlog::info("event=daemon_stopped steps_total={}", d.stats.steps_total());
   return {};

@@ -109,7 +109,34 @@ Result<void> ReadKey(const std::string& key, const nlohmann::json& value, Daemon
   if (key == "exact_threads") return set(config.exact_threads);
   if (key == "cpu_cores") return set(config.cpu_cores);
   if (key == "log_level") return set(config.log_level);
+  if (key == "metrics_file") return set(config.metrics_file);
+  if (key == "metrics_port") return set(config.metrics_port);
+  if (key == "metrics_interval_s") return set(config.metrics_interval_s);
   return Invalid(key, "unknown key");
+}
+
+// The metrics file must be one node_exporter's textfile collector reads (it reads *.prom only)
+// in a directory that exists: the daemon writes a temporary file beside it and renames it over
+// the file, and a directory missing at start would only show as a warning at each write.
+Result<void> ValidateMetrics(const DaemonConfig& config) {
+  if (config.metrics_port < 0 || config.metrics_port > 65535)
+    return Invalid("metrics_port",
+                   std::to_string(config.metrics_port) + " is outside [0, 65535] (0: no port)");
+  if (!(config.metrics_interval_s >= 0.1 && config.metrics_interval_s <= 3600))
+    return Invalid("metrics_interval_s", "must be in [0.1, 3600] seconds");
+  if (config.metrics_file.empty()) return {};
+  const std::filesystem::path file(config.metrics_file);
+  if (file.extension() != ".prom")
+    return Invalid("metrics_file", "'" + config.metrics_file +
+                                       "' does not end in .prom, the files node_exporter's "
+                                       "textfile collector reads");
+  const std::filesystem::path directory =
+      file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+  std::error_code error;
+  if (!std::filesystem::is_directory(directory, error))
+    return Invalid("metrics_file", "'" + config.metrics_file + "': its directory '" +
+                                       directory.string() + "' does not exist");
+  return {};
 }
 
 }  // namespace
@@ -201,6 +228,7 @@ Result<void> ValidateDaemonConfig(const DaemonConfig& config) {
   if (config.cpu_cores < 0 || config.cpu_cores > kMaxCpuCores)
     return Invalid("cpu_cores", std::to_string(config.cpu_cores) + " is outside [0, " +
                                     std::to_string(kMaxCpuCores) + "] (0: all cores)");
+  if (auto ok = ValidateMetrics(config); !ok) return ok;
   static const std::set<std::string> kLevels = {"trace", "debug", "info", "warn", "error"};
   if (!kLevels.count(config.log_level))
     return Invalid("log_level",

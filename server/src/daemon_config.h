@@ -67,6 +67,12 @@ struct DaemonConfig {
   /// session's pool has more threads, and a heavy session's loops get half of them.
   int cpu_cores = 0;
   std::string log_level = "info";  ///< trace, debug, info, warn, error
+  // Metrics (Prometheus' text format; metrics_export.h).
+  /// node_exporter's textfile collector reads this file (a *.prom in an existing directory),
+  /// rewritten atomically every metrics_interval_s; "": none.
+  std::string metrics_file;
+  int metrics_port = 0;           ///< serves /metrics on 127.0.0.1 only; 0: none
+  double metrics_interval_s = 5;  ///< how often metrics_file is rewritten, seconds
 };
 
 /// Reads a JSON config file; unknown keys are errors (a typo must not be silently ignored).

@@ -49,6 +49,7 @@ class DaemonStats {
   void CountStep(double ms, std::string_view method) {
     std::lock_guard lock(mutex_);
     latency_.Add(ms);
+    latency_sum_ms_ += ms;
     steps_total_++;
     steps_by_method_[std::string(method.substr(0, method.find('/')))]++;
   }
@@ -64,6 +65,7 @@ class DaemonStats {
     int64_t errors_total = 0, rejected_total = 0, steps_total = 0, latency_samples = 0;
     int64_t opens_refused_total = 0;
     double p50_ms = 0, p90_ms = 0, p99_ms = 0, max_ms = 0;
+    double latency_sum_ms = 0;  ///< every step's latency since start, added (metrics' _sum)
   };
   Snapshot Read() const {
     std::lock_guard lock(mutex_);
@@ -75,6 +77,7 @@ class DaemonStats {
     snapshot.rejected_total = rejected_total_;
     snapshot.steps_total = steps_total_;
     snapshot.latency_samples = static_cast<int64_t>(latency_.count());
+    snapshot.latency_sum_ms = latency_sum_ms_;
     snapshot.p50_ms = latency_.Quantile(0.5);
     snapshot.p90_ms = latency_.Quantile(0.9);
     snapshot.p99_ms = latency_.Quantile(0.99);
@@ -94,6 +97,7 @@ class DaemonStats {
   int64_t rejected_total_ = 0;
   int64_t steps_total_ = 0;
   LatencyWindow latency_{8192};
+  double latency_sum_ms_ = 0;
   struct DropLog {
     int64_t unlogged = 0;
     std::chrono::steady_clock::time_point last{};

@@ -109,6 +109,14 @@ struct CommandLine {
         "CPU cores the daemon may use in all (0: all): no session's threads exceed it (nor "
         "--threads), and a heavy session gets half of it");
     Add("--log-level", &DaemonConfig::log_level, "trace, debug, info, warn, error");
+    Add("--metrics-file", &DaemonConfig::metrics_file,
+        "write Prometheus metrics to this *.prom file for node_exporter's textfile collector "
+        "(replaced atomically every --metrics-interval-s; its directory must exist)",
+        false);
+    Add("--metrics-port", &DaemonConfig::metrics_port,
+        "serve Prometheus metrics at 127.0.0.1:PORT, path /metrics (loopback only; 0: no port)");
+    Add("--metrics-interval-s", &DaemonConfig::metrics_interval_s,
+        "seconds between rewrites of --metrics-file");
   }
 
   // The config file (when given), then every flag given on the command line on top of it.

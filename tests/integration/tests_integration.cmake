@@ -71,3 +71,18 @@ set_target_properties(far_integration_test PROPERTIES
 gtest_discover_tests(far_integration_test
   PROPERTIES LABELS integration TIMEOUT 120
   DISCOVERY_TIMEOUT 60)
+
+# far-daemon's Prometheus metrics (tests/integration/metrics_test.py): the file and the port
+# parse with prometheus_client's parser and match far-client status, the file is never read
+# partial, and the port listens on 127.0.0.1 only. Each in a network namespace of its own.
+foreach(mode values loopback)
+  set(name MetricsTest.FileAndPortMatchTheStatusAndTheFileIsNeverReadPartial)
+  if(mode STREQUAL "loopback")
+    set(name MetricsTest.ThePortListensOnLoopbackOnlyAndATakenPortIsAStartError)
+  endif()
+  add_test(NAME ${name}
+           COMMAND ${PROJECT_SOURCE_DIR}/deploy/netns-run.sh /usr/bin/python3
+                   ${CMAKE_CURRENT_SOURCE_DIR}/integration/metrics_test.py ${mode}
+                   $<TARGET_FILE:far-daemon> $<TARGET_FILE:far-client>)
+  set_tests_properties(${name} PROPERTIES LABELS integration TIMEOUT 120)
+endforeach()

@@ -125,6 +125,32 @@ TEST(DaemonConfigTest, ReadsCpuCoresWithinItsRange) {
   }
 }
 
+TEST(DaemonConfigTest, ReadsTheMetricsKeysAndRefusesAFileNodeExporterWouldNotRead) {
+  const std::string directory = std::filesystem::temp_directory_path().string();
+  auto config = ParseDaemonConfig(R"({"metrics_file": ")" + directory +
+                                      R"(/far.prom", "metrics_port": 9464,
+      "metrics_interval_s": 1.5})",
+                                  "metrics.json");
+  ASSERT_TRUE(config.ok()) << ToString(config.error());
+  EXPECT_EQ(config->metrics_file, directory + "/far.prom");
+  EXPECT_EQ(config->metrics_port, 9464);
+  EXPECT_EQ(config->metrics_interval_s, 1.5);
+  EXPECT_EQ(DaemonConfig{}.metrics_interval_s, 5);
+  const std::pair<std::string, const char*> cases[] = {
+      {R"({"metrics_file": "/nonexistent-far-dir/far.prom"})", "does not exist"},
+      {R"({"metrics_file": ")" + directory + R"(/far.txt"})", "does not end in .prom"},
+      {R"({"metrics_port": 65536})", "metrics_port"},
+      {R"({"metrics_port": -1})", "metrics_port"},
+      {R"({"metrics_interval_s": 0})", "metrics_interval_s"},
+  };
+  for (const auto& [text, expected] : cases) {
+    auto refused = ParseDaemonConfig(text, "metrics.json");
+    ASSERT_FALSE(refused.ok()) << text;
+    EXPECT_EQ(refused.error().code, ErrorCode::kInvalidArgument) << text;
+    EXPECT_NE(refused.error().message.find(expected), std::string::npos) << refused.error().message;
+  }
+}
+
 TEST(DaemonConfigTest, ParsesTextInMemoryWithTheGivenName) {
   auto config = ParseDaemonConfig(R"({"max_sessions": 5})", "inline.json");
   ASSERT_TRUE(config.ok()) << ToString(config.error());
