@@ -64,6 +64,7 @@ chmod 0755 "$work" # slurmd's job steps run as root too, but srun checks its cwd
 munged_pid=""
 slurmctld_pid=""
 slurmd_pid=""
+service_pid=""
 stop_pid() {
   local pid=$1 i
   [ -n "$pid" ] || return 0
@@ -112,6 +113,7 @@ cleanup() {
       sleep 0.2
     done
   fi
+  stop_pid "$service_pid"
   stop_pid "$slurmd_pid"
   stop_pid "$slurmctld_pid"
   stop_pid "$munged_pid"
@@ -254,6 +256,14 @@ wait_for_job() {
   scontrol show job "$job" | sed -n 's/.*JobState=\([A-Z_]*\).*/\1/p'
 }
 
+# far-client play's contacts, as the reference lists them.
+contacts_by_step() {
+  awk '
+    /^step +[0-9]+ +round trip/ { step = $2; match($0, /contacts +[0-9]+/)
+      n = substr($0, RSTART, RLENGTH); sub(/contacts +/, "", n); print "step " step " contacts " n }
+    /touches/ { sub(/^ +/, ""); print "step " step " " $0 }' | sort
+}
+
 tasks=4
 job_a_dir=$work/job-a
 mkdir -m 0700 "$job_a_dir"
@@ -272,11 +282,7 @@ for ((task = 0; task < tasks; task++)); do
   lines=$(sed -n "s/^ *$task: //p" "$work/job-a.out")
   grep -q "^far-daemon 'far' answered on $job_a_dir/run/far.sock" <<<"$lines" ||
     fail "task $task found no daemon in the job's socket directory: $lines"
-  awk '
-    /^step +[0-9]+ +round trip/ { step = $2; match($0, /contacts +[0-9]+/)
-      n = substr($0, RSTART, RLENGTH); sub(/contacts +/, "", n); print "step " step " contacts " n }
-    /touches/ { sub(/^ +/, ""); print "step " step " " $0 }' <<<"$lines" |
-    sort >"$work/task-$task.txt"
+  contacts_by_step <<<"$lines" >"$work/task-$task.txt"
   diff -u "$reference" "$work/task-$task.txt" >"$work/task-$task.diff" ||
     fail "task $task's contacts differ from far-snapshot's: $(cat "$work/task-$task.diff")"
 done
@@ -284,6 +290,38 @@ done
 [ ! -S "$job_a_dir/run/far.sock" ] || fail "job a left its socket $job_a_dir/run/far.sock"
 echo "slurm test: job a: $tasks tasks, each $frames steps with the reference's contacts" \
   "($(grep -c contacts "$reference") steps, $(grep -c touches "$reference") touching object pairs)"
+
+# --- c. The node's daemon as a service -------------------------------------------------------
+# A daemon started outside Slurm, as the package's far-daemon.service would be (name far; its
+# socket directory stands for /run/far), and far-sim-node-service.sbatch's tasks finding it on
+# their own.
+service_dir=$work/service-run
+mkdir -m 0700 "$service_dir"
+"$daemon_bin" --name far --socket "$service_dir/far.sock" >"$work/log/far-service.log" 2>&1 &
+service_pid=$!
+"$client_bin" --socket "$service_dir/far.sock" --connect-timeout 120s ping >/dev/null ||
+  fail "the service daemon did not answer"
+job_c=$(FAR_BIN=$build_dir FAR_SOCKET_DIR=$service_dir FAR_SCENE=$work/scene/scene.json \
+  FAR_PLAY_ARGS="--contacts --method bvh --resolution 128" \
+  sbatch --parsable --ntasks=2 --output="$work/job-c.out" --chdir="$work" \
+  "$source_dir/deploy/slurm/far-sim-node-service.sbatch")
+state=$(wait_for_job "$job_c" 300)
+[ "$state" = COMPLETED ] || fail "job c ($job_c) is $state: $(cat "$work/job-c.out")"
+for task in 0 1; do
+  lines=$(sed -n "s/^ *$task: //p" "$work/job-c.out")
+  grep -q "^far-daemon 'far' answered on $service_dir/far.sock" <<<"$lines" ||
+    fail "job c's task $task did not find the service daemon: $lines"
+  contacts_by_step <<<"$lines" | diff -u "$reference" - >"$work/task-c$task.diff" ||
+    fail "job c's task $task: contacts differ from far-snapshot's: $(cat "$work/task-c$task.diff")"
+done
+# The job's sessions ended with its tasks; the service goes on.
+read -r sessions _ < <("$client_bin" --socket "$service_dir/far.sock" status |
+  awk '/^steps: / { steps = $2 } /^sessions: / { open = $2 } END { print open, steps }')
+[ "$sessions" = 0 ] || fail "the service daemon still has $sessions sessions after job c"
+kill -TERM "$service_pid"
+wait "$service_pid" || fail "the service daemon exited $? on SIGTERM"
+service_pid=""
+phase_done "job c: 2 tasks on a node service"
 
 # --- b. A cancelled job leaves nothing --------------------------------------------------------
 job_b_dir=$work/job-b
