@@ -6,7 +6,9 @@
 #      far-snapshot computes for the same scene in this process's build (far::Pipeline in
 #      process, no daemon);
 #   b. a long job cancelled with scancel while its tasks step: afterwards no far process is
-#      left, /dev/shm holds nothing new and no daemon listens on the job's socket.
+#      left, no session segment, nothing new in /dev/shm, and the job's socket directory is gone;
+#   c. deploy/slurm/far-sim-node-service.sbatch's tasks on a daemon started outside Slurm, as
+#      the node's service: their contacts, and no session of theirs left on it.
 # Slurm talks TCP on 127.0.0.1 (ports chosen at run time) and far LCM on the loopback: run it
 # inside deploy/netns-run.sh. Exit 77 (skipped) only when Slurm or munge is not installed.
 # Usage: slurm_cluster_test.sh <build dir> <source dir>
@@ -291,38 +293,6 @@ done
 echo "slurm test: job a: $tasks tasks, each $frames steps with the reference's contacts" \
   "($(grep -c contacts "$reference") steps, $(grep -c touches "$reference") touching object pairs)"
 
-# --- c. The node's daemon as a service -------------------------------------------------------
-# A daemon started outside Slurm, as the package's far-daemon.service would be (name far; its
-# socket directory stands for /run/far), and far-sim-node-service.sbatch's tasks finding it on
-# their own.
-service_dir=$work/service-run
-mkdir -m 0700 "$service_dir"
-"$daemon_bin" --name far --socket "$service_dir/far.sock" >"$work/log/far-service.log" 2>&1 &
-service_pid=$!
-"$client_bin" --socket "$service_dir/far.sock" --connect-timeout 120s ping >/dev/null ||
-  fail "the service daemon did not answer"
-job_c=$(FAR_BIN=$build_dir FAR_SOCKET_DIR=$service_dir FAR_SCENE=$work/scene/scene.json \
-  FAR_PLAY_ARGS="--contacts --method bvh --resolution 128" \
-  sbatch --parsable --ntasks=2 --output="$work/job-c.out" --chdir="$work" \
-  "$source_dir/deploy/slurm/far-sim-node-service.sbatch")
-state=$(wait_for_job "$job_c" 300)
-[ "$state" = COMPLETED ] || fail "job c ($job_c) is $state: $(cat "$work/job-c.out")"
-for task in 0 1; do
-  lines=$(sed -n "s/^ *$task: //p" "$work/job-c.out")
-  grep -q "^far-daemon 'far' answered on $service_dir/far.sock" <<<"$lines" ||
-    fail "job c's task $task did not find the service daemon: $lines"
-  contacts_by_step <<<"$lines" | diff -u "$reference" - >"$work/task-c$task.diff" ||
-    fail "job c's task $task: contacts differ from far-snapshot's: $(cat "$work/task-c$task.diff")"
-done
-# The job's sessions ended with its tasks; the service goes on.
-read -r sessions _ < <("$client_bin" --socket "$service_dir/far.sock" status |
-  awk '/^steps: / { steps = $2 } /^sessions: / { open = $2 } END { print open, steps }')
-[ "$sessions" = 0 ] || fail "the service daemon still has $sessions sessions after job c"
-kill -TERM "$service_pid"
-wait "$service_pid" || fail "the service daemon exited $? on SIGTERM"
-service_pid=""
-phase_done "job c: 2 tasks on a node service"
-
 # --- b. A cancelled job leaves nothing --------------------------------------------------------
 job_b_dir=$work/job-b
 mkdir -m 0700 "$job_b_dir"
@@ -383,3 +353,36 @@ grep -q "event=daemon_stopped" "$work/log/far-$job_b-far.log" ||
 phase_done "job b: checks after scancel"
 echo "slurm test: job b: cancelled mid-step ($segments segments open, $later_steps steps);" \
   "0 far processes, 0 segments, 0 new /dev/shm entries left"
+
+# --- c. The node's daemon as a service -------------------------------------------------------
+# A daemon started outside Slurm, as the package's far-daemon.service would be (name far; its
+# socket directory stands for /run/far), and far-sim-node-service.sbatch's tasks finding it on
+# their own.
+service_dir=$work/service-run
+mkdir -m 0700 "$service_dir"
+"$daemon_bin" --name far --socket "$service_dir/far.sock" >"$work/log/far-service.log" 2>&1 &
+service_pid=$!
+"$client_bin" --socket "$service_dir/far.sock" --connect-timeout 120s ping >/dev/null ||
+  fail "the service daemon did not answer"
+job_c=$(FAR_BIN=$build_dir FAR_SOCKET_DIR=$service_dir FAR_SCENE=$work/scene/scene.json \
+  FAR_PLAY_ARGS="--contacts --method bvh --resolution 128" \
+  sbatch --parsable --ntasks=2 --output="$work/job-c.out" --chdir="$work" \
+  "$source_dir/deploy/slurm/far-sim-node-service.sbatch")
+state=$(wait_for_job "$job_c" 300)
+[ "$state" = COMPLETED ] || fail "job c ($job_c) is $state: $(cat "$work/job-c.out")"
+for task in 0 1; do
+  lines=$(sed -n "s/^ *$task: //p" "$work/job-c.out")
+  grep -q "^far-daemon 'far' answered on $service_dir/far.sock" <<<"$lines" ||
+    fail "job c's task $task did not find the service daemon: $lines"
+  contacts_by_step <<<"$lines" | diff -u "$reference" - >"$work/task-c$task.diff" ||
+    fail "job c's task $task: contacts differ from far-snapshot's: $(cat "$work/task-c$task.diff")"
+done
+# The job's sessions ended with its tasks; the service goes on.
+read -r sessions _ < <("$client_bin" --socket "$service_dir/far.sock" status |
+  awk '/^steps: / { steps = $2 } /^sessions: / { open = $2 } END { print open, steps }')
+[ "$sessions" = 0 ] || fail "the service daemon still has $sessions sessions after job c"
+kill -TERM "$service_pid"
+wait "$service_pid" || fail "the service daemon exited $? on SIGTERM"
+service_pid=""
+phase_done "job c: 2 tasks on a node service"
+echo "slurm test: job c: 2 tasks found the node's service daemon, each with the reference's contacts"
