@@ -13,6 +13,7 @@
 #include "daemon_connection.h"
 #include "session_recorder.h"
 
+#include "far/client/discovery.h"
 #include "far/client/internal/client_access.h"
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
@@ -494,7 +495,23 @@ Result<std::unique_ptr<Client::Impl>> Client::Impl::Open(const ClientOptions& op
   return impl;
 }
 
-Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& options) {
+Result<std::unique_ptr<Client>> Client::Connect(const ClientOptions& given) {
+  const ClientOptions options = WithDaemonFromEnvironment(given);
+  if (!options.socket_path.empty() || options.daemon != kAutoDaemon) return ConnectTo(options);
+  // auto: the daemons this process may use, best first; a full or deaf one passes to the next.
+  auto chosen = internal::ChooseDaemons(options);
+  if (!chosen) return chosen.error();
+  std::string tried;
+  for (const ClientOptions& daemon : *chosen) {
+    auto client = ConnectTo(daemon);
+    if (client) return client;
+    tried += "; " + daemon.socket_path + ": " + client.error().message;
+  }
+  return MakeError(ErrorCode::kUnavailable,
+                   "--daemon auto: every daemon it may use refused" + tried);
+}
+
+Result<std::unique_ptr<Client>> Client::ConnectTo(const ClientOptions& options) {
   bool not_heard = false;
   auto impl = Impl::Open(options, &not_heard);
   if (impl) return std::unique_ptr<Client>(new Client(std::move(*impl)));
@@ -710,7 +727,14 @@ Result<std::unique_ptr<SessionRecorder>> StartRecording(const ClientOptions& opt
 
 }  // namespace internal
 
-Result<DaemonStatus> Client::Status(const ClientOptions& options) {
+Result<DaemonStatus> Client::Status(const ClientOptions& given) {
+  ClientOptions options = WithDaemonFromEnvironment(given);
+  if (options.socket_path.empty() && options.daemon == kAutoDaemon) {
+    // The status of the daemon Connect would use first.
+    auto chosen = internal::ChooseDaemons(options);
+    if (!chosen) return chosen.error();
+    options = chosen->front();
+  }
   auto connection = internal::ConnectToDaemon(options);
   if (!connection) return connection.error();
   return internal::RequestStatus(*connection, options);

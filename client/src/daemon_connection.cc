@@ -205,7 +205,7 @@ Result<DaemonStatus> RequestStatus(protocol::LocalConnection& connection,
   status.latency_max_ms = reply->latency_max_ms;
   status.latency_samples = reply->latency_samples;
   for (int i = 0; i < reply->num_sessions; ++i) {
-    status.sessions.push_back({reply->session_id[i], reply->session_uid[i],
+    status.sessions.push_back({reply->session_id[i], reply->session_uid[i], reply->session_pid[i],
                                reply->session_client_name[i], reply->session_steps[i],
                                reply->session_objects[i], reply->session_triangles[i],
                                reply->session_latency_p50_ms[i], reply->session_latency_p99_ms[i]});
@@ -213,6 +213,13 @@ Result<DaemonStatus> RequestStatus(protocol::LocalConnection& connection,
   for (int i = 0; i < reply->num_error_kinds; ++i) {
     status.errors_by_kind.emplace_back(reply->error_kind[i], reply->error_count[i]);
   }
+  status.daemon_pid = reply->daemon_pid;
+  status.opens_refused_total = reply->opens_refused_total;
+  status.memory_rss_bytes = reply->memory_rss_bytes;
+  status.segment_bytes = reply->segment_bytes;
+  status.gpu_names = reply->gpu_name;
+  for (int i = 0; i < reply->num_methods; ++i)
+    status.steps_by_method.emplace_back(reply->method_name[i], reply->method_steps[i]);
   return status;
 }
 

@@ -41,6 +41,12 @@ struct NotHeard {
 };
 std::string NotHeardMessage(const ClientOptions& options, const NotHeard& what);
 
+/// For ClientOptions::daemon "auto": `options` for each daemon auto may use, best first
+/// (far::client::RankDaemons over FindDaemons, the job's GPUs and this process id), each with
+/// its socket_path and name. Waits up to options.connect_timeout for a daemon to answer.
+/// Errors: kUnavailable naming the directories looked in and what each socket said.
+Result<std::vector<ClientOptions>> ChooseDaemons(const ClientOptions& options);
+
 /// Connects to the daemon's socket, retrying (10 ms, doubling to 200 ms) while there is none
 /// or it refuses, until options.connect_timeout. Errors: kUnavailable "no far-daemon named
 /// 'far' is running (...)", kPermissionDenied (the socket fails the trust check).

@@ -231,6 +231,16 @@ constexpr std::array kStatusReply{
     Count("num_error_kinds"),                // 29
     StringArray("error_kind", 29),           // 30
     Array("error_count", 8, 29),             // 31
+    Scalar("daemon_pid", 4),                 // 32
+    Scalar("opens_refused_total", 8),        // 33
+    Scalar("memory_rss_bytes", 8),           // 34
+    Scalar("segment_bytes", 8),              // 35
+    Count("num_gpu_names"),                  // 36
+    StringArray("gpu_name", 36),             // 37
+    Count("num_methods"),                    // 38
+    StringArray("method_name", 38),          // 39
+    Array("method_steps", 8, 38),            // 40
+    Array("session_pid", 4, 20),             // 41
 };
 
 constexpr std::array kRecordingHeader{

@@ -4,7 +4,9 @@
 #include <cstdio>
 #include <fstream>
 #include <mutex>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "daemon_stats.h"
 #include "log_limiter.h"
@@ -14,8 +16,10 @@
 #include "session_worker.h"
 #include "socket_server.h"
 #include "status_reply.h"
+#include <spdlog/fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
+#include "far/base/gpu_identity.h"
 #include "far/gpu/gl_context.h"
 #include "far/model/scene_budget.h"
 #include "far/pipeline/pipeline.h"
@@ -42,6 +46,30 @@ void LogOomScoreAdj() {
         "fill the memory; its service unit sets OOMScoreAdjust=-500\"",
         adj);
   }
+}
+
+// The EGL device a scheduler's name for a GPU (far-daemon --gpu-id) stands for.
+Result<int> EglDeviceNamed(const std::string& gpu_id) {
+  std::string seen;
+  for (const GlContext::Device& device : GlContext::ListDevices()) {
+    const std::vector<std::string> names = GpuIdentifiers(device.drm_device_file);
+    if (NamesGpu(gpu_id, names)) return device.index;
+    std::string list;
+    for (const std::string& name : names) list += (list.empty() ? "" : ", ") + name;
+    seen += "\n  - " + device.description + ": " + (list.empty() ? "no names" : list);
+  }
+  return MakeError(ErrorCode::kUnavailable,
+                   "--gpu-id " + gpu_id + ": no EGL device has that name; the devices are:" +
+                       (seen.empty() ? std::string(" none (no EGL device platform)") : seen));
+}
+
+// The names clients may know this daemon's GPU by: its EGL device's, then the configured ones.
+std::vector<std::string> ServedGpuNames(const DaemonConfig& config,
+                                        const std::string& drm_device_file) {
+  std::vector<std::string> names = GpuIdentifiers(drm_device_file);
+  for (const std::string& name : config.serves_gpus)
+    if (!NamesGpu(name, names)) names.push_back(name);
+  return names;
 }
 
 }  // namespace
@@ -173,24 +201,32 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   LogOomScoreAdj();
   // GL must work before anyone is served: each session makes its own context later.
   std::string device;
+  std::vector<std::string> gpu_names;
   {
-    auto context = GlContext::Create(d.config.gl_platform, d.config.gpu);
+    int gpu = d.config.gpu;
+    if (!d.config.gpu_id.empty()) {
+      auto named = EglDeviceNamed(d.config.gpu_id);
+      if (!named) return named.error();
+      gpu = *named;
+    }
+    auto context = GlContext::Create(d.config.gl_platform, gpu);
     if (!context) return context.error();
     std::lock_guard lock(d.renderer_mutex);
     d.renderer = (*context)->renderer();
     device = (*context)->platform_description();
+    gpu_names = ServedGpuNames(d.config, (*context)->drm_device_file());
     // auto's GPU cost model, once for every session to come.
     if (!MeasureGpuCost()) spdlog::warn("event=gpu_cost_unknown renderer=\"{}\"", d.renderer);
   }
-  d.status = std::make_unique<StatusSources>(
-      StatusSources{d.config, d.stats, d.sessions, d.renderer, device, d.created});
+  d.status = std::make_unique<StatusSources>(StatusSources{
+      d.config, d.stats, d.sessions, d.budget, d.renderer, device, gpu_names, d.created});
   SocketServer server(std::move(d.listener), d.config, d.sessions, d.stats, *d.workers, *d.status);
   // Both lines come before the socket answers: whoever finds the daemon ready finds them logged.
   spdlog::info(
       "event=daemon_ready name={} socket={} gl_renderer=\"{}\" gl_device=\"{}\" "
-      "lcm_url={} max_sessions={} cpu_cores={} threads_per_session={}",
-      d.config.name, SocketPathOf(d.config), d.renderer, device, d.config.lcm_url,
-      d.config.max_sessions, CpuCoresOf(d.config),
+      "gpu_names=\"{}\" lcm_url={} max_sessions={} cpu_cores={} threads_per_session={}",
+      d.config.name, SocketPathOf(d.config), d.renderer, device, fmt::join(gpu_names, ","),
+      d.config.lcm_url, d.config.max_sessions, CpuCoresOf(d.config),
       CpuPoolThreads(d.config.exact_threads, CpuCoresOf(d.config)));
   if (protocol::IsInProcessUrl(d.config.lcm_url)) {
     spdlog::warn(

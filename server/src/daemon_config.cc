@@ -1,5 +1,7 @@
 #include "daemon_config.h"
 
+#include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <limits>
 #include <set>
@@ -47,6 +49,15 @@ Result<void> ReadNumber(const std::string& key, const nlohmann::json& value, T* 
   }
 }
 
+// A name a scheduler gives a GPU: "2", "GPU-6f0e...", "0000:3b:00.0".
+bool IsGpuName(const std::string& name) {
+  if (name.empty() || name.size() > 64) return false;
+  return std::all_of(name.begin(), name.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == ':' || c == '.' || c == '_' || c == '-';
+  });
+}
+constexpr size_t kMaxServedGpuNames = 16;
+
 Result<void> ReadPlatform(const std::string& key, const nlohmann::json& value, GlPlatform* out) {
   const std::optional<GlPlatform> platform = ParseGlPlatform(value.get<std::string>());
   if (!platform) {
@@ -71,6 +82,11 @@ Result<void> ReadKey(const std::string& key, const nlohmann::json& value, Daemon
   if (key == "socket_path") return set(config.socket_path);
   if (key == "lcm_url") return set(config.lcm_url);
   if (key == "gpu") return set(config.gpu);
+  if (key == "gpu_id") return set(config.gpu_id);
+  if (key == "serves_gpus") {
+    config.serves_gpus = value.get<std::vector<std::string>>();
+    return {};
+  }
   if (key == "max_sessions") return set(config.max_sessions);
   if (key == "max_sessions_per_user") return set(config.max_sessions_per_user);
   if (key == "max_opens_per_second_per_user") return set(config.max_opens_per_second_per_user);
@@ -131,8 +147,20 @@ Result<void> ValidateDaemonConfig(const DaemonConfig& config) {
   if (!protocol::IsValidDaemonName(config.name))
     return Invalid("name",
                    "'" + config.name + "' is not 1..16 of [a-z0-9-] starting with a letter");
+  if (config.name == "auto")
+    return Invalid("name", "'auto' is reserved: clients' --daemon auto chooses a daemon");
   if (config.lcm_url.empty()) return Invalid("lcm_url", "empty");
   if (config.gpu < -1) return Invalid("gpu", "must be -1 (any) or a device index >= 0");
+  if (!config.gpu_id.empty() && config.gpu >= 0)
+    return Invalid("gpu_id", "give the GPU by index (gpu) or by name (gpu_id), not both");
+  if (!config.gpu_id.empty() && !IsGpuName(config.gpu_id))
+    return Invalid("gpu_id", "'" + config.gpu_id + "' is not 1..64 of [A-Za-z0-9:._-]");
+  if (config.serves_gpus.size() > kMaxServedGpuNames)
+    return Invalid("serves_gpus", "more than " + std::to_string(kMaxServedGpuNames) + " names");
+  for (const std::string& gpu_name : config.serves_gpus) {
+    if (!IsGpuName(gpu_name))
+      return Invalid("serves_gpus", "'" + gpu_name + "' is not 1..64 of [A-Za-z0-9:._-]");
+  }
   if (config.max_resolution < kMinResolution || config.max_resolution > kMaxResolution) {
     return Invalid("max_resolution", std::to_string(config.max_resolution) + " is outside [" +
                                          std::to_string(kMinResolution) + ", " +

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "far/base/result.h"
 #include "far/gpu/gl_platform.h"
@@ -24,6 +25,14 @@ struct DaemonConfig {
   std::string lcm_url = std::string(protocol::kDefaultLcmUrl);  ///< docs/protocol.md
   GlPlatform gl_platform = GlPlatform::kAuto;
   int gpu = -1;  ///< EGL device index (far-daemon --gpu N); -1: the first that works
+  /// The GPU by a name its scheduler gives it (far-daemon --gpu-id): a device minor number
+  /// ("2", as in SLURM_JOB_GPUS), an NVIDIA UUID or a PCI address; "" = by `gpu`. The EGL
+  /// device whose far::GpuIdentifiers include it is used (docs/cluster.md).
+  std::string gpu_id;
+  /// More names the daemon answers to when clients look for their job's GPU (far-client
+  /// --daemon auto), beside those detected from its EGL device: for schedulers that number
+  /// GPUs their own way, and for daemons on a software renderer standing in for a GPU.
+  std::vector<std::string> serves_gpus;
   // Sessions.
   int max_sessions = 64;
   int max_sessions_per_user = 16;

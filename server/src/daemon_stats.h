@@ -44,22 +44,33 @@ class DaemonStats {
   }
   static constexpr std::chrono::seconds kDropLogPeriod{10};
   /// Counts one step served in `ms` (request received to reply ready; counted before it goes
-  /// out).
-  void CountStep(double ms) {
+  /// out) by `method`, the method that ran ("bvh", "gpu", "far", ...; StepStats::method up to
+  /// its first '/').
+  void CountStep(double ms, std::string_view method) {
     std::lock_guard lock(mutex_);
     latency_.Add(ms);
     steps_total_++;
+    steps_by_method_[std::string(method.substr(0, method.find('/')))]++;
+  }
+  /// Counts one session open refused (limits, rate, bad parameters); its error kind is counted
+  /// by CountError.
+  void CountRefusedOpen() {
+    std::lock_guard lock(mutex_);
+    opens_refused_total_++;
   }
 
   struct Snapshot {
-    std::map<std::string, int64_t> errors_by_kind;
+    std::map<std::string, int64_t> errors_by_kind, steps_by_method;
     int64_t errors_total = 0, rejected_total = 0, steps_total = 0, latency_samples = 0;
+    int64_t opens_refused_total = 0;
     double p50_ms = 0, p90_ms = 0, p99_ms = 0, max_ms = 0;
   };
   Snapshot Read() const {
     std::lock_guard lock(mutex_);
     Snapshot snapshot;
     snapshot.errors_by_kind = errors_by_kind_;
+    snapshot.steps_by_method = steps_by_method_;
+    snapshot.opens_refused_total = opens_refused_total_;
     snapshot.errors_total = errors_total_;
     snapshot.rejected_total = rejected_total_;
     snapshot.steps_total = steps_total_;
@@ -77,8 +88,9 @@ class DaemonStats {
 
  private:
   mutable std::mutex mutex_;
-  std::map<std::string, int64_t> errors_by_kind_;
+  std::map<std::string, int64_t> errors_by_kind_, steps_by_method_;
   int64_t errors_total_ = 0;
+  int64_t opens_refused_total_ = 0;
   int64_t rejected_total_ = 0;
   int64_t steps_total_ = 0;
   LatencyWindow latency_{8192};

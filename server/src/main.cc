@@ -5,12 +5,14 @@
 #include <cstdio>
 #include <functional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "daemon.h"
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "far/base/gpu_identity.h"
 #include "far/gpu/gl_context.h"
 #include "far/model/version.h"
 
@@ -37,6 +39,7 @@ struct CommandLine {
            bool show_default = true) {
     CLI::Option* option = app.add_option(name, flags.*field, help);
     if (show_default) option->capture_default_str();
+    if constexpr (std::is_same_v<T, std::vector<std::string>>) option->delimiter(',');
     overrides.push_back([this, option, field](DaemonConfig& config) {
       if (*option) config.*field = flags.*field;
     });
@@ -58,7 +61,18 @@ struct CommandLine {
         "EGL device index of the GPU to use, as --list-gpus numbers them (that device and no "
         "other; a second GPU gets a second daemon with its own --name)",
         false);
-    app.add_flag("--list-gpus", list_gpus, "list the EGL devices with their index, and exit");
+    Add("--gpu-id", &DaemonConfig::gpu_id,
+        "the GPU by a name its scheduler gives it: a device minor number (the N of /dev/nvidiaN, "
+        "as in SLURM_JOB_GPUS), an NVIDIA UUID (GPU-...) or a PCI address; --list-gpus shows "
+        "each device's names",
+        false);
+    Add("--serves-gpus", &DaemonConfig::serves_gpus,
+        "comma-separated names this daemon also answers to when clients look for their job's "
+        "GPU (far-client --daemon auto), beside those of its EGL device",
+        false);
+    app.add_flag("--list-gpus", list_gpus,
+                 "list the EGL devices with their index and the names schedulers give them, and "
+                 "exit");
     Add("--lcm-url", &DaemonConfig::lcm_url, "LCM URL");
     app.add_option("--gl-platform", gl_platform,
                    "auto (default: a GPU, else Mesa's software renderer), device (a GPU only: "
@@ -126,9 +140,15 @@ int main(int argc, char** argv) {
   CommandLine command_line;
   CLI11_PARSE(command_line.app, argc, argv);
   if (command_line.list_gpus) {
-    const std::vector<std::string> devices = far::GlContext::ListDevices();
+    const std::vector<far::GlContext::Device> devices = far::GlContext::ListDevices();
     if (devices.empty()) std::printf("no EGL devices (the EGL device platform is not offered)\n");
-    for (const std::string& device : devices) std::printf("%s\n", device.c_str());
+    for (const far::GlContext::Device& device : devices) {
+      std::string names;
+      for (const std::string& id : far::GpuIdentifiers(device.drm_device_file))
+        names += (names.empty() ? "" : ", ") + id;
+      std::printf("%s%s%s\n", device.description.c_str(),
+                  names.empty() ? "" : " names: ", names.c_str());
+    }
     return 0;
   }
   auto config = command_line.Config();

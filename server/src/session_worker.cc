@@ -266,7 +266,7 @@ class SessionWorker {
     // Latency: request received -> reply ready. Counted before the reply goes out, so that a
     // client that has its answer finds the step in the daemon's status.
     const double ms = MsBetween(job.received, Clock::now());
-    context_.stats.CountStep(ms);
+    context_.stats.CountStep(ms, result->stats.method);
     {
       std::lock_guard lock(session_->latency_mutex);
       session_->latency.Add(ms);

@@ -115,6 +115,7 @@ void SocketServer::Open(Pending& pending, std::span<const uint8_t> bytes) {
   auto refuse = [&](const Error& error) {
     SetRefusal(reply, error);
     stats_.CountError(reply.status_name);
+    stats_.CountRefusedOpen();
     LogForClient(spdlog::level::warn, uid, "open_refused",
                  "event=open_refused uid={} reason=\"{}\"", uid, ToString(error));
     if (auto out = protocol::EncodeMessage(reply)) (void)pending.connection.Send(*out);

@@ -1,10 +1,25 @@
 #include "status_reply.h"
 
+#include <unistd.h>
+
+#include <fstream>
+
 #include "far/model/version.h"
 #include "far/protocol/channels.h"
 #include "far/protocol/version.h"
 
 namespace far::server {
+namespace {
+
+// The process' resident memory (/proc/self/statm's second field, in pages); 0 if unreadable.
+int64_t ResidentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  int64_t size_pages = 0, resident_pages = 0;
+  if (!(statm >> size_pages >> resident_pages)) return 0;
+  return resident_pages * sysconf(_SC_PAGESIZE);
+}
+
+}  // namespace
 
 far_lcm::status_reply_t MakeStatusReply(const StatusSources& sources, uid_t asker,
                                         int64_t request_id) {
@@ -38,6 +53,7 @@ far_lcm::status_reply_t MakeStatusReply(const StatusSources& sources, uid_t aske
     if (asker != 0 && session->uid != asker) continue;
     reply.session_id.push_back(session->id);
     reply.session_uid.push_back(static_cast<int32_t>(session->uid));
+    reply.session_pid.push_back(static_cast<int32_t>(session->pid));
     reply.session_client_name.push_back(session->client_name);
     reply.session_steps.push_back(session->steps);
     reply.session_objects.push_back(session->num_objects);
@@ -52,6 +68,17 @@ far_lcm::status_reply_t MakeStatusReply(const StatusSources& sources, uid_t aske
     reply.error_count.push_back(count);
   }
   reply.num_error_kinds = static_cast<int32_t>(reply.error_kind.size());
+  reply.daemon_pid = static_cast<int32_t>(getpid());
+  reply.opens_refused_total = stats.opens_refused_total;
+  reply.memory_rss_bytes = ResidentBytes();
+  reply.segment_bytes = sources.budget.used(BudgetKind::kSegmentBytes);
+  reply.gpu_name = sources.gpu_names;
+  reply.num_gpu_names = static_cast<int32_t>(reply.gpu_name.size());
+  for (const auto& [method, steps] : stats.steps_by_method) {
+    reply.method_name.push_back(method);
+    reply.method_steps.push_back(steps);
+  }
+  reply.num_methods = static_cast<int32_t>(reply.method_name.size());
   return reply;
 }
 

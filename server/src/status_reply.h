@@ -5,11 +5,14 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "daemon_config.h"
 #include "daemon_stats.h"
 #include "far_lcm/status_reply_t.hpp"
 #include "session_registry.h"
+
+#include "far/model/scene_budget.h"
 
 namespace far::server {
 
@@ -18,7 +21,9 @@ struct StatusSources {
   const DaemonConfig& config;
   const DaemonStats& stats;
   const SessionRegistry& sessions;
+  const SharedSceneBudget& budget;  ///< the segment bytes in use
   std::string gl_renderer, gl_device;
+  std::vector<std::string> gpu_names;  ///< what schedulers call its GPU (docs/cluster.md)
   std::chrono::steady_clock::time_point started;
 };
 

@@ -78,7 +78,8 @@ TEST(MessageTest, EveryTypeRoundTripsThroughThePreScan) {
 }
 
 TEST(MessageTest, FingerprintsArePinned) {
-  // The wire contract of protocol version 4 (4: contact geometry). A change of any .lcm file
+  // The wire contract of protocol version 5 (5: what a cluster needs in the status; 4: contact
+  // geometry). A change of any .lcm file
   // changes its fingerprint and fails here: update the value, docs/protocol.md, and
   // kProtocolVersion if the meaning changed, so that old and new peers reject each other with a
   // clear error.
@@ -90,8 +91,8 @@ TEST(MessageTest, FingerprintsArePinned) {
   EXPECT_EQ(far_lcm::step_reply_t::getHash(), static_cast<int64_t>(0x5bd75aad5eeeda94ull));
   EXPECT_EQ(far_lcm::error_t::getHash(), static_cast<int64_t>(0xb22a7284ae722a4full));
   EXPECT_EQ(far_lcm::status_request_t::getHash(), static_cast<int64_t>(0x232a6c3597e1b397ull));
-  EXPECT_EQ(far_lcm::status_reply_t::getHash(), static_cast<int64_t>(0x8bceb52ed7defbbcull));
-  EXPECT_EQ(kProtocolVersion, 4);
+  EXPECT_EQ(far_lcm::status_reply_t::getHash(), static_cast<int64_t>(0xfa43055c3d7de49full));
+  EXPECT_EQ(kProtocolVersion, 5);
 }
 
 TEST(MessageTest, EmptyArraysAndStringsRoundTrip) {
@@ -167,7 +168,7 @@ TEST(MessageTest, RejectsWrongProtocolVersion) {
   auto message = SampleStepRequest();
   message.protocol_version = kProtocolVersion + 1;
   ExpectDecodeError<far_lcm::step_request_t>(Encode(message), ErrorCode::kVersionMismatch,
-                                             "step_request_t.protocol_version: got 5, expected 4");
+                                             "step_request_t.protocol_version: got 6, expected 5");
 }
 
 TEST(MessageTest, RejectsAForgedHugeArrayLengthWithoutAllocating) {

@@ -236,6 +236,16 @@ inline far_lcm::status_reply_t SampleStatusReply() {
   m.num_error_kinds = 2;
   m.error_kind = {"busy", "invalid_argument"};
   m.error_count = {1, 3};
+  m.daemon_pid = 4321;
+  m.opens_refused_total = 2;
+  m.memory_rss_bytes = 64 << 20;
+  m.segment_bytes = 32 << 20;
+  m.num_gpu_names = 3;
+  m.gpu_name = {"1", "GPU-6f0e2b1c-0000-4000-8000-000000000001", "0000:3b:00.0"};
+  m.num_methods = 2;
+  m.method_name = {"bvh", "gpu"};
+  m.method_steps = {3, 2};
+  m.session_pid = {777, 778};
   return m;
 }
 

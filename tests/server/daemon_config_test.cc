@@ -7,6 +7,7 @@
 #include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -54,6 +55,27 @@ TEST(DaemonConfigTest, RejectsUnknownKeysWrongTypesAndRanges) {
     EXPECT_NE(config.error().message.find(expected), std::string::npos) << config.error().message;
   }
   EXPECT_EQ(LoadDaemonConfig("/nonexistent/far.json").error().code, ErrorCode::kIoError);
+}
+
+TEST(DaemonConfigTest, ReadsTheGpusNamesAndRefusesBadOnesAndTheNameAuto) {
+  auto config = ParseDaemonConfig(
+      R"({"gpu_id": "GPU-6f0e2b1c", "serves_gpus": ["2", "0000:3b:00.0"]})", "daemon.json");
+  ASSERT_TRUE(config.ok()) << ToString(config.error());
+  EXPECT_EQ(config->gpu_id, "GPU-6f0e2b1c");
+  EXPECT_EQ(config->serves_gpus, (std::vector<std::string>{"2", "0000:3b:00.0"}));
+  const std::pair<const char*, const char*> cases[] = {
+      {R"({"gpu_id": "2", "gpu": 1})", "not both"},
+      {R"({"gpu_id": "two gpus"})", "gpu_id"},
+      {R"({"serves_gpus": "2"})", "wrong type"},
+      {R"({"serves_gpus": ["2", ""]})", "serves_gpus"},
+      {R"({"serves_gpus": ["a,b"]})", "serves_gpus"},
+      {R"({"name": "auto"})", "reserved"},
+  };
+  for (const auto& [text, expected] : cases) {
+    auto bad = ParseDaemonConfig(text, "daemon.json");
+    ASSERT_FALSE(bad.ok()) << text;
+    EXPECT_NE(bad.error().message.find(expected), std::string::npos) << bad.error().message;
+  }
 }
 
 TEST(DaemonConfigTest, ReadsTheSharedBudgetsAndTheIdleTimeout) {

@@ -53,7 +53,13 @@ class SocketServerTest : public ::testing::Test {
     workers_.reset(
         new WorkerContext{config_, *replier_, stats_, budget_, setup_allowance_, /*use_gl=*/false,
                           [this](int64_t id, const std::string&) { sessions_->Close(id); }});
-    status_.reset(new StatusSources{config_, stats_, *sessions_, "none", "none",
+    status_.reset(new StatusSources{config_,
+                                    stats_,
+                                    *sessions_,
+                                    budget_,
+                                    "none",
+                                    "none",
+                                    {"7"},
                                     std::chrono::steady_clock::now()});
     auto listener = protocol::LocalListener::Listen(SocketPathOf(config_));
     EXPECT_TRUE(listener.ok());

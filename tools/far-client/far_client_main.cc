@@ -24,8 +24,10 @@ int main(int argc, char** argv) {
     far::cli::GlobalFlags global;
     std::vector<std::string> record_command;  // far-client record FILE <these words>
     app.add_option("--daemon", global.options.daemon,
-                   "the daemon's name (far-daemon --name): its socket is <dir>/<name>.sock")
-        ->capture_default_str();
+                   "the daemon's name (far-daemon --name): its socket is <dir>/<name>.sock; "
+                   "'auto': the daemon of the job's GPU ($FAR_GPUS, $SLURM_STEP_GPUS, "
+                   "$SLURM_JOB_GPUS, $NVIDIA_VISIBLE_DEVICES), else the least loaded on this "
+                   "machine (default: $FAR_DAEMON, else far)");
     app.add_option("--socket", global.options.socket_path,
                    "the daemon's socket path, when not the default for its name");
     app.add_option("--lcm-url", global.options.lcm_url,

@@ -39,7 +39,7 @@ std::vector<std::string> ChildArgv(const RecordFlags& flags, const GlobalFlags& 
   std::error_code ignored;
   argv.insert(argv.begin(), std::filesystem::read_symlink("/proc/self/exe", ignored).string());
   const client::ClientOptions& o = global.options;
-  if (o.daemon != client::kDefaultDaemonName) argv.insert(argv.end(), {"--daemon", o.daemon});
+  if (!o.daemon.empty()) argv.insert(argv.end(), {"--daemon", o.daemon});
   if (!o.socket_path.empty()) argv.insert(argv.end(), {"--socket", o.socket_path});
   if (!o.lcm_url.empty()) argv.insert(argv.end(), {"--lcm-url", o.lcm_url});
   argv.insert(argv.end(), {"--connect-timeout", global.connect_timeout});

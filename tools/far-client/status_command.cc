@@ -7,6 +7,8 @@
 #include "commands.h"
 #include <nlohmann/json.hpp>
 
+#include "far/client/discovery.h"
+
 namespace far::cli {
 namespace {
 
@@ -17,6 +19,7 @@ json StatusJson(const client::DaemonStatus& status) {
   for (const auto& s : status.sessions) {
     sessions.push_back({{"id", s.id},
                         {"uid", s.uid},
+                        {"pid", s.pid},
                         {"client", s.client_name},
                         {"steps", s.steps},
                         {"objects", s.objects},
@@ -26,6 +29,8 @@ json StatusJson(const client::DaemonStatus& status) {
   }
   json errors = json::object();
   for (const auto& [kind, count] : status.errors_by_kind) errors[kind] = count;
+  json methods = json::object();
+  for (const auto& [method, steps] : status.steps_by_method) methods[method] = steps;
   return {{"daemon_version", status.daemon_version},
           {"daemon_name", status.daemon_name},
           {"socket", status.socket_path},
@@ -47,13 +52,60 @@ json StatusJson(const client::DaemonStatus& status) {
             {"p99", status.latency_p99_ms},
             {"max", status.latency_max_ms},
             {"samples", status.latency_samples}}},
-          {"sessions", sessions}};
+          {"sessions", sessions},
+          {"daemon_pid", status.daemon_pid},
+          {"gpu_names", status.gpu_names},
+          {"opens_refused_total", status.opens_refused_total},
+          {"memory_rss_bytes", status.memory_rss_bytes},
+          {"segment_bytes", status.segment_bytes},
+          {"steps_by_method", methods}};
+}
+
+std::string Joined(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : ",") + name;
+  return text.empty() ? "-" : text;
+}
+
+// far-client status --all: every daemon on this machine, one line each.
+int PrintAll(const client::ClientOptions& options, bool as_json) {
+  const std::vector<client::FoundDaemon> found = client::FindDaemons(options);
+  if (as_json) {
+    json all = json::array();
+    for (const auto& daemon : found) {
+      all.push_back(daemon.status ? StatusJson(*daemon.status)
+                                  : json{{"socket", daemon.socket_path}, {"error", daemon.error}});
+    }
+    std::cout << all.dump(2) << "\n";
+    return 0;
+  }
+  if (found.empty()) std::printf("no far-daemon sockets on this machine\n");
+  std::printf("%-12s %-8s %-9s %-9s %-10s %-10s %-18s %s\n", "name", "pid", "sessions", "steps",
+              "p50 ms", "p99 ms", "gpu names", "socket / renderer");
+  for (const auto& daemon : found) {
+    if (!daemon.status) {
+      std::printf("%-12s %-8s %-9s %-9s %-10s %-10s %-18s %s (%s)\n", "?", "-", "-", "-", "-", "-",
+                  "-", daemon.socket_path.c_str(), daemon.error.c_str());
+      continue;
+    }
+    const client::DaemonStatus& s = *daemon.status;
+    const std::string sessions =
+        std::to_string(s.sessions_open) + "/" + std::to_string(s.max_sessions);
+    std::printf("%-12s %-8d %-9s %-9lld %-10.3f %-10.3f %-18s %s (%s)\n", s.daemon_name.c_str(),
+                s.daemon_pid, sessions.c_str(), static_cast<long long>(s.steps_total),
+                s.latency_p50_ms, s.latency_p99_ms, Joined(s.gpu_names).c_str(),
+                daemon.socket_path.c_str(), s.gl_renderer.c_str());
+  }
+  return 0;
 }
 
 void PrintText(const client::DaemonStatus& status) {
   std::printf("far-daemon %s '%s', up %.1f s, socket %s\n", status.daemon_version.c_str(),
               status.daemon_name.c_str(), status.uptime_ms / 1000.0, status.socket_path.c_str());
-  std::printf("GL_RENDERER: %s (%s)\n", status.gl_renderer.c_str(), status.gl_device.c_str());
+  std::printf("GL_RENDERER: %s (%s); GPU names: %s\n", status.gl_renderer.c_str(),
+              status.gl_device.c_str(), Joined(status.gpu_names).c_str());
+  std::printf("pid %d, resident memory %.1f MiB, session segments %.1f MiB\n", status.daemon_pid,
+              status.memory_rss_bytes / 1048576.0, status.segment_bytes / 1048576.0);
   std::printf("LCM: %s, channels %sS<id>_REQ/_REPLY\n", status.lcm_url.c_str(),
               status.channel_prefix.c_str());
   std::printf("steps: %lld  errors: %lld  rejected messages: %lld\n",
@@ -63,9 +115,13 @@ void PrintText(const client::DaemonStatus& status) {
   std::printf("step latency ms: p50 %.3f  p90 %.3f  p99 %.3f  max %.3f  (%lld steps)\n",
               status.latency_p50_ms, status.latency_p90_ms, status.latency_p99_ms,
               status.latency_max_ms, static_cast<long long>(status.latency_samples));
+  for (const auto& [method, steps] : status.steps_by_method) {
+    std::printf("steps by %-18s %lld\n", method.c_str(), static_cast<long long>(steps));
+  }
   for (const auto& [kind, count] : status.errors_by_kind) {
     std::printf("errors %-20s %lld\n", kind.c_str(), static_cast<long long>(count));
   }
+  std::printf("session opens refused: %lld\n", static_cast<long long>(status.opens_refused_total));
   // The daemon lists the asking user's sessions, and every session to root.
   const char* whose = getuid() == 0 ? "every user's" : "yours";
   std::printf("sessions: %d open of %d (at most %d per user); %s:%s\n", status.sessions_open,
@@ -107,10 +163,15 @@ Command AddStatusCommand(CLI::App& app, const GlobalFlags& global) {
                                    "Print the daemon's status: GL renderer and device, sessions "
                                    "(your own; all for root), steps, latency percentiles, "
                                    "errors by kind");
+  auto all = std::make_shared<bool>(false);
   command.app->add_flag("--json", *as_json, "print JSON");
-  command.run = [&global, as_json] {
+  command.app->add_flag("--all", *all,
+                        "every daemon on this machine (each socket in the socket directories), "
+                        "one line each; with --json an array");
+  command.run = [&global, as_json, all] {
     auto options = global.Options();
     if (!options) return Fail(options.error());
+    if (*all) return PrintAll(*options, *as_json);
     auto status = client::Client::Status(*options);
     if (!status) return Fail(status.error());
     if (*as_json) {

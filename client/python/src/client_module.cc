@@ -62,12 +62,11 @@ ClientOptions ToOptions(const std::string& daemon, const std::string& socket_pat
 
 // The options of far::client::ClientOptions, by the same names; durations in seconds (a float
 // or a datetime.timedelta).
-#define FAR_PYTHON_CLIENT_OPTIONS                                                         \
-  py::kw_only(), py::arg("daemon") = std::string(far::client::kDefaultDaemonName),        \
-                 py::arg("socket_path") = "", py::arg("lcm_url") = "",                    \
-                 py::arg("client_name") = "far-python", py::arg("connect_timeout") = 1.0, \
-                 py::arg("hear_timeout") = 1.0, py::arg("timeout") = 60.0,                \
-                 py::arg("record_path") = py::none()
+#define FAR_PYTHON_CLIENT_OPTIONS                                                 \
+  py::kw_only(), py::arg("daemon") = std::string(), py::arg("socket_path") = "",  \
+                 py::arg("lcm_url") = "", py::arg("client_name") = "far-python",  \
+                 py::arg("connect_timeout") = 1.0, py::arg("hear_timeout") = 1.0, \
+                 py::arg("timeout") = 60.0, py::arg("record_path") = py::none()
 
 // One far::client::Client. Every call of it is thread-safe (client.h), so Python threads may
 // share a far.Client without a lock of ours. Every call runs with the GIL released (an update
@@ -132,15 +131,16 @@ class PyClient {
 py::dict StatusDict(const client::DaemonStatus& s) {
   py::list sessions;
   for (const auto& session : s.sessions) {
-    sessions.append(py::dict(py::arg("id") = session.id, py::arg("uid") = session.uid,
-                             py::arg("client_name") = session.client_name,
-                             py::arg("steps") = session.steps, py::arg("objects") = session.objects,
-                             py::arg("triangles") = session.triangles,
-                             py::arg("latency_p50_ms") = session.latency_p50_ms,
-                             py::arg("latency_p99_ms") = session.latency_p99_ms));
+    sessions.append(py::dict(
+        py::arg("id") = session.id, py::arg("uid") = session.uid, py::arg("pid") = session.pid,
+        py::arg("client_name") = session.client_name, py::arg("steps") = session.steps,
+        py::arg("objects") = session.objects, py::arg("triangles") = session.triangles,
+        py::arg("latency_p50_ms") = session.latency_p50_ms,
+        py::arg("latency_p99_ms") = session.latency_p99_ms));
   }
-  py::dict errors;
+  py::dict errors, methods;
   for (const auto& [kind, count] : s.errors_by_kind) errors[py::str(kind)] = count;
+  for (const auto& [method, steps] : s.steps_by_method) methods[py::str(method)] = steps;
   py::dict out;
   out["daemon_version"] = s.daemon_version;
   out["daemon_name"] = s.daemon_name;
@@ -163,6 +163,12 @@ py::dict StatusDict(const client::DaemonStatus& s) {
   out["latency_samples"] = s.latency_samples;
   out["sessions"] = sessions;
   out["errors_by_kind"] = errors;
+  out["daemon_pid"] = s.daemon_pid;
+  out["gpu_names"] = s.gpu_names;
+  out["opens_refused_total"] = s.opens_refused_total;
+  out["memory_rss_bytes"] = s.memory_rss_bytes;
+  out["segment_bytes"] = s.segment_bytes;
+  out["steps_by_method"] = methods;
   return out;
 }
 

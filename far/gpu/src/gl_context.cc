@@ -19,6 +19,7 @@ struct EglState {
   EGLDisplay display = EGL_NO_DISPLAY;
   EGLContext context = EGL_NO_CONTEXT;
   std::string renderer, version, platform;
+  std::string drm_device_file;  ///< the EGL device's DRM file; "" for software and surfaceless
 };
 
 std::string EglErrorName(EGLint error) {
@@ -165,13 +166,18 @@ bool IsSoftwareDevice(EGLDeviceEXT device) {
 }
 
 // "EGL device 1 (hardware, /dev/dri/card1)": how a device is named in logs, errors and status.
+// The device's DRM file (/dev/dri/cardN) when EGL_EXT_device_drm gives one, else "".
+std::string DrmDeviceFile(EGLDeviceEXT device) {
+  if (!HasExtension(eglQueryDeviceStringEXT(device, EGL_EXTENSIONS), "EGL_EXT_device_drm"))
+    return {};
+  const char* file = eglQueryDeviceStringEXT(device, EGL_DRM_DEVICE_FILE_EXT);
+  return file == nullptr ? std::string() : std::string(file);
+}
+
 std::string DeviceName(EGLDeviceEXT device, int index) {
   std::string name = "EGL device " + std::to_string(index) +
                      (IsSoftwareDevice(device) ? " (EGL_MESA_device_software" : " (hardware");
-  if (HasExtension(eglQueryDeviceStringEXT(device, EGL_EXTENSIONS), "EGL_EXT_device_drm")) {
-    const char* file = eglQueryDeviceStringEXT(device, EGL_DRM_DEVICE_FILE_EXT);
-    if (file != nullptr) name += std::string(", ") + file;
-  }
+  if (const std::string file = DrmDeviceFile(device); !file.empty()) name += ", " + file;
   return name + ")";
 }
 
@@ -195,6 +201,7 @@ bool TryOneDevice(const char* client_extensions, int index, EglState* state,
     return false;
   }
   state->platform = name;
+  state->drm_device_file = DrmDeviceFile(devices[static_cast<size_t>(index)]);
   return true;
 }
 
@@ -233,6 +240,7 @@ bool TryDevicePlatform(const char* client_extensions, bool hardware_only, EglSta
         continue;
       }
       state->platform = name;
+      state->drm_device_file = DrmDeviceFile(devices[i]);
       return true;
     }
   }
@@ -249,13 +257,15 @@ bool internal::OffersEglDevicePlatform(const char* client_extensions) {
 
 struct GlContext::Impl : EglState {};
 
-std::vector<std::string> GlContext::ListDevices() {
+std::vector<GlContext::Device> GlContext::ListDevices() {
   const std::vector<EGLDeviceEXT> devices =
       QueryDevices(eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS));
-  std::vector<std::string> names;
-  for (size_t i = 0; i < devices.size(); ++i)
-    names.push_back(DeviceName(devices[i], static_cast<int>(i)));
-  return names;
+  std::vector<Device> list;
+  for (size_t i = 0; i < devices.size(); ++i) {
+    list.push_back(Device{static_cast<int>(i), DeviceName(devices[i], static_cast<int>(i)),
+                          DrmDeviceFile(devices[i])});
+  }
+  return list;
 }
 
 Result<std::unique_ptr<GlContext>> GlContext::Create(GlPlatform platform, int device) {
@@ -319,5 +329,6 @@ GlContext::~GlContext() {
 const std::string& GlContext::renderer() const { return impl_->renderer; }
 const std::string& GlContext::version() const { return impl_->version; }
 const std::string& GlContext::platform_description() const { return impl_->platform; }
+const std::string& GlContext::drm_device_file() const { return impl_->drm_device_file; }
 
 }  // namespace far

@@ -34,7 +34,10 @@ struct ClientOptions {
   /// The daemon's name: its socket is <dir>/<name>.sock, dir as far-daemon chooses it
   /// ($FAR_SOCKET_DIR, else /run/far, else $XDG_RUNTIME_DIR/far, else /tmp/far-<uid> or, when
   /// another user holds that, $HOME/.far/run-<host>; docs/daemon.md, "Where it listens").
-  std::string daemon = std::string(kDefaultDaemonName);
+  /// "auto": the daemon of the job's GPU on this machine, else the least loaded
+  /// (far/client/discovery.h). "" (the default): $FAR_DAEMON when set and no socket_path is
+  /// given, so that a scheduler can point every client of a job at a daemon; else "far".
+  std::string daemon;
   std::string socket_path;  ///< the daemon's socket, when not the default for `daemon`
   /// The LCM URL of the session's channels; "" = the one the daemon names when it opens the
   /// session (the usual case: clients need no LCM configuration).
@@ -84,6 +87,7 @@ struct DaemonStatus {
   struct Session {
     int64_t id = 0;
     int uid = 0;
+    int pid = 0;  ///< the client's process id (as the daemon sees it: SO_PEERCRED)
     std::string client_name;
     int64_t steps = 0;
     int objects = 0;
@@ -92,6 +96,15 @@ struct DaemonStatus {
   };
   std::vector<Session> sessions;
   std::vector<std::pair<std::string, int64_t>> errors_by_kind;
+  int daemon_pid = 0;
+  int64_t opens_refused_total = 0;  ///< session opens refused (limits, rate, bad parameters)
+  int64_t memory_rss_bytes = 0;     ///< the daemon's resident memory
+  int64_t segment_bytes = 0;        ///< the open sessions' shared-memory segments
+  /// What schedulers call the daemon's GPU: its device minor number, UUID and PCI address
+  /// when it has one (far::GpuIdentifiers), and far-daemon --serves-gpus (docs/cluster.md).
+  std::vector<std::string> gpu_names;
+  /// Steps answered by each method that ran ("bvh", "gpu", ...), since the daemon started.
+  std::vector<std::pair<std::string, int64_t>> steps_by_method;
 };
 
 /// One session with far-daemon: a connection to its local socket (the session lives as long as
@@ -184,6 +197,8 @@ class Client {
   struct Impl;
   friend struct internal::ClientAccess;  // replay writes recorded ring records bit for bit
   explicit Client(std::unique_ptr<Impl> impl);
+  // Connect for one daemon by name or socket (never "auto").
+  static Result<std::unique_ptr<Client>> ConnectTo(const ClientOptions& options);
   std::unique_ptr<Impl> impl_;
 };
 

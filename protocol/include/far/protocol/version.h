@@ -10,7 +10,7 @@ namespace far::protocol {
 
 /// Carried in every far_lcm message's `protocol_version`; bumped with every change of meaning
 /// (a change of a message's fields also changes its LCM fingerprint).
-inline constexpr int32_t kProtocolVersion = 4;
+inline constexpr int32_t kProtocolVersion = 5;
 
 /// Byte caps checked before decoding. Control messages (open, step and status requests, open
 /// reply, step status, error) are small; step replies may be large (shm path), and a sealed

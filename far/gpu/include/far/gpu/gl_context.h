@@ -29,9 +29,17 @@ class GlContext {
   static Result<std::unique_ptr<GlContext>> Create(GlPlatform platform = GlPlatform::kAuto,
                                                    int device = -1);
 
-  /// The EGL devices in EGL's order, one line each: "EGL device 0 (hardware, /dev/dri/card0)",
-  /// "EGL device 1 (EGL_MESA_device_software)". Empty without the EGL device platform.
-  static std::vector<std::string> ListDevices();
+  /// An EGL device: its index (Create's `device`), a line naming it ("EGL device 0 (hardware,
+  /// /dev/dri/card0)", "EGL device 1 (EGL_MESA_device_software)") and its DRM file ("" when
+  /// EGL_EXT_device_drm gives none), which leads to the names a scheduler gives the GPU
+  /// (far::GpuIdentifiers).
+  struct Device {
+    int index = 0;
+    std::string description;
+    std::string drm_device_file;
+  };
+  /// The EGL devices in EGL's order. Empty without the EGL device platform.
+  static std::vector<Device> ListDevices();
 
   ~GlContext();
   GlContext(const GlContext&) = delete;
@@ -43,6 +51,9 @@ class GlContext {
   const std::string& version() const;
   /// How the context was made, e.g. "EGL device 0 (EGL_MESA_device_software)" or "surfaceless".
   const std::string& platform_description() const;
+  /// The DRM file of the EGL device the context was made on ("/dev/dri/card1"); "" for a
+  /// software device or the surfaceless platform.
+  const std::string& drm_device_file() const;
 
  private:
   struct Impl;
