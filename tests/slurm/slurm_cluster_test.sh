@@ -8,7 +8,10 @@
 #   b. a long job cancelled with scancel while its tasks step: afterwards no far process is
 #      left, no session segment, nothing new in /dev/shm, and the job's socket directory is gone;
 #   c. deploy/slurm/far-sim-node-service.sbatch's tasks on a daemon started outside Slurm, as
-#      the node's service: their contacts, and no session of theirs left on it.
+#      the node's service: their contacts, and no session of theirs left on it;
+#   d. the per-GPU layout: a job given 2 GPUs (gres: two device nodes made in the private
+#      directory) runs far-gpu-0 and far-gpu-1 (both on the default renderer, each advertising
+#      its Slurm GPU id: FAR_GPU_FLAG=--serves-gpus), and each task lands on its GPU's daemon.
 # Slurm talks TCP on 127.0.0.1 (ports chosen at run time) and far LCM on the loopback: run it
 # inside deploy/netns-run.sh. Exit 77 (skipped) only when Slurm or munge is not installed.
 # Usage: slurm_cluster_test.sh <build dir> <source dir>
@@ -200,10 +203,18 @@ ReturnToService=2
 KillWait=10
 InactiveLimit=0
 MinJobAge=300
-NodeName=far-node NodeAddr=127.0.0.1 NodeHostname=$host CPUs=4 RealMemory=1000 State=UNKNOWN
+GresTypes=gpu
+NodeName=far-node NodeAddr=127.0.0.1 NodeHostname=$host CPUs=4 RealMemory=1000 Gres=gpu:2 State=UNKNOWN
 PartitionName=far Nodes=far-node Default=YES MaxTime=INFINITE State=UP
 EOF
 : >"$work/etc/plugstack.conf"
+# Two GPUs for job d. slurmd wants a character device behind each (it never opens one with
+# task/none): nodes with /dev/null's numbers, in the private directory.
+mkdir "$work/dev"
+for gpu in 0 1; do
+  mknod "$work/dev/gpu$gpu" c 1 3 || fail "mknod $work/dev/gpu$gpu failed (it needs real root)"
+done
+printf 'Name=gpu File=%s\n' "$work/dev/gpu0" "$work/dev/gpu1" >"$work/etc/gres.conf"
 slurmctld -D -i >"$work/log/slurmctld.out" 2>&1 &
 slurmctld_pid=$!
 slurmd -D -N far-node >"$work/log/slurmd.out" 2>&1 &
@@ -282,14 +293,14 @@ phase_done "job a: $tasks tasks, $frames steps each"
 # Each task's ping names the daemon it found, and its play prints every step's contacts.
 for ((task = 0; task < tasks; task++)); do
   lines=$(sed -n "s/^ *$task: //p" "$work/job-a.out")
-  grep -q "^far-daemon 'far' answered on $job_a_dir/run/far.sock" <<<"$lines" ||
+  grep -q "^far-daemon 'far-job' answered on $job_a_dir/run/far-job.sock" <<<"$lines" ||
     fail "task $task found no daemon in the job's socket directory: $lines"
   contacts_by_step <<<"$lines" >"$work/task-$task.txt"
   diff -u "$reference" "$work/task-$task.txt" >"$work/task-$task.diff" ||
     fail "task $task's contacts differ from far-snapshot's: $(cat "$work/task-$task.diff")"
 done
 [ -z "$(far_processes)" ] || fail "far processes left after job a: $(far_processes)"
-[ ! -S "$job_a_dir/run/far.sock" ] || fail "job a left its socket $job_a_dir/run/far.sock"
+[ ! -S "$job_a_dir/run/far-job.sock" ] || fail "job a left its socket $job_a_dir/run/far-job.sock"
 echo "slurm test: job a: $tasks tasks, each $frames steps with the reference's contacts" \
   "($(grep -c contacts "$reference") steps, $(grep -c touches "$reference") touching object pairs)"
 
@@ -301,7 +312,7 @@ job_b=$(env -u FAR_SOCKET_DIR TMPDIR="$job_b_dir" FAR_BIN="$build_dir" FAR_LOG_D
   FAR_SCENE="$work/scene/scene.json" FAR_STEPS=100000000 FAR_PLAY_ARGS="--method far --resolution 512" \
   FAR_TASK_OUTPUT=/dev/null \
   sbatch --parsable --ntasks="$tasks" --output="$work/job-b.out" --chdir="$work" "$job_script")
-socket_b=$job_b_dir/far-job-$job_b/far.sock
+socket_b=$job_b_dir/far-job-$job_b/far-job.sock
 # FAR's GL method at 512^2: a step is tens of milliseconds of the daemon's GL work (llvmpipe),
 # while its client waits, so the cancel finds steps inside the daemon. (With bvh, four clients
 # stepping in a tight loop at thousands of steps a second starve the checks below of the two
@@ -348,21 +359,21 @@ new_shm=$(comm -13 "$work/shm-before.txt" "$work/shm-after.txt")
 [ ! -e "$(dirname "$socket_b")" ] || fail "job b left its socket directory: $(ls -la "$(dirname "$socket_b")")"
 grep -q "far-job: $job_b stopped by SIGTERM" "$work/job-b.out" ||
   fail "job b's script did not run its SIGTERM trap: $(cat "$work/job-b.out")"
-grep -q "event=daemon_stopped" "$work/log/far-$job_b-far.log" ||
-  fail "job b's daemon did not stop cleanly: $(tail -n 5 "$work/log/far-$job_b-far.log")"
+grep -q "event=daemon_stopped" "$work/log/far-$job_b-far-job.log" ||
+  fail "job b's daemon did not stop cleanly: $(tail -n 5 "$work/log/far-$job_b-far-job.log")"
 phase_done "job b: checks after scancel"
 echo "slurm test: job b: cancelled mid-step ($segments segments open, $later_steps steps);" \
   "0 far processes, 0 segments, 0 new /dev/shm entries left"
 
 # --- c. The node's daemon as a service -------------------------------------------------------
-# A daemon started outside Slurm, as the package's far-daemon.service would be (name far; its
-# socket directory stands for /run/far), and far-sim-node-service.sbatch's tasks finding it on
-# their own.
+# A daemon started outside Slurm, as the package's far-daemon@far-node.service would be (its
+# socket directory stands for /run/far), and far-sim-node-service.sbatch's tasks finding it
+# without its name.
 service_dir=$work/service-run
 mkdir -m 0700 "$service_dir"
-"$daemon_bin" --name far --socket "$service_dir/far.sock" >"$work/log/far-service.log" 2>&1 &
+"$daemon_bin" --name far-node --socket "$service_dir/far-node.sock" >"$work/log/far-service.log" 2>&1 &
 service_pid=$!
-"$client_bin" --socket "$service_dir/far.sock" --connect-timeout 120s ping >/dev/null ||
+"$client_bin" --socket "$service_dir/far-node.sock" --connect-timeout 120s ping >/dev/null ||
   fail "the service daemon did not answer"
 job_c=$(FAR_BIN=$build_dir FAR_SOCKET_DIR=$service_dir FAR_SCENE=$work/scene/scene.json \
   FAR_PLAY_ARGS="--contacts --method bvh --resolution 128" \
@@ -372,13 +383,13 @@ state=$(wait_for_job "$job_c" 300)
 [ "$state" = COMPLETED ] || fail "job c ($job_c) is $state: $(cat "$work/job-c.out")"
 for task in 0 1; do
   lines=$(sed -n "s/^ *$task: //p" "$work/job-c.out")
-  grep -q "^far-daemon 'far' answered on $service_dir/far.sock" <<<"$lines" ||
+  grep -q "^far-daemon 'far-node' answered on $service_dir/far-node.sock" <<<"$lines" ||
     fail "job c's task $task did not find the service daemon: $lines"
   contacts_by_step <<<"$lines" | diff -u "$reference" - >"$work/task-c$task.diff" ||
     fail "job c's task $task: contacts differ from far-snapshot's: $(cat "$work/task-c$task.diff")"
 done
 # The job's sessions ended with its tasks; the service goes on.
-read -r sessions _ < <("$client_bin" --socket "$service_dir/far.sock" status |
+read -r sessions _ < <("$client_bin" --socket "$service_dir/far-node.sock" status |
   awk '/^steps: / { steps = $2 } /^sessions: / { open = $2 } END { print open, steps }')
 [ "$sessions" = 0 ] || fail "the service daemon still has $sessions sessions after job c"
 kill -TERM "$service_pid"
@@ -386,3 +397,30 @@ wait "$service_pid" || fail "the service daemon exited $? on SIGTERM"
 service_pid=""
 phase_done "job c: 2 tasks on a node service"
 echo "slurm test: job c: 2 tasks found the node's service daemon, each with the reference's contacts"
+
+# --- d. One daemon per GPU --------------------------------------------------------------------
+job_d_dir=$work/job-d
+mkdir -m 0700 "$job_d_dir"
+job_d=$(FAR_BIN=$build_dir FAR_SOCKET_DIR=$job_d_dir/run FAR_LOG_DIR=$work/log \
+  FAR_SCENE=$work/scene/scene.json FAR_PLAY_ARGS="--contacts --method bvh --resolution 128" \
+  FAR_GPU_FLAG=--serves-gpus \
+  sbatch --parsable --gpus=2 --ntasks="$tasks" --output="$work/job-d.out" --chdir="$work" "$job_script")
+state=$(wait_for_job "$job_d" 300)
+[ "$state" = COMPLETED ] || fail "job d ($job_d) is $state: $(cat "$work/job-d.out")"
+# Slurm numbers a node's GPUs 0, 1, ... (gres.conf's order); task t takes GPU t mod 2.
+for ((task = 0; task < tasks; task++)); do
+  gpu=$((task % 2))
+  lines=$(sed -n "s/^ *$task: //p" "$work/job-d.out")
+  grep -q "^far-daemon 'far-gpu-$gpu' answered on $job_d_dir/run/far-gpu-$gpu.sock" <<<"$lines" ||
+    fail "job d's task $task is not on far-gpu-$gpu: $lines"
+  contacts_by_step <<<"$lines" | diff -u "$reference" - >"$work/task-d$task.diff" ||
+    fail "job d's task $task: contacts differ from far-snapshot's: $(cat "$work/task-d$task.diff")"
+done
+for gpu in 0 1; do
+  opened=$(grep -c "event=session_open" "$work/log/far-$job_d-far-gpu-$gpu.log" || true)
+  [ "$opened" -eq $((tasks / 2)) ] ||
+    fail "far-gpu-$gpu opened $opened sessions, not $((tasks / 2)) (one per task of its GPU)"
+done
+[ -z "$(far_processes)" ] || fail "far processes left after job d: $(far_processes)"
+phase_done "job d: $tasks tasks on 2 GPUs' daemons"
+echo "slurm test: job d: 2 GPUs, a daemon for each, $tasks tasks each on its GPU's daemon"
