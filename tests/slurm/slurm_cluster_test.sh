@@ -138,6 +138,8 @@ cleanup() {
   exit "$status"
 }
 trap cleanup EXIT
+trap 'exit 143' TERM
+trap 'exit 130' INT
 
 # --- The cluster ------------------------------------------------------------------------------
 mkdir -p "$work"/{munge,munge-socket,etc,state,spool/far-node,log,run}
