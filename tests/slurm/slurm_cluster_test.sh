@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# A one-node Slurm cluster of its own (munged, slurmctld, slurmd; every file in a private
-# directory, no system file read or changed), running deploy/slurm/far-job.sbatch for real:
+# A one-node Slurm cluster of its own (munged, slurmctld, slurmd; every file they use in a
+# private directory: no system file changed, neither Slurm's nor munge's configuration read),
+# running deploy/slurm/far-job.sbatch for real:
 #   a. a job of several simulator tasks, each finding the job's far-daemon without its name
 #      (FAR_DAEMON=auto): the job exits 0 and every task's contacts, step by step, are those
 #      far-snapshot computes for the same scene in this process's build (far::Pipeline in
