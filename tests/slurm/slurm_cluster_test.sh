@@ -310,9 +310,10 @@ echo "slurm test: job a: $tasks tasks, each $frames steps with the reference's c
 # --- b. A cancelled job leaves nothing --------------------------------------------------------
 job_b_dir=$work/job-b
 mkdir -m 0700 "$job_b_dir"
-# No FAR_SOCKET_DIR: the job makes its own directory, $TMPDIR/far-job-<id>, and removes it.
-job_b=$(env -u FAR_SOCKET_DIR TMPDIR="$job_b_dir" FAR_BIN="$build_dir" FAR_LOG_DIR="$work/log" \
-  FAR_SCENE="$work/scene/scene.json" FAR_STEPS=100000000 FAR_PLAY_ARGS="--method far --resolution 512" \
+# No FAR_SOCKET_DIR, no FAR_SCENE: the job makes its own directory, $TMPDIR/far-job-<id>, and
+# a demo scene in it, and removes both.
+job_b=$(env -u FAR_SOCKET_DIR -u FAR_SCENE TMPDIR="$job_b_dir" FAR_BIN="$build_dir" FAR_LOG_DIR="$work/log" \
+  FAR_STEPS=100000000 FAR_PLAY_ARGS="--method far --resolution 512" \
   FAR_TASK_OUTPUT=/dev/null \
   sbatch --parsable --ntasks="$tasks" --output="$work/job-b.out" --chdir="$work" "$job_script")
 socket_b=$job_b_dir/far-job-$job_b/far-job.sock
