@@ -35,6 +35,7 @@ configs=(
   '{"name": "gpu-1", "socket_path": "/run/far/gpu-1.sock", "gpu": 0, "max_sessions_per_user": 2, "max_opens_per_second_per_user": 5}'
   '{"ring_bytes": 1048576, "reply_bytes": 65536, "max_requests_per_second": 100.5, "max_queued_per_session": 2, "step_deadline_ms": 1000, "heavy_step_ms": 20, "exact_threads": 2}'
   '{"max_triangles_per_session": 1000, "max_vertices_per_session": 3000, "max_objects_per_session": 10, "max_triangles_total": 5000, "max_vertices_total": 15000, "max_reply_pairs": 100, "gl_platform": "device"}'
+  '{"name": "gpu-0", "gpu_id": "GPU-6f0e2b1c", "serves_gpus": ["0", "0000:3b:00.0"]}'
   '{"max_sesions": 3}'
   '{"ring_bytes": 100000}'
   '{"max_triangles_per_session": 9223372036854775807, "max_requests_per_second": 1e300}'

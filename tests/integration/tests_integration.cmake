@@ -35,6 +35,7 @@ set(far_integration_tests
   integration/end_to_end_test.cc
   integration/readable_output_test.cc
   integration/two_daemons_test.cc
+  integration/auto_daemon_test.cc
   integration/privacy_test.cc
   integration/waiting_test.cc
   integration/record_replay_test.cc
