@@ -26,7 +26,8 @@ struct DaemonConfig {
   GlPlatform gl_platform = GlPlatform::kAuto;
   int gpu = -1;  ///< EGL device index (far-daemon --gpu N); -1: the first that works
   /// The GPU by a name its scheduler gives it (far-daemon --gpu-id): a device minor number
-  /// ("2", as in SLURM_JOB_GPUS), an NVIDIA UUID or a PCI address; "" = by `gpu`. The EGL
+  /// ("2", Slurm's index when gres.conf lists the devices in minor order), an NVIDIA UUID or a
+  /// PCI address; "" = by `gpu`. The EGL
   /// device whose far::GpuIdentifiers include it is used (docs/cluster.md).
   std::string gpu_id;
   /// More names the daemon answers to when clients look for their job's GPU (far-client

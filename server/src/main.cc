@@ -62,9 +62,9 @@ struct CommandLine {
         "other; a second GPU gets a second daemon with its own --name)",
         false);
     Add("--gpu-id", &DaemonConfig::gpu_id,
-        "the GPU by a name its scheduler gives it: a device minor number (the N of /dev/nvidiaN, "
-        "as in SLURM_JOB_GPUS), an NVIDIA UUID (GPU-...) or a PCI address; --list-gpus shows "
-        "each device's names",
+        "the GPU by a name its scheduler gives it: a device minor number (the N of /dev/nvidiaN; "
+        "Slurm's GPU index when gres.conf lists the devices in minor order), an NVIDIA UUID "
+        "(GPU-...) or a PCI address; --list-gpus shows each device's names",
         false);
     Add("--serves-gpus", &DaemonConfig::serves_gpus,
         "comma-separated names this daemon also answers to when clients look for their job's "

@@ -1,7 +1,8 @@
 #pragma once
 
 // What a cluster scheduler calls a GPU, read from the files the kernel and NVIDIA's driver
-// publish. Slurm's gres indices (SLURM_JOB_GPUS, SLURM_STEP_GPUS) follow the N of /dev/nvidiaN,
+// publish. Slurm's gres indices (SLURM_JOB_GPUS, SLURM_STEP_GPUS) are the N of /dev/nvidiaN
+// when gres.conf lists the devices in minor order,
 // NVIDIA's Kubernetes device plugin names GPUs by UUID (NVIDIA_VISIBLE_DEVICES), and every
 // vendor's device has a PCI address. EGL names none of them, but EGL_EXT_device_drm gives the
 // device's DRM file (/dev/dri/cardN), which leads to all three (docs/cluster.md).
