@@ -129,7 +129,8 @@ class DaemonUnderTest {
       stats_,           budget_,
       setup_allowance_,
       /*use_gl=*/false, [this](int64_t id, const std::string&) { sessions_.Close(id); }};
-  server::StatusSources status_{config_, stats_, sessions_, "none", "none", Clock::now()};
+  server::StatusSources status_{config_, stats_, sessions_, budget_,
+                                "none",  "none", {},        Clock::now()};
   std::atomic<bool> stop_{false};
   std::unique_ptr<server::SocketServer> server_;
   std::thread thread_;
