@@ -152,24 +152,27 @@ TEST_F(AutoDaemonTest, ThirtyTwoClientsFindTheirGpusDaemonAndAreServedFairly) {
   }
 }
 
-TEST_F(AutoDaemonTest, ClientsOfAJobWithoutGpusSpreadOverTheLeastLoadedDaemons) {
+TEST_F(AutoDaemonTest, ClientsOfAJobWithoutGpusGoToTheLeastLoadedDaemon) {
+  // One client after another, each once the one before has its session: each sees the loads
+  // as they are, so the least loaded daemon alternates. (Clients that start together see the
+  // same loads and spread by process id instead: no count is promised then.)
   constexpr int kClients = 16;
   std::vector<std::unique_ptr<ChildProcess>> clients;
-  for (int i = 0; i < kClients; ++i) {
-    clients.push_back(SpawnClient("", 8));
-    ASSERT_NE(clients.back(), nullptr);
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
   std::map<std::string, int> open;
-  ASSERT_TRUE(WaitUntil(
-      [&] {
-        open = OpenSessions(AllStatus());
-        return open["gpu-0"] + open["gpu-1"] == kClients;
-      },
-      std::chrono::seconds(20)));
+  for (int i = 0; i < kClients; ++i) {
+    clients.push_back(SpawnClient("", 120));  // still stepping when the last one starts
+    ASSERT_NE(clients.back(), nullptr);
+    ASSERT_TRUE(WaitUntil(
+        [&] {
+          open = OpenSessions(AllStatus());
+          return open["gpu-0"] + open["gpu-1"] == i + 1;
+        },
+        std::chrono::seconds(20)))
+        << AllStatus().dump(2);
+    EXPECT_LE(std::abs(open["gpu-0"] - open["gpu-1"]), 1) << "after client " << i;
+  }
   std::printf("16 clients without a GPU: gpu-0 %d, gpu-1 %d\n", open["gpu-0"], open["gpu-1"]);
-  EXPECT_LE(std::abs(open["gpu-0"] - open["gpu-1"]), 4);
-  for (auto& client : clients) EXPECT_EQ(client->Wait(std::chrono::seconds(40)), 0);
+  // Their work is done: SIGKILL (the destructor), and the daemons close their sessions.
 }
 
 }  // namespace
