@@ -8,7 +8,8 @@
 #   bash bench/daemon/threads_scaling.sh build/release 5 3 bvh 1 2 4 8
 # The daemon runs on its default renderer (llvmpipe without a GPU), in a private network
 # namespace (deploy/netns-run.sh): no datagram leaves loopback. FAR_DAEMON_ARGS adds daemon flags
-# (FAR_DAEMON_ARGS="--threads 1": one thread per step, no CPU pool).
+# (FAR_DAEMON_ARGS="--threads 1": one thread per step, no CPU pool); FAR_LOAD_ARGS adds
+# far-client load flags (FAR_LOAD_ARGS="--scene S": each thread steps scene S, not a soup).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 if [ "${FAR_IN_NETNS:-}" != 1 ]; then exec deploy/netns-run.sh bash "$0" "$@"; fi
@@ -37,8 +38,9 @@ for ((r = 0; r < reps; r++)); do
   for ((i = 0; i < n; i++)); do
     c=${counts[$(((i + r) % n))]}
     d0=$(daemon_cpu)
+    # shellcheck disable=SC2086
     /usr/bin/time -f "%U %S" -o "$work/time" "$client" --socket "$work/far.sock" load \
-      --clients "$c" --seconds "$seconds" --method "$method" --json >"$work/out.json"
+      --clients "$c" --seconds "$seconds" --method "$method" ${FAR_LOAD_ARGS:-} --json >"$work/out.json"
     d1=$(daemon_cpu)
     python3 - "$c" "$work/out.json" "$work/time" "$d0" "$d1" "$tick" >>"$work/runs" <<'EOF'
 import json, sys

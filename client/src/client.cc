@@ -12,12 +12,12 @@
 
 #include "daemon_connection.h"
 #include "session_recorder.h"
+#include "shared_receiver.h"
 
 #include "far/client/discovery.h"
 #include "far/client/internal/client_access.h"
 #include "far/protocol/channels.h"
 #include "far/protocol/convert.h"
-#include "far/protocol/lcm_bus.h"
 #include "far/protocol/message.h"
 #include "far/protocol/ring_records.h"
 #include "far/protocol/session_auth.h"
@@ -83,7 +83,10 @@ StepRequest RequestToSend(StepRequest request) {
 struct Client::Impl {
   ClientOptions options;
   protocol::LocalConnection connection{-1};  // the session lives as long as this does
-  std::unique_ptr<protocol::LcmBus> bus;
+  // The process's LCM instance and receiving thread for the session's URL, shared with every
+  // Client on it; this session's listener on it (0: not listening).
+  std::shared_ptr<internal::SharedReceiver> receiver;
+  internal::SharedReceiver::ListenerId listener = 0;
   int64_t session_id = 0;
   std::string request_channel, reply_channel;
   std::unique_ptr<protocol::ShmSegment> segment;
@@ -92,11 +95,11 @@ struct Client::Impl {
   // waits for a write that waits for room in a full ring, which only a step can make.
   std::mutex update_mutex;
   std::unique_ptr<protocol::UpdateWriter> updates;  // under update_mutex
-  std::unique_ptr<protocol::RingReader> replies;    // receive thread only
+  std::unique_ptr<protocol::RingReader> replies;    // receiving thread only
   protocol::SessionKey key{};
-  int64_t last_sealed_id = 0;  // receive thread only: the daemon's sequence, strictly growing
+  int64_t last_sealed_id = 0;  // receiving thread only: the daemon's sequence, strictly growing
 
-  protocol::SkippedReplies skipped;  // receive thread only: reply records read past
+  protocol::SkippedReplies skipped;  // receiving thread only: reply records read past
   std::string socket_path;           // where the session was opened
   std::string lcm_url;               // the session's LCM URL: the daemon's unless the caller's
   std::string daemon_lcm_url;        // the one the daemon serves
@@ -125,9 +128,8 @@ struct Client::Impl {
   std::map<int64_t, Pending> pending;  // by step id
   std::optional<Error> closed;         // set when the session ended
 
-  std::thread receiver;
-  std::thread::id receiving_thread;  // receiver's, set once before Connect returns
   std::atomic<bool> stopping{false};
+  bool connection_ended = false;  // receiving thread only: the daemon's end closed (Tick)
   std::unique_ptr<internal::SessionRecorder> recorder;  // null: not recording
 
   ~Impl() { StopReceiving(); }
@@ -138,13 +140,15 @@ struct Client::Impl {
   // Opens a session on the daemon at options.socket_path (or the default socket for the
   // name): the connection, the open handshake, the segment and its rings; no bus yet.
   static Result<std::unique_ptr<Impl>> OpenOn(const ClientOptions& options);
-  // Creates the bus, subscribes, starts the receive thread and probes (not_heard when no
-  // probe was answered within options.hear_timeout).
+  // Listens on the reply channel through the process's receiver for the URL, and probes
+  // (not_heard when no probe was answered within options.hear_timeout).
   Result<void> Listen();
 
+  // No callback of this session runs once this returns (but the one calling it).
   void StopReceiving() {
     stopping = true;
-    if (receiver.joinable()) receiver.join();
+    if (listener != 0) receiver->Detach(listener);
+    listener = 0;
   }
 
   // Signs and publishes a request, unless the loss seam loses it (call with send_mutex held).
@@ -152,7 +156,7 @@ struct Client::Impl {
     if (Lost({true, session_id, kind, message.step_id, {}})) return {};
     auto bytes = protocol::EncodeSigned(message, key);
     if (!bytes) return bytes.error();
-    return bus->Publish(request_channel, *bytes);
+    return receiver->Publish(request_channel, *bytes);
   }
 
   // The daemon said something of a pending step: it is asked for again only after a quiet
@@ -163,7 +167,7 @@ struct Client::Impl {
     p.wait = kFirstRetry;
   }
 
-  // Asks again for every pending step whose time has come (the receive thread).
+  // Asks again for every pending step whose time has come (the receiving thread).
   void AskAgain() {
     const auto now = Clock::now();
     std::lock_guard send_lock(send_mutex);
@@ -229,11 +233,12 @@ struct Client::Impl {
   // Refuses a call that would wait for the receive thread from the receive thread itself (an
   // on_progress callback): it would wait out its timeout.
   Result<void> CheckNotReceiving(const char* what) const {
-    if (std::this_thread::get_id() != receiving_thread) return {};
+    if (!receiver || !receiver->OnReceivingThread()) return {};
     return MakeError(ErrorCode::kInvalidArgument,
                      std::string(what) +
-                         " called from an on_progress callback of the same client: the callback "
-                         "runs on the thread that receives the replies (use StepAsync)");
+                         " called from an on_progress callback: the callback runs on the thread "
+                         "that receives the replies of every Client of this process on its LCM "
+                         "URL (use StepAsync)");
   }
 
   // Sends a step (StepAsync); its step id, and the future of its reply.
@@ -368,17 +373,16 @@ struct Client::Impl {
     return {false, session_id, "reply", reply ? reply->step_id : -1, {}};
   }
 
-  // The receive thread: LCM replies, and the daemon's end of the connection: when it closes
-  // (the daemon stopped, restarted or ended the session) every waiting step fails at once.
-  void Receive() {
-    while (!stopping) {
-      bus->Handle(std::chrono::milliseconds(50));
-      AskAgain();
-      if (connection.PeerClosed()) {
-        FailAll(MakeError(ErrorCode::kUnavailable,
-                          "far-daemon ended the session (it stopped, restarted or closed it)"));
-        return;
-      }
+  // The receiving thread's timers (SharedReceiver::kTickEvery): steps to ask for again, and
+  // the daemon's end of the connection: when it closes (the daemon stopped, restarted or ended
+  // the session) every waiting step fails at once.
+  void Tick() {
+    if (connection_ended || stopping) return;
+    AskAgain();
+    if (connection.PeerClosed()) {
+      connection_ended = true;
+      FailAll(MakeError(ErrorCode::kUnavailable,
+                        "far-daemon ended the session (it stopped, restarted or closed it)"));
     }
   }
 
@@ -459,13 +463,11 @@ Result<void> Client::Impl::Listen() {
                          "(its default) or give the client one with --lcm-url / "
                          "ClientOptions::lcm_url");
   }
-  auto created = protocol::LcmBus::Create(lcm_url);
-  if (!created) return created.error();
-  bus = std::move(*created);
-  bus->Subscribe(reply_channel,
-                 [this](std::string_view, std::span<const uint8_t> b) { OnReply(b); });
-  receiver = std::thread([this] { Receive(); });
-  receiving_thread = receiver.get_id();
+  auto shared = internal::SharedReceiver::For(lcm_url);
+  if (!shared) return shared.error();
+  receiver = std::move(*shared);
+  listener = receiver->Attach(
+      reply_channel, {[this](std::span<const uint8_t> b) { OnReply(b); }, [this] { Tick(); }});
   // The daemon must hear this client's steps, and the client its replies: a probe proves both
   // before the first step, instead of a first step that waits out its timeout.
   const auto start = Clock::now();
@@ -674,7 +676,8 @@ Result<void> Client::Close() {
   Impl& c = *impl_;
   if (auto ok = c.CheckNotReceiving("Close"); !ok) return ok;
   if (c.stopping.exchange(true)) return {};
-  if (c.receiver.joinable()) c.receiver.join();
+  if (c.listener != 0) c.receiver->Detach(c.listener);
+  c.listener = 0;
   // Closing the connection ends the session: the daemon frees it at once.
   c.connection = protocol::LocalConnection(-1);
   c.FailAll(MakeError(ErrorCode::kUnavailable, "the session is closed"));

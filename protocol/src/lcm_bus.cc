@@ -1,20 +1,34 @@
 #include "far/protocol/lcm_bus.h"
 
+#include <atomic>
+#include <cstdint>
+#include <unordered_map>
+
 #include <lcm/lcm.h>
 
 namespace far::protocol {
+namespace {
 
-struct LcmBus::Subscription {
-  Handler handler;
-  lcm_subscription_t* lcm_subscription = nullptr;
+// The handlers of every subscription in the process, by id. LCM passes a subscription's
+// userdata to its handler after releasing its own lock, so an unsubscribe on another thread
+// may come in between: the userdata is the id, never a pointer that could be freed by then.
+std::mutex g_handlers_mutex;
+std::unordered_map<uint64_t, std::shared_ptr<const LcmBus::Handler>> g_handlers;
+std::atomic<uint64_t> g_next_id{1};
 
-  static void Dispatch(const lcm_recv_buf_t* buffer, const char* channel, void* self) {
-    const auto* subscription = static_cast<const Subscription*>(self);
-    subscription->handler(
-        channel,
-        std::span<const uint8_t>(static_cast<const uint8_t*>(buffer->data), buffer->data_size));
+void Dispatch(const lcm_recv_buf_t* buffer, const char* channel, void* id) {
+  std::shared_ptr<const LcmBus::Handler> handler;
+  {
+    std::lock_guard lock(g_handlers_mutex);
+    auto it = g_handlers.find(reinterpret_cast<uintptr_t>(id));
+    if (it == g_handlers.end()) return;
+    handler = it->second;
   }
-};
+  (*handler)(channel, std::span<const uint8_t>(static_cast<const uint8_t*>(buffer->data),
+                                               buffer->data_size));
+}
+
+}  // namespace
 
 Result<std::unique_ptr<LcmBus>> LcmBus::Create(const std::string& url) {
   // Only the providers far builds and has hardened (docs/protocol.md). An empty URL would let
@@ -39,20 +53,45 @@ Result<std::unique_ptr<LcmBus>> LcmBus::Create(const std::string& url) {
 }
 
 LcmBus::~LcmBus() {
-  auto* lcm = static_cast<lcm_t*>(lcm_);
-  for (auto& subscription : subscriptions_) lcm_unsubscribe(lcm, subscription->lcm_subscription);
-  lcm_destroy(lcm);
+  std::map<SubscriptionId, void*> left;
+  {
+    std::lock_guard lock(subscriptions_mutex_);
+    left = subscriptions_;
+  }
+  for (const auto& [id, subscription] : left) Unsubscribe(id);
+  lcm_destroy(static_cast<lcm_t*>(lcm_));
 }
 
-void LcmBus::Subscribe(const std::string& channel, Handler handler) {
-  auto subscription = std::make_unique<Subscription>();
-  subscription->handler = std::move(handler);
-  subscription->lcm_subscription = lcm_subscribe(static_cast<lcm_t*>(lcm_), channel.c_str(),
-                                                 &Subscription::Dispatch, subscription.get());
-  if (subscription->lcm_subscription != nullptr) {
-    lcm_subscription_set_queue_capacity(subscription->lcm_subscription, kQueueCapacity);
+LcmBus::SubscriptionId LcmBus::Subscribe(const std::string& channel, Handler handler) {
+  const SubscriptionId id = g_next_id.fetch_add(1);
+  {
+    std::lock_guard lock(g_handlers_mutex);
+    g_handlers.emplace(id, std::make_shared<const Handler>(std::move(handler)));
   }
-  subscriptions_.push_back(std::move(subscription));
+  lcm_subscription_t* subscription = lcm_subscribe(static_cast<lcm_t*>(lcm_), channel.c_str(),
+                                                   &Dispatch, reinterpret_cast<void*>(id));
+  if (subscription != nullptr) {
+    lcm_subscription_set_queue_capacity(subscription, kQueueCapacity);
+    std::lock_guard lock(subscriptions_mutex_);
+    subscriptions_.emplace(id, subscription);
+  }
+  return id;
+}
+
+void LcmBus::Unsubscribe(SubscriptionId id) {
+  void* subscription = nullptr;
+  {
+    std::lock_guard lock(subscriptions_mutex_);
+    auto it = subscriptions_.find(id);
+    if (it != subscriptions_.end()) {
+      subscription = it->second;
+      subscriptions_.erase(it);
+    }
+  }
+  if (subscription != nullptr)
+    lcm_unsubscribe(static_cast<lcm_t*>(lcm_), static_cast<lcm_subscription_t*>(subscription));
+  std::lock_guard lock(g_handlers_mutex);
+  g_handlers.erase(id);
 }
 
 Result<void> LcmBus::Publish(const std::string& channel, std::span<const uint8_t> bytes) {

@@ -124,7 +124,8 @@ Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, Daemo
     spdlog::warn("event=socket_directory_taken reason=\"{}\" socket={}", user.tmp_taken,
                  SocketPathOf(config));
   }
-  impl->replier = std::make_unique<Replier>(*impl->bus, impl->stats);
+  impl->replier = std::make_unique<Replier>(*impl->bus, impl->stats,
+                                            std::chrono::milliseconds(config.status_after_ms));
   impl->handlers =
       std::make_unique<MessageHandlers>(impl->config, impl->sessions, *impl->replier, impl->stats);
   impl->handlers->Subscribe(*impl->bus, std::move(hooks.before_message));

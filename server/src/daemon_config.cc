@@ -105,6 +105,7 @@ Result<void> ReadKey(const std::string& key, const nlohmann::json& value, Daemon
   if (key == "max_reply_pairs") return set(config.max_reply_pairs);
   if (key == "step_deadline_ms") return set(config.step_deadline_ms);
   if (key == "heavy_step_ms") return set(config.heavy_step_ms);
+  if (key == "status_after_ms") return set(config.status_after_ms);
   if (key == "setup_allowance_ms") return set(config.setup_allowance_ms);
   if (key == "exact_threads") return set(config.exact_threads);
   if (key == "cpu_cores") return set(config.cpu_cores);
@@ -222,6 +223,8 @@ Result<void> ValidateDaemonConfig(const DaemonConfig& config) {
   if (config.max_queued_per_session < 1) return Invalid("max_queued_per_session", "must be >= 1");
   if (config.step_deadline_ms < 100) return Invalid("step_deadline_ms", "must be >= 100");
   if (config.heavy_step_ms < 1) return Invalid("heavy_step_ms", "must be >= 1");
+  if (config.status_after_ms < 0 || config.status_after_ms > 60'000)
+    return Invalid("status_after_ms", "must be in [0, 60000]");
   if (!(config.setup_allowance_ms >= 0 && config.setup_allowance_ms <= 3.6e6))
     return Invalid("setup_allowance_ms", "must be in [0, 3600000]");
   if (config.exact_threads < 0) return Invalid("exact_threads", "must be >= 0");

@@ -59,6 +59,10 @@ struct DaemonConfig {
   int64_t max_reply_pairs = 2'000'000;  ///< contacts + distance pairs in one reply
   int step_deadline_ms = 60'000;        ///< the longest a step may wait and run
   int heavy_step_ms = 50;  ///< a session whose step takes longer runs at a lower CPU priority
+  /// A step's statuses (queued, started, stage) are sent once it is this old (ms since its
+  /// request came); a step answered sooner gets its reply alone. "queued" is sent at once when
+  /// the step waits behind another. 0: every status, as soon as it happens.
+  int status_after_ms = 5;
   /// Per user, ms of one-off work (hierarchy builds, auto's calibration) that does not make a
   /// step heavy; refilled at a tenth of it per second (setup_allowance.h). 0: every step's
   /// whole CPU time counts.

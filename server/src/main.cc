@@ -104,6 +104,9 @@ struct CommandLine {
         "contact and distance pairs in one reply");
     Add("--step-deadline-ms", &DaemonConfig::step_deadline_ms,
         "the longest a step may wait and run");
+    Add("--status-after-ms", &DaemonConfig::status_after_ms,
+        "a step's statuses (queued, started, stage) are sent once it is this old; quicker steps "
+        "get their reply alone (0: every status)");
     Add("--threads", &DaemonConfig::exact_threads, "CPU threads for exact tests (0: all)");
     Add("--cpu-cores", &DaemonConfig::cpu_cores,
         "CPU cores the daemon may use in all (0: all): no session's threads exceed it (nor "

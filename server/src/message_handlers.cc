@@ -139,8 +139,8 @@ void MessageHandlers::Queue(Session& session, protocol::StepCommand command) {
     if (session.closing) return;
     if (session.queue.size() < static_cast<size_t>(config_.max_queued_per_session)) {
       // Said before the worker can take it, so that "queued" always comes before "started".
-      replier_.StepStatus(session, job, "queued", static_cast<int32_t>(session.queue.size()),
-                          std::nullopt);
+      replier_.QueuedStatus(session, job, static_cast<int32_t>(session.queue.size()),
+                            !session.queue.empty() || session.ledger.running());
       session.queue.push_back(std::move(job));
       session.last_active = now.time_since_epoch().count();  // not idle (IdleSessions)
       session.wake.notify_one();

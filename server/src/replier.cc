@@ -59,9 +59,16 @@ void Replier::Status(Session& session, int64_t request_id, int64_t step_id, std:
 }
 
 void Replier::StepStatus(Session& session, const StepJob& job, std::string_view state,
-                         int32_t queue_position, std::optional<Stage> stage) {
-  Status(session, job.command.request_id, job.command.step_id, state, queue_position, stage,
-         job.received);
+                         std::optional<Stage> stage) {
+  if (Clock::now() - job.received < status_after_) return;
+  Status(session, job.command.request_id, job.command.step_id, state, 0, stage, job.received);
+}
+
+void Replier::QueuedStatus(Session& session, const StepJob& job, int32_t queue_position,
+                           bool behind_another) {
+  if (!behind_another && Clock::now() - job.received < status_after_) return;
+  Status(session, job.command.request_id, job.command.step_id, "queued", queue_position,
+         std::nullopt, job.received);
 }
 
 void Replier::Again(Session& session, int64_t request_id, int64_t step_id,

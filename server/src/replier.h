@@ -23,7 +23,11 @@ namespace far::server {
 /// messages are sealed and published under its publish_mutex, the ledger under its mutex).
 class Replier {
  public:
-  Replier(protocol::LcmBus& bus, DaemonStats& stats) : bus_(bus), stats_(stats) {}
+  /// `status_after`: how old a step must be before StepStatus says where it is
+  /// (DaemonConfig::status_after_ms; 0: always).
+  Replier(protocol::LcmBus& bus, DaemonStats& stats,
+          std::chrono::milliseconds status_after = std::chrono::milliseconds(0))
+      : bus_(bus), stats_(stats), status_after_(status_after) {}
 
   /// Seals an encoded session message (step_reply_t, step_status_t, error_t) for `session`
   /// and publishes it on its reply channel.
@@ -34,9 +38,15 @@ class Replier {
   /// A failed step's reply (the client waits for a step_reply_t with its step id), kept and
   /// counted.
   void StepError(Session& session, const protocol::StepCommand& command, const Error& error);
-  /// Where a step is: "queued" (with its place), "started", or "stage" (with the stage).
+  /// Where a step is: "started", or "stage" (with the stage); nothing while the step is
+  /// younger than status_after. Each status is a datagram to every LCM instance on the URL:
+  /// a step answered within a few milliseconds is said by its reply alone.
   void StepStatus(Session& session, const StepJob& job, std::string_view state,
-                  int32_t queue_position, std::optional<Stage> stage);
+                  std::optional<Stage> stage);
+  /// "queued" with the step's place: at once when it waits behind another step of the session
+  /// (`behind_another`), else as StepStatus.
+  void QueuedStatus(Session& session, const StepJob& job, int32_t queue_position,
+                    bool behind_another);
   /// The answer to a step asked for again (request `request_id`): its kept reply sealed anew,
   /// where it is (a status), or, when its answer is no longer kept, an error reply (not_found)
   /// that is not kept. The step never runs again.
@@ -57,6 +67,7 @@ class Replier {
 
   protocol::LcmBus& bus_;
   DaemonStats& stats_;
+  std::chrono::milliseconds status_after_;
 };
 
 }  // namespace far::server

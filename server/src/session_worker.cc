@@ -151,7 +151,7 @@ class SessionWorker {
         std::lock_guard lock(session_->mutex);
         session_->ledger.EnterStage(stage);
       }
-      context_.replier.StepStatus(*session_, job, "stage", 0, stage);
+      context_.replier.StepStatus(*session_, job, "stage", stage);
     };
     // Past heavy_step_ms of wall time and of the worker's own CPU time, every thread of the
     // step lowers itself at its next check, while the step runs: a step that only ends at its
@@ -230,7 +230,7 @@ class SessionWorker {
                   std::to_string(static_cast<int64_t>(MsBetween(job.received, Clock::now()))) +
                   " ms in the queue, past its deadline; it was not run"));
     }
-    replier.StepStatus(*session_, job, "started", 0, std::nullopt);
+    replier.StepStatus(*session_, job, "started", std::nullopt);
     if (auto ok = EnsurePipeline(); !ok) return replier.StepError(*session_, command, ok.error());
     if (auto ingested = Ingest(command); !ingested) {
       replier.StepError(*session_, command, ingested.error());

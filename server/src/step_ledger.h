@@ -58,6 +58,8 @@ class StepLedger {
   /// What is known of `step_id`, a repeat (Take said false), given the session's queue.
   StepRecall Recall(int64_t step_id, const std::deque<StepJob>& queue) const;
 
+  /// True while the worker runs a step (between Start and its answer or Finish).
+  bool running() const { return running_.has_value(); }
   size_t kept_bytes() const { return kept_bytes_; }
 
  private:

@@ -48,6 +48,7 @@ constexpr const char* kKeys[] = {
     "max_reply_pairs",
     "step_deadline_ms",
     "heavy_step_ms",
+    "status_after_ms",
     "setup_allowance_ms",
     "exact_threads",
     "cpu_cores",

@@ -1,12 +1,14 @@
 // A client waits for a step as long as the daemon is alive and working on it, up to the limit
 // the user sets (far-client <command> --timeout), and no longer: no fixed wait blames a busy
-// daemon. While it waits, the daemon says where the step is (queued, started, each stage).
+// daemon. While it waits, the daemon says where the step is (queued, started, each stage),
+// once the step is status_after_ms old; a step that waits behind another is told at once.
 
 #include <signal.h>
 
 #include <chrono>
 #include <filesystem>
 #include <future>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -24,8 +26,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using WaitingTest = DaemonTest;
 
+// status_after_ms 0: every status, however quick the step.
 TEST_F(WaitingTest, TheDaemonSaysWhereAStepIsWhileItWorks) {
-  ASSERT_NE(StartDaemon(), nullptr);
+  ASSERT_NE(StartDaemon({"--status-after-ms", "0"}), nullptr);
   auto client = client::Client::Connect(TestClientOptions("progress"));
   ASSERT_TRUE(client.ok()) << far::ToString(client.error());
   for (const SceneObject& object : ContactSoup(3))
@@ -46,6 +49,59 @@ TEST_F(WaitingTest, TheDaemonSaysWhereAStepIsWhileItWorks) {
                                              "stage:primitive_cull",
                                              "stage:exact"};
   EXPECT_EQ(seen, expected);
+}
+
+// A step answered before it is status_after_ms old gets its reply alone: no status datagram
+// (each one reaches every LCM instance on the URL). A step asked for again is answered with
+// where it is whatever its age, but this one is answered in milliseconds, long before the
+// client's first repeat (200 ms).
+TEST_F(WaitingTest, AStepAnsweredSoonerThanStatusAfterMsGetsItsReplyAlone) {
+  ASSERT_NE(StartDaemon({"--status-after-ms", "60000"}), nullptr);
+  auto client = client::Client::Connect(TestClientOptions("quiet"));
+  ASSERT_TRUE(client.ok()) << far::ToString(client.error());
+  const std::vector<SceneObject> soup = ContactSoup(3);
+  for (const SceneObject& object : soup)
+    ASSERT_TRUE((*client)->AddObject(object.id, object.mesh, object.motion, object.X_WO).ok());
+  StepRequest request;
+  request.method = Method::kBvh;
+  std::vector<std::string> seen;
+  auto result = (*client)->Step(
+      request, [&](const client::StepProgress& progress) { seen.push_back(progress.state); });
+  ASSERT_TRUE(result.ok()) << far::ToString(result.error());
+  EXPECT_EQ(result->contacts, ReferenceContacts(soup));
+  EXPECT_TRUE(seen.empty()) << seen.size() << " statuses, the first " << seen.front();
+}
+
+// A step sent while another of the session's steps runs or waits is told "queued" at once,
+// whatever status_after_ms: its client learns why it waits. The daemon is stopped while both
+// requests are sent, so that the second surely finds the first ahead of it.
+TEST_F(WaitingTest, AStepBehindAnotherIsToldAtOnceThatItIsQueued) {
+  DaemonProcess* daemon = StartDaemon({"--status-after-ms", "60000"});
+  ASSERT_NE(daemon, nullptr);
+  auto client = client::Client::Connect(TestClientOptions("behind"));
+  ASSERT_TRUE(client.ok()) << far::ToString(client.error());
+  for (const SceneObject& object : ContactSoup(3))
+    ASSERT_TRUE((*client)->AddObject(object.id, object.mesh, object.motion, object.X_WO).ok());
+  StepRequest request;
+  request.method = Method::kExact;
+  std::mutex mutex;
+  std::vector<std::string> first_seen, second_seen;
+  auto record = [&mutex](std::vector<std::string>& seen) {
+    return [&mutex, &seen](const client::StepProgress& progress) {
+      std::lock_guard lock(mutex);
+      seen.push_back(progress.state);
+    };
+  };
+  ::kill(daemon->pid(), SIGSTOP);
+  auto first = (*client)->StepAsync(request, record(first_seen));
+  auto second = (*client)->StepAsync(request, record(second_seen));
+  ::kill(daemon->pid(), SIGCONT);
+  ASSERT_TRUE(first.get().ok());
+  ASSERT_TRUE(second.get().ok());
+  std::lock_guard lock(mutex);
+  ASSERT_FALSE(second_seen.empty());
+  EXPECT_EQ(second_seen.front(), "queued");
+  EXPECT_TRUE(first_seen.empty() || first_seen.front() != "queued");
 }
 
 // A small soup with contacts, written as a scene file into `dir`, for far-client play.

@@ -25,9 +25,11 @@ TEST(DaemonConfigTest, DefaultsAreValid) { EXPECT_TRUE(ValidateDaemonConfig(Daem
 TEST(DaemonConfigTest, ReadsKnownKeys) {
   auto config =
       LoadDaemonConfig(WriteTemp("ok", R"({"max_resolution": 512, "gl_platform": "surfaceless",
-      "max_sessions": 3, "log_level": "debug", "lcm_url": "memq://", "setup_allowance_ms": 250})"));
+      "max_sessions": 3, "log_level": "debug", "lcm_url": "memq://", "setup_allowance_ms": 250,
+      "status_after_ms": 0})"));
   ASSERT_TRUE(config.ok()) << ToString(config.error());
   EXPECT_EQ(config->setup_allowance_ms, 250);
+  EXPECT_EQ(config->status_after_ms, 0);
   EXPECT_EQ(config->max_resolution, 512);
   EXPECT_EQ(config->gl_platform, GlPlatform::kSurfaceless);
   EXPECT_EQ(config->max_sessions, 3);
@@ -45,6 +47,8 @@ TEST(DaemonConfigTest, RejectsUnknownKeysWrongTypesAndRanges) {
       {R"({"log_level": "loud"})", "log_level"},
       {R"({"depth_format": "depth8"})", "depth_format"},
       {R"({"setup_allowance_ms": -1})", "setup_allowance_ms"},
+      {R"({"status_after_ms": -1})", "status_after_ms"},
+      {R"({"status_after_ms": 60001})", "status_after_ms"},
       {R"([1, 2])", "not a JSON object"},
       {R"({"max_sessions": )", ""},
   };

@@ -66,7 +66,9 @@ struct ClientOptions {
   std::optional<std::string> record_path;
 };
 
-/// Where a step is while its reply has not come: the daemon's step_status_t.
+/// Where a step is while its reply has not come: the daemon's step_status_t. The daemon says it
+/// once the step is its status_after_ms old (5 ms by default; a quicker step is answered by its
+/// reply alone), and "queued" at once when the step waits behind another of the session.
 struct StepProgress {
   std::string state;           ///< "queued", "started" or "stage"
   int queue_position = 0;      ///< queued: this session's steps ahead of it
@@ -123,15 +125,18 @@ struct DaemonStatus {
 ///  - Close may be called from any thread while others step: their steps fail at once with
 ///    kUnavailable ("the session is closed"), and so does every later call. The destructor
 ///    must not run while another thread is inside a call of the same Client.
-///  - on_progress runs on the client's receiving thread. It must not block, and must not call
-///    Step or Close on the same Client (they would wait for that very thread: both return
-///    kInvalidArgument instead); StepAsync and the update calls are allowed.
-///  - Distinct Clients share no mutable state: each has its own connection, segment, LCM
-///    instance and receiving thread, so N threads each stepping their own Client (their own
-///    session) run side by side, in one process or several. Process-wide state, all
-///    initialized thread-safely on first use: libsodium (sodium_init, once), one SIGBUS handler
-///    for the shared-memory segments (installed once; a SIGBUS outside a segment goes to the
-///    handler that was there before), the loss seam of the tests. Connect reads the
+///  - on_progress runs on the receiving thread, which the process's Clients on one LCM URL
+///    share. It must not block, and must not call Step or Close on any Client (they would wait
+///    for that very thread: both return kInvalidArgument instead); StepAsync and the update
+///    calls are allowed.
+///  - Each Client has its own connection, segment and session, so N threads each stepping their
+///    own Client run side by side, in one process or several. The Clients of one process on
+///    one LCM URL share one LCM instance and one receiving thread (made with the first, ended
+///    with the last; each datagram on the URL is then read once per process, not once per
+///    Client). Process-wide state, all initialized thread-safely on first use: libsodium
+///    (sodium_init, once), one SIGBUS handler for the shared-memory segments (installed once; a
+///    SIGBUS outside a segment goes to the handler that was there before), the shared LCM
+///    instances, the loss seam of the tests. Connect reads the
 ///    environment (FAR_RECORD, FAR_SOCKET_DIR, XDG_RUNTIME_DIR, HOME): do not setenv while
 ///    another thread connects. The library logs nothing and changes no signal disposition but
 ///    SIGBUS's (sends use MSG_NOSIGNAL: no SIGPIPE).
@@ -172,10 +177,10 @@ class Client {
 
   /// Runs one step of this session's scene and waits for its reply: up to options.timeout
   /// while the daemon is alive, calling `on_progress` (on the receiving thread) as the daemon
-  /// reports the step queued, started and at each stage. A request with a distance D and the
-  /// default output (Output::kContacts) asks for Output::kDistancePairs: the reply holds every
-  /// triangle pair closer than D, and the contacts as well (far-client --distance does the
-  /// same); every other output is sent as given.
+  /// reports the step queued, started and at each stage (StepProgress says when it does). A request
+  /// with a distance D and the default output (Output::kContacts) asks for Output::kDistancePairs:
+  /// the reply holds every triangle pair closer than D, and the contacts as well (far-client
+  /// --distance does the same); every other output is sent as given.
   Result<StepResult> Step(const StepRequest& request, const ProgressCallback& on_progress = {});
   /// Sends a step and returns at once; the future holds the reply or the error. The request
   /// is completed as Step says.

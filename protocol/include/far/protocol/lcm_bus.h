@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -22,11 +23,12 @@ inline bool IsInProcessUrl(std::string_view url) { return url.starts_with("memq:
 /// its callback trampolines are miscompiled by GCC 12 under -fsanitize=vptr (docs/protocol.md),
 /// and its typed handlers decode without our size guards. Handlers get raw bytes.
 ///
-/// Thread safety: Publish may be called from any thread (serialized here); Subscribe before
-/// the handling thread starts; Handle from one thread only, which runs the handlers.
+/// Thread safety: Publish, Subscribe and Unsubscribe may be called from any thread, also while
+/// another handles; Handle from one thread only, which runs the handlers.
 class LcmBus {
  public:
   using Handler = std::function<void(std::string_view channel, std::span<const uint8_t> bytes)>;
+  using SubscriptionId = uint64_t;
 
   /// Connects to `url` (e.g. "udpm://239.255.76.67:7667?ttl=0", "memq://").
   /// Errors: kInvalidArgument for any other provider (far's LCM has only these two);
@@ -46,8 +48,12 @@ class LcmBus {
   static constexpr int kQueueCapacity = 1000;
 
   /// Calls `handler` for every message on channels matching the regular expression `channel`
-  /// (queue capacity kQueueCapacity).
-  void Subscribe(const std::string& channel, Handler handler);
+  /// (queue capacity kQueueCapacity), from now on. Returns the subscription's id (never 0).
+  SubscriptionId Subscribe(const std::string& channel, Handler handler);
+  /// Ends subscription `id`: no message is passed to its handler after this returns, but the
+  /// one the handling thread may be passing to it right now (a caller that frees what the
+  /// handler uses waits for that call itself). An unknown id is ignored.
+  void Unsubscribe(SubscriptionId id);
   /// Publishes bytes on `channel`. Errors: kUnavailable when LCM fails to send.
   Result<void> Publish(const std::string& channel, std::span<const uint8_t> bytes);
   /// Waits up to `timeout` for messages and runs their handlers. Returns false on an LCM error.
@@ -57,11 +63,11 @@ class LcmBus {
 
  private:
   LcmBus() = default;
-  struct Subscription;
   std::string url_;
   void* lcm_ = nullptr;  // lcm_t*
   std::mutex publish_mutex_;
-  std::vector<std::unique_ptr<Subscription>> subscriptions_;
+  std::mutex subscriptions_mutex_;
+  std::map<SubscriptionId, void*> subscriptions_;  // lcm_subscription_t*, by id
 };
 
 }  // namespace far::protocol
