@@ -4,8 +4,9 @@
 #   asan  build/ci-asan: ASan + UBSan. The unit tests of every layer that reads outside input
 #         (protocol, server, io, model), the integration tests that play hostile clients, and a
 #         smoke run of every libFuzzer target from its committed corpus.
-#   tsan  build/ci-tsan: ThreadSanitizer. The protocol, server and pairs unit tests (the last:
-#         the CPU pool and the stages that run on it) and the integration tests of the daemon's
+#   tsan  build/ci-tsan: ThreadSanitizer. The protocol, server, pairs and client unit tests
+#         (pairs: the CPU pool and the stages that run on it; client: the receiving thread a
+#         process's Clients share) and the integration tests of the daemon's
 #         threads (sessions opening and closing, dispatch, hostile clients writing shared
 #         memory while the daemon reads it, one process stepping many sessions from many
 #         threads).
@@ -29,7 +30,8 @@ asan_unit_targets=(far_protocol_test far_server_test far_io_test far_model_test 
 # Integration tests that send the daemon what a hostile or careless client would, and LCM's
 # error path when its multicast group has no route (a use-after-free fixed in far's LCM patch).
 asan_integration='^(BadInputTest|LimitsTest|LcmForgedDatagramTest|LcmRouteErrorTest)\.'
-tsan_unit_targets=(far_protocol_test far_server_test far_pairs_test far-client far-snapshot)
+tsan_unit_targets=(far_protocol_test far_server_test far_pairs_test far_client_receiver_test
+  far-client far-snapshot)
 tsan_integration='^(SessionLifetimeTest|DispatchTest|BadInputTest|LimitsTest|ManyThreadsTest)\.'
 
 configure() {

@@ -26,6 +26,11 @@ Result<std::shared_ptr<SharedReceiver>> SharedReceiver::For(const std::string& u
 }
 
 SharedReceiver::SharedReceiver(std::unique_ptr<protocol::LcmBus> bus) : bus_(std::move(bus)) {
+  // LCM's udpm provider makes its sockets, receive thread and the mutexes guarding them lazily,
+  // on the first subscribe or handle, and that first time is not safe from two threads at
+  // once (ThreadSanitizer: a subscribe racing the handling thread's first wait). A handle
+  // that returns at once makes them here, before the handling thread exists.
+  bus_->Handle(std::chrono::milliseconds(0));
   // Run takes the lock first: it sees thread_id_ set.
   std::lock_guard lock(mutex_);
   thread_ = std::thread([this] { Run(); });

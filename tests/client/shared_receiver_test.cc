@@ -1,7 +1,9 @@
 // The receiving thread a process's Clients share on one LCM URL (client/src/shared_receiver.h):
 // one per URL while it has holders, each listener passed only its own channel's messages and
 // ticked, and a listener detached is never called again (Detach waits for a call in progress,
-// so that a Client can free what its callbacks use). Over memq://: LCM's in-process provider.
+// so that a Client can free what its callbacks use). Over udpm, in the private network namespace
+// this test runs in (deploy/netns-run.sh); the LCM subscriptions the receiver makes and ends
+// while its thread handles are tested first, on an LcmBus alone.
 
 #include "shared_receiver.h"
 
@@ -13,12 +15,14 @@
 
 #include <gtest/gtest.h>
 
+#include "far/protocol/channels.h"
+
 namespace far::client::internal {
 namespace {
 
 using std::chrono::milliseconds;
 
-constexpr char kUrl[] = "memq://";
+const std::string kUrl(protocol::kDefaultLcmUrl);
 
 // Waits up to 2 s for `done()`.
 template <typename Done>
@@ -30,6 +34,46 @@ bool WaitFor(Done done) {
 void Send(SharedReceiver& receiver, const std::string& channel) {
   const uint8_t byte = 7;
   ASSERT_TRUE(receiver.Publish(channel, std::span<const uint8_t>(&byte, 1)).ok());
+}
+
+// A subscription ended is never called again, and one made while another thread handles
+// messages gets them from then on (the client's shared receiver subscribes each session's
+// reply channel while its thread handles the others').
+TEST(LcmBusThreadsTest, SubscribeAndUnsubscribeWhileAnotherThreadHandles) {
+  auto bus = protocol::LcmBus::Create(kUrl);
+  ASSERT_TRUE(bus.ok()) << ToString(bus.error());
+  // Before the handling thread, as SharedReceiver does: udpm makes its sockets and their
+  // mutexes on the first subscribe or handle, which is not safe from two threads at once.
+  (*bus)->Handle(std::chrono::milliseconds(0));
+  std::atomic<bool> stop{false};
+  std::thread handler([&] {
+    while (!stop) (*bus)->Handle(std::chrono::milliseconds(5));
+  });
+  std::atomic<int> a{0}, b{0};
+  const auto id_a =
+      (*bus)->Subscribe("FAR_A", [&](std::string_view, std::span<const uint8_t>) { ++a; });
+  (*bus)->Subscribe("FAR_B", [&](std::string_view, std::span<const uint8_t>) { ++b; });
+  const uint8_t byte = 1;
+  auto publish = [&](const char* channel) {
+    ASSERT_TRUE((*bus)->Publish(channel, std::span<const uint8_t>(&byte, 1)).ok());
+  };
+  auto wait_for = [](const std::atomic<int>& count, int value) {
+    for (int i = 0; i < 200 && count < value; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    return count.load();
+  };
+  publish("FAR_A");
+  publish("FAR_B");
+  EXPECT_EQ(wait_for(a, 1), 1);
+  EXPECT_EQ(wait_for(b, 1), 1);
+  (*bus)->Unsubscribe(id_a);
+  (*bus)->Unsubscribe(id_a);  // twice: ignored
+  publish("FAR_A");
+  publish("FAR_B");
+  EXPECT_EQ(wait_for(b, 2), 2);  // B's second came, so A's had been handled (one queue)
+  EXPECT_EQ(a, 1);
+  stop = true;
+  handler.join();
 }
 
 TEST(SharedReceiverTest, OneReceiverPerUrlWhileItHasHolders) {
