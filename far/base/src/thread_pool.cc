@@ -34,7 +34,7 @@ void ThreadPool::ParallelFor(size_t count, size_t grain,
   if (count == 0) return;
   grain = std::max<size_t>(grain, 1);
   // Small loops are not worth waking anyone.
-  const size_t helpers = std::min(workers_.size(), taking_part_.load());
+  const size_t helpers = std::min({workers_.size(), taking_part_.load(), share_helpers_.load()});
   if (helpers == 0 || count <= grain) {
     body(0, count);
     return;
@@ -114,6 +114,10 @@ void ThreadPool::WorkerLoop(size_t index) {
 void ThreadPool::SetBackground(int max_threads) {
   taking_part_ = static_cast<size_t>(std::max(1, max_threads) - 1);
   background_ = true;
+}
+
+void ThreadPool::SetShare(int max_threads) {
+  share_helpers_ = static_cast<size_t>(std::max(1, max_threads) - 1);
 }
 
 void ThreadPool::MoveCallingThreadToBackground() {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <thread>
@@ -174,7 +175,11 @@ Result<StepResult> Pipeline::Step(const StepRequest& request, const StepControl&
 int Pipeline::num_objects() const { return impl_->world.cache.size(); }
 int64_t Pipeline::num_triangles() const { return impl_->model.num_triangles(); }
 void Pipeline::SetCpuBackground(int max_threads) { impl_->pool.SetBackground(max_threads); }
-void Pipeline::SetCpuShare(double cores) { impl_->cpu_share = cores; }
+void Pipeline::SetCpuShare(double cores) {
+  impl_->cpu_share = cores;
+  impl_->pool.SetShare(cores > 0 ? static_cast<int>(std::floor(cores + 1e-9))
+                                 : impl_->pool.num_threads());
+}
 int Pipeline::cpu_threads() const { return impl_->pool.num_threads(); }
 const SceneCounters& Pipeline::counters() const { return impl_->world.cache.counters(); }
 std::string Pipeline::gl_renderer() const { return impl_->renderer_name; }

@@ -94,6 +94,20 @@ TEST(ThreadPoolTest, BackgroundLoopsUseAtMostTheirThreadsAndIdlePriority) {
   EXPECT_EQ(ThreadsOfOneLoop(pool, 50), std::set<std::thread::id>{std::this_thread::get_id()});
 }
 
+// A daemon's session whose share of the cores is one thread runs its loops alone, and gets its
+// workers back when its share grows (Pipeline::SetCpuShare).
+TEST(ThreadPoolTest, LoopsUseAtMostTheShareAndGetTheirThreadsBackWhenItGrows) {
+  ThreadPool pool(4);
+  pool.SetShare(1);
+  EXPECT_EQ(ThreadsOfOneLoop(pool, 50), std::set<std::thread::id>{std::this_thread::get_id()});
+  pool.SetShare(0);  // at least one thread
+  EXPECT_EQ(ThreadsOfOneLoop(pool, 50), std::set<std::thread::id>{std::this_thread::get_id()});
+  pool.SetShare(2);
+  for (int round = 0; round < 5; ++round) EXPECT_LE(ThreadsOfOneLoop(pool, 200).size(), 2u);
+  pool.SetShare(5);
+  EXPECT_GT(ThreadsOfOneLoop(pool, 200).size(), 2u);
+}
+
 // A worker queued on the caller's CPU waits while the caller runs the loop (on a VM, 32-42% of
 // the loops after an idle gap ran on one thread): the pool keeps its workers off that CPU.
 TEST(ThreadPoolTest, WorkersRunOffTheCallersCpu) {

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -39,6 +40,14 @@ class ThreadPool {
   /// alone did not do: bench/RESULTS.md). One way: an unprivileged process cannot undo it.
   void SetBackground(int max_threads);
 
+  /// Runs each ParallelFor from the next one on on at most `max_threads` threads (the caller
+  /// and max_threads - 1 workers; at least 1), until called again: the caller's share of cores
+  /// it shares with others. Waking workers for a share of less than two cores only adds
+  /// context switches to the cores' load (8 sessions stepping 1K triangles on 2 cores: 4,350
+  /// steps/s with each session's loops on 2 threads, 5,940 on 1; bench/RESULTS.md). A lower
+  /// SetBackground limit stays.
+  void SetShare(int max_threads);
+
   /// CPU time the workers have used since they started, all together (ms; Linux thread CPU
   /// clocks, 0 elsewhere). With the caller's own thread CPU time, what a loop cost in CPU.
   double WorkersCpuMs() const;
@@ -71,6 +80,7 @@ class ThreadPool {
   int excluded_cpu_ = -1;  // the CPU the workers are kept off (-1: none yet)
   // Workers with an index below this take part in a loop; and whether they go to the background.
   std::atomic<size_t> taking_part_;
+  std::atomic<size_t> share_helpers_{SIZE_MAX};  // SetShare: workers a loop may wake
   std::atomic<bool> background_{false};
 };
 

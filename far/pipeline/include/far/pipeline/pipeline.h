@@ -98,6 +98,9 @@ class Pipeline {
   /// stepping; 0, the default: its pool's threads). auto weighs each configuration's CPU time
   /// by it: a step costs at least its CPU time over the share, so where the cores are shared,
   /// a configuration that needs little CPU (gpu) wins over one that needs many cores (bvh).
+  /// The pool's loops use at most the share's whole cores (at least one thread:
+  /// ThreadPool::SetShare), so that sessions stepping together do not wake more threads than
+  /// there are cores for them.
   void SetCpuShare(double cores);
   /// The threads of the CPU pool's parallel loops (the calling thread included).
   int cpu_threads() const;
