@@ -490,28 +490,45 @@ TEST_F(PipelineCullingTest, GlViewTimesAreInsideTheCullingStages) {
   }
 }
 
-// On llvmpipe a FAR step costs milliseconds plus tens of microseconds per triangle: on a scene
-// of thousands of triangles auto runs bvh, and its reason says what it measured and predicted.
+// Auto tries the candidates (each twice: its first run on new objects carries one-off work), then
+// runs the one measured fastest, and its reason says what each measured or was predicted. Which
+// one wins depends on the machine and its load (on llvmpipe usually bvh, but the gpu step on a
+// busy 2-core machine may come within the 3x that makes auto try the raster ones too), so the
+// test holds auto to its own measurements, not to a winner.
 TEST_F(PipelineCullingTest, AutoRunsTheFastestReliableConfigurationAndSaysWhy) {
   Load(RandomSoup(77, 40, 200, 3.0, 0.3));  // 8000 triangles
   StepRequest request;                      // auto: the default
   StepResult result;
-  for (int step = 0; step < 8; ++step) result = Run(request);
+  int steps = 0;
+  do {
+    result = Run(request);
+    ++steps;
+  } while (result.stats.method_reason.find("auto: calibrating") != std::string::npos && steps < 60);
   const std::string& reason = result.stats.method_reason;
-  EXPECT_NE(reason.find("auto: "), std::string::npos) << reason;
-  if (pipeline_->gl_renderer().find("llvmpipe") != std::string::npos) {
-    // A software renderer: bvh wins; gpu was measured slower or predicted hopeless (its
-    // probe's scenes are small: the prediction varies), FAR is predicted hopeless.
-    EXPECT_EQ(result.stats.method, "bvh");
-    EXPECT_NE(reason.find("auto: bvh is the fastest measured"), std::string::npos) << reason;
-    EXPECT_TRUE(reason.find("gpu measured") != std::string::npos ||
-                reason.find("not tried (predicted over 3x the best): gpu") != std::string::npos)
-        << reason;
-    EXPECT_NE(reason.find("far/id-buffer/256"), std::string::npos) << reason;
-  } else {
-    // A GPU: whichever is fastest there, a reliable one, with what it measured.
-    EXPECT_TRUE(result.stats.certificate.guaranteed) << result.stats.method;
-    EXPECT_NE(reason.find("measured"), std::string::npos) << reason;
+  SCOPED_TRACE(reason);
+  ASSERT_EQ(reason.find("auto: calibrating"), std::string::npos) << "still calibrating";
+  const std::string chosen = result.stats.method;
+  ASSERT_EQ(reason.rfind("auto: " + chosen + " is the fastest measured (", 0), 0u);
+  EXPECT_TRUE(result.stats.certificate.guaranteed) << chosen;
+  // Every other candidate was measured (and was not faster) or was predicted hopeless.
+  const auto ms_after = [&](size_t at) { return std::stod(reason.substr(at)); };
+  const double chosen_ms = ms_after(reason.find('(') + 1);
+  std::vector<std::string> candidates = {"bvh"};
+  if (pipeline_->gl_renderer() != "none") {
+    candidates.insert(candidates.end(),
+                      {"gpu", "far/id-buffer/256", "far/occlusion-query/256", "far/id-buffer/1024",
+                       "far/occlusion-query/1024", "far-exact-offset/id-buffer/256"});
+  }
+  for (const std::string& candidate : candidates) {
+    if (candidate == chosen) continue;
+    const size_t measured = reason.find("; " + candidate + " measured ");
+    if (measured != std::string::npos) {
+      EXPECT_LE(chosen_ms, ms_after(measured + candidate.size() + 11)) << candidate;
+    } else {
+      const size_t skipped = reason.find("not tried (predicted over 3x the best): ");
+      ASSERT_NE(skipped, std::string::npos) << candidate << " neither measured nor skipped";
+      EXPECT_NE(reason.find(candidate, skipped), std::string::npos) << candidate;
+    }
   }
   // The configuration of any other method is named too.
   request.method = Method::kFar;
