@@ -521,9 +521,10 @@ TEST_F(PipelineCullingTest, AutoRunsTheFastestReliableConfigurationAndSaysWhy) {
   }
   for (const std::string& candidate : candidates) {
     if (candidate == chosen) continue;
-    const size_t measured = reason.find("; " + candidate + " measured ");
+    const std::string measured_text = "; " + candidate + " measured ";
+    const size_t measured = reason.find(measured_text);
     if (measured != std::string::npos) {
-      EXPECT_LE(chosen_ms, ms_after(measured + candidate.size() + 11)) << candidate;
+      EXPECT_LE(chosen_ms, ms_after(measured + measured_text.size())) << candidate;
     } else {
       const size_t skipped = reason.find("not tried (predicted over 3x the best): ");
       ASSERT_NE(skipped, std::string::npos) << candidate << " neither measured nor skipped";
