@@ -31,10 +31,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using namespace std::chrono_literals;
 
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 int SessionsOpen(const StudyDaemon& daemon) {
   auto status = daemon.Status();
   return status ? status->sessions_open : -1;

@@ -19,10 +19,6 @@ using Clock = std::chrono::steady_clock;
 constexpr uid_t kOtherUid = 65534;
 constexpr int kCannotSwitchUser = 77;
 
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 OpenReport OpenMany(const client::ClientOptions& options, int attempts,
                     std::vector<std::unique_ptr<client::Client>>* held) {
   OpenReport report;

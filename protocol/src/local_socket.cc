@@ -14,10 +14,10 @@
 #include <cstring>
 #include <filesystem>
 
+#include "errno_text.h"
+
 namespace far::protocol {
 namespace {
-
-std::string ErrnoText(int error) { return std::strerror(error); }
 
 Result<sockaddr_un> AddressOf(const std::string& path) {
   sockaddr_un address{};

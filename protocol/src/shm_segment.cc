@@ -13,12 +13,11 @@
 #include <cstring>
 #include <new>
 
+#include "errno_text.h"
 #include "shm_access.h"
 
 namespace far::protocol {
 namespace {
-
-std::string ErrnoText(int error) { return std::strerror(error); }
 
 std::string Hex64(uint64_t value) {
   char text[24];

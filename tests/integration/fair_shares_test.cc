@@ -24,8 +24,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr uid_t kOtherUid = 65534;
-
 // uid 65534 holding sessions (HoldingClientMain), in a folder it may enter with the daemon's
 // socket; `go` lets it step its sessions again and say what became of them.
 class OtherUserHolder {

@@ -4,6 +4,8 @@
 // `far_integration_test --far-other-user <socket>` with its uid switched (ChildProcess::Spawn
 // with a user), so that the daemon sees a second user on its socket (SO_PEERCRED).
 
+#include <sys/types.h>
+
 #include <cstdint>
 #include <string>
 
@@ -19,6 +21,9 @@ namespace far::integration {
 int OtherUserClientMain(const std::string& socket);
 
 inline constexpr const char* kOtherUserClientName = "other-user";
+
+/// The other user's uid in the tests that need a second user (Debian's nobody).
+inline constexpr uid_t kOtherUid = 65534;
 
 /// A user that holds sessions (fair_shares_test.cc starts this binary as
 /// `far_integration_test --far-hold <socket> <sessions> <triangles> <go file>` as another uid):

@@ -50,13 +50,13 @@ class ScopedEnv {
 };
 
 // What a child printed (stdout and stderr) until it exited, and its exit code.
-struct Output {
+struct CommandOutput {
   std::string text;
   std::optional<int> exit_code;
 };
-Output RunAsUser(uid_t user, const std::vector<std::string>& argv,
-                 std::chrono::seconds timeout = 30s) {
-  Output output;
+CommandOutput RunAsUser(uid_t user, const std::vector<std::string>& argv,
+                        std::chrono::seconds timeout = 30s) {
+  CommandOutput output;
   auto child = ChildProcess::Spawn(argv, user, /*with_stderr=*/true);
   if (!child) {
     output.text = far::ToString(child.error());
@@ -127,7 +127,7 @@ TEST_F(SocketDirectoryTest, AUserWhoseTmpDirectoryIsTakenServesFromItsHomeAndIts
   EXPECT_NE(log.find("socket=" + socket_dir), std::string::npos) << log;
 
   // Its clients look where it listens, also once the other user removed theirs.
-  Output status = RunAsUser(user_, {FAR_CLIENT_PATH, "status"});
+  CommandOutput status = RunAsUser(user_, {FAR_CLIENT_PATH, "status"});
   EXPECT_EQ(status.exit_code, 0) << status.text;
   EXPECT_NE(status.text.find("socket " + socket_dir), std::string::npos) << status.text;
   ASSERT_EQ(rmdir(tmp_.c_str()), 0);
@@ -138,7 +138,7 @@ TEST_F(SocketDirectoryTest, AUserWhoseTmpDirectoryIsTakenServesFromItsHomeAndIts
 
 TEST_F(SocketDirectoryNoHomeTest, WithoutAHomeOfItsOwnTheDaemonRefusesNamingTheOwnerAndWhatToDo) {
   ScopedEnv home("HOME", "/nonexistent");
-  const Output daemon = RunAsUser(user_, DaemonArgs());
+  const CommandOutput daemon = RunAsUser(user_, DaemonArgs());
   EXPECT_EQ(daemon.exit_code, 1) << daemon.text;
   for (const std::string& part :
        {"socket directory " + tmp_ + " (owner uid " + std::to_string(kSquatter),

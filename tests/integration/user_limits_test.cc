@@ -27,8 +27,6 @@ namespace {
 using namespace std::chrono_literals;
 
 // The uid of the other user (Debian's "nobody").
-constexpr uid_t kOtherUid = 65534;
-
 using UserLimitsTest = DaemonTest;
 
 TEST_F(UserLimitsTest, AUserOverItsSessionLimitIsRefusedWhileItsSessionsWork) {

@@ -51,7 +51,7 @@ std::optional<Enum> ValueOf(const NameTable<Enum, N>& table, std::string_view na
   return std::nullopt;
 }
 
-Error Invalid(const std::string& field, const std::string& what) {
+Error InvalidField(const std::string& field, const std::string& what) {
   return MakeError(ErrorCode::kInvalidArgument, field + ": " + what);
 }
 
@@ -100,30 +100,31 @@ bool NeedsGl(Method method) { return IsGpuMethod(method) || method == Method::kG
 
 Result<void> CheckStepRequest(const StepRequest& request) {
   if (request.resolution < kMinResolution || request.resolution > kMaxResolution) {
-    return Invalid("resolution", std::to_string(request.resolution) + " is outside " +
-                                     Range(kMinResolution, kMaxResolution));
+    return InvalidField("resolution", std::to_string(request.resolution) + " is outside " +
+                                          Range(kMinResolution, kMaxResolution));
   }
   if (request.subobject_size < 1 || request.subobject_size > kMaxSubobjectSize) {
-    return Invalid("subobject_size", std::to_string(request.subobject_size) + " is outside " +
-                                         Range(1, kMaxSubobjectSize));
+    return InvalidField("subobject_size", std::to_string(request.subobject_size) + " is outside " +
+                                              Range(1, kMaxSubobjectSize));
   }
   if (request.distance && !(std::isfinite(*request.distance) && *request.distance >= 0 &&
                             *request.distance <= kMaxDistance)) {
-    return Invalid("distance", FormatDouble(*request.distance) + " is not a finite number in [0, " +
-                                   FormatDouble(kMaxDistance) + "]");
+    return InvalidField("distance", FormatDouble(*request.distance) +
+                                        " is not a finite number in [0, " +
+                                        FormatDouble(kMaxDistance) + "]");
   }
   if (request.output == Output::kDistancePairs && !request.distance) {
-    return Invalid("output", "'distance' needs a distance D");
+    return InvalidField("output", "'distance' needs a distance D");
   }
   if (!AnswersDistance(request.method) && request.distance) {
-    return Invalid("method", "'" + std::string(ToString(request.method)) +
-                                 "' answers contacts only; distance queries need " +
-                                 DistanceMethodNames());
+    return InvalidField("method", "'" + std::string(ToString(request.method)) +
+                                      "' answers contacts only; distance queries need " +
+                                      DistanceMethodNames());
   }
   if (request.geometry && request.output != Output::kContacts &&
       request.output != Output::kDistancePairs) {
-    return Invalid("geometry", "needs output 'contacts' or 'distance', not '" +
-                                   std::string(ToString(request.output)) + "'");
+    return InvalidField("geometry", "needs output 'contacts' or 'distance', not '" +
+                                        std::string(ToString(request.output)) + "'");
   }
   return {};
 }

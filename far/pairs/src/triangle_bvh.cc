@@ -42,7 +42,7 @@ struct Box {
   }
 };
 
-Box TriangleBox(std::span<const Eigen::Vector3d> p, const TriangleIndices& t) {
+Box TriangleBounds(std::span<const Eigen::Vector3d> p, const TriangleIndices& t) {
   Box box;
   for (uint32_t v : t) box.Extend(p[v]);
   return box;
@@ -223,7 +223,7 @@ bool TriangleBvh::Build(std::span<const Eigen::Vector3d> p_MV,
   builder.boxes.reserve(triangles.size());
   builder.centroids.reserve(triangles.size());
   for (const TriangleIndices& t : triangles) {
-    builder.boxes.push_back(TriangleBox(p_MV, t));
+    builder.boxes.push_back(TriangleBounds(p_MV, t));
     const Box& box = builder.boxes.back();
     builder.centroids.emplace_back(0.5 * (box.lo[0] + box.hi[0]), 0.5 * (box.lo[1] + box.hi[1]),
                                    0.5 * (box.lo[2] + box.hi[2]));
@@ -257,7 +257,7 @@ bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,
     Box& box = boxes[i];
     if (node.leaf()) {
       for (uint32_t k = node.first; k < node.first + node.count; ++k) {
-        box.Extend(TriangleBox(p_MV, triangles[order_[k]]));
+        box.Extend(TriangleBounds(p_MV, triangles[order_[k]]));
       }
     } else {
       box = boxes[node.first];

@@ -12,8 +12,10 @@
 
 namespace far::scenes {
 
+using internal::kFrameSeconds;
+
 Scene BunniesScene(const Mesh& bunny, int subdivision, uint64_t seed, int frames) {
-  constexpr double kDt = 0.1, kPeriod = 6.0;  // seconds per frame, seconds per pass there and back
+  constexpr double kPeriod = 6.0;  // seconds per pass there and back
   subdivision = std::max(1, subdivision);
   Mesh mesh = RefineMesh(bunny, subdivision);
   // Centered on its box, so that the path below is in units of the mesh's size.
@@ -30,7 +32,7 @@ Scene BunniesScene(const Mesh& bunny, int subdivision, uint64_t seed, int frames
       Eigen::Vector3d(0.3 + 0.2 * unit(rng), 1.0, 0.2 + 0.2 * unit(rng)).normalized();
   const double omega = 2 * std::numbers::pi / kPeriod;
   const auto pose = [&](int f) {
-    const double t = kDt * f + phase;
+    const double t = kFrameSeconds * f + phase;
     const Eigen::Vector3d p_WO =
         size * Eigen::Vector3d(0.22 * std::cos(omega * t), 0.07 * std::sin(2 * omega * t) + 0.03,
                                0.06 + 0.04 * std::sin(omega * t + 1.0));

@@ -17,6 +17,9 @@
 
 namespace far::scenes::internal {
 
+/// Seconds between two frames of every generated scene.
+inline constexpr double kFrameSeconds = 0.1;
+
 /// Triangles that AppendTube adds.
 int TubeTriangles(int sides, int segments);
 

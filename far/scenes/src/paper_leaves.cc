@@ -15,10 +15,10 @@ namespace far::scenes {
 namespace {
 
 using internal::AppendTube;
+using internal::kFrameSeconds;
 using internal::Random;
 using internal::TubeTriangles;
 
-constexpr double kDt = 0.1;     // seconds per frame
 constexpr double kCycle = 8.0;  // seconds from growing on the branch to growing back
 constexpr int kBranches = 24, kTwigsPerBranch = 2;
 
@@ -229,7 +229,7 @@ Scene PaperLeavesScene(uint64_t seed, int frames, int num_leaves, int leaf_cells
                                        leaf_cells, triangles));
   }
   for (int f = 1; f < frames; ++f) {
-    scene.frames.push_back(Frame(leaves, leaf_cells, triangles, kDt * f));
+    scene.frames.push_back(Frame(leaves, leaf_cells, triangles, kFrameSeconds * f));
   }
   return scene;
 }

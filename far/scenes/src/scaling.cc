@@ -16,10 +16,10 @@ namespace far::scenes {
 namespace {
 
 using internal::HeightField;
+using internal::kFrameSeconds;
 using internal::Random;
 using internal::RestOn;
 
-constexpr double kDt = 0.1;         // seconds per frame
 constexpr double kTile = 4.0;       // metres
 constexpr double kMargin = 0.5;     // ground beyond the outer tiles
 constexpr double kRadius = 0.6;     // spheres
@@ -244,7 +244,7 @@ Scene ScalingScene(uint64_t seed, int target_triangles, int frames) {
 
   Scene scene;
   scene.objects = Objects(world, layout);
-  for (int f = 1; f < frames; ++f) scene.frames.push_back(Frame(world, layout, kDt * f));
+  for (int f = 1; f < frames; ++f) scene.frames.push_back(Frame(world, layout, kFrameSeconds * f));
   return scene;
 }
 

@@ -5,7 +5,11 @@
 #include <numbers>
 #include <random>
 
+#include "mesh_tools.h"
+
 namespace far::scenes {
+
+using internal::kFrameSeconds;
 
 std::vector<SceneObject> RandomSoup(uint64_t seed, int num_objects, int triangles_per_object,
                                     double world_size, double triangle_size,
@@ -184,7 +188,6 @@ std::vector<SceneObject> LeavesScene(uint64_t seed, int num_leaves, int leaf_cel
 }
 
 Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int frames) {
-  constexpr double kDt = 0.1;
   Scene scene;
   scene.objects = LeavesScene(seed, num_leaves, leaf_cells, 0.0);
   // The same tree cut into short pieces along its tubes, so that the triangles a contact marks
@@ -204,7 +207,7 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
   for (int f = 1; f < frames; ++f) {
     FrameUpdate frame;
     // Leaves: new vertices (same triangles).
-    const auto leaves = LeavesScene(seed, num_leaves, leaf_cells, kDt * f);
+    const auto leaves = LeavesScene(seed, num_leaves, leaf_cells, kFrameSeconds * f);
     for (size_t l = 1; l < leaves.size(); ++l)
       frame.vertices.emplace_back(leaves[l].id, leaves[l].mesh);
     if (f < breaks_at) {
@@ -229,7 +232,7 @@ Scene AnimatedLeavesScene(uint64_t seed, int num_leaves, int leaf_cells, int fra
       }
     } else {
       // Fragments fly apart.
-      const double t = kDt * (f - breaks_at);
+      const double t = kFrameSeconds * (f - breaks_at);
       for (int k = 0; k < num_fragments; ++k) {
         const double angle = std::numbers::pi / 2 * k;
         Pose pose;

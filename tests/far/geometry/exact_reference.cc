@@ -8,7 +8,7 @@
 namespace far::reference {
 namespace {
 
-using Tri = std::array<QVec, 3>;
+using QTri = std::array<QVec, 3>;
 
 QVec operator-(const QVec& a, const QVec& b) { return QVec{a.x - b.x, a.y - b.y, a.z - b.z}; }
 QVec operator+(const QVec& a, const QVec& b) { return QVec{a.x + b.x, a.y + b.y, a.z + b.z}; }
@@ -24,7 +24,7 @@ bool IsZero(const QVec& a) { return sgn(a.x) == 0 && sgn(a.y) == 0 && sgn(a.z) =
 
 bool InUnitInterval(const mpq_class& x) { return sgn(x) >= 0 && x <= 1; }
 
-Tri ToQTri(const TrianglePoints& t) { return Tri{ToQ(t.a), ToQ(t.b), ToQ(t.c)}; }
+QTri ToQTri(const TrianglePoints& t) { return QTri{ToQ(t.a), ToQ(t.b), ToQ(t.c)}; }
 
 // Closed segment [a, b] (a == b allowed) contains p.
 bool PointOnSegment(const QVec& p, const QVec& a, const QVec& b) {
@@ -63,7 +63,7 @@ bool SegmentsMeet(const QVec& a, const QVec& b, const QVec& c, const QVec& d) {
 }
 
 // The two points of a degenerate (collinear) triangle that span its hull.
-std::pair<QVec, QVec> HullSegment(const Tri& q) {
+std::pair<QVec, QVec> HullSegment(const QTri& q) {
   int best_i = 0;
   int best_j = 1;
   mpq_class best = -1;
@@ -81,7 +81,7 @@ std::pair<QVec, QVec> HullSegment(const Tri& q) {
 }
 
 // X in the plane of the non-degenerate triangle q with normal n lies in the closed triangle.
-bool InsideTriangle(const QVec& x, const Tri& q, const QVec& n) {
+bool InsideTriangle(const QVec& x, const QTri& q, const QVec& n) {
   for (int i = 0; i < 3; ++i) {
     if (sgn(Dot(Cross(q[(i + 1) % 3] - q[i], x - q[i]), n)) < 0) return false;
   }
@@ -89,7 +89,7 @@ bool InsideTriangle(const QVec& x, const Tri& q, const QVec& n) {
 }
 
 // Closed segment [a, b] (a == b allowed) meets the convex hull of q (any triangle).
-bool SegmentMeetsTriangle(const QVec& a, const QVec& b, const Tri& q) {
+bool SegmentMeetsTriangle(const QVec& a, const QVec& b, const QTri& q) {
   const QVec n = Cross(q[1] - q[0], q[2] - q[0]);
   if (IsZero(n)) {
     const auto [u, v] = HullSegment(q);
@@ -154,7 +154,7 @@ std::optional<mpq_class> SegmentInteriorSquared(const QVec& a, const QVec& b, co
 }
 
 // Squared distance of p to the plane of q if p projects into the closed triangle q.
-std::optional<mpq_class> VertexFaceSquared(const QVec& p, const Tri& q) {
+std::optional<mpq_class> VertexFaceSquared(const QVec& p, const QTri& q) {
   const QVec n = Cross(q[1] - q[0], q[2] - q[0]);
   if (IsZero(n)) return std::nullopt;
   // (e x (p - q_i)) . n depends only on the in-plane part of p - q_i.
@@ -165,7 +165,7 @@ std::optional<mpq_class> VertexFaceSquared(const QVec& p, const Tri& q) {
 
 // The part of the closed segment [a, b] in the convex hull of q, as its ends (none, one or two
 // points), constructed exactly.
-std::vector<QVec> ClipSegment(const QVec& a, const QVec& b, const Tri& q) {
+std::vector<QVec> ClipSegment(const QVec& a, const QVec& b, const QTri& q) {
   const QVec d = b - a;
   const QVec n = Cross(q[1] - q[0], q[2] - q[0]);
   mpq_class lo = 0;
@@ -289,8 +289,8 @@ bool ExactTrianglesIntersect(const TrianglePoints& s, const TrianglePoints& t) {
   // coplanar) has a point on the boundary of s or of t, and that boundary is the edges. A
   // degenerate triangle is the union of its edges, and SegmentMeetsTriangle handles a
   // degenerate hull.
-  const Tri qs = ToQTri(s);
-  const Tri qt = ToQTri(t);
+  const QTri qs = ToQTri(s);
+  const QTri qt = ToQTri(t);
   for (int i = 0; i < 3; ++i) {
     if (SegmentMeetsTriangle(qs[i], qs[(i + 1) % 3], qt)) return true;
     if (SegmentMeetsTriangle(qt[i], qt[(i + 1) % 3], qs)) return true;
@@ -301,8 +301,8 @@ bool ExactTrianglesIntersect(const TrianglePoints& s, const TrianglePoints& t) {
 mpq_class ExactSquaredDistance(const TrianglePoints& s, const TrianglePoints& t) {
   if (ExactTrianglesIntersect(s, t)) return 0;
   // Disjoint: the minimum over vertex-edge, edge-edge interior and vertex-face candidates.
-  const Tri qs = ToQTri(s);
-  const Tri qt = ToQTri(t);
+  const QTri qs = ToQTri(s);
+  const QTri qt = ToQTri(t);
   mpq_class best = PointSegmentSquared(qs[0], qt[0], qt[1]);
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
@@ -323,8 +323,8 @@ mpq_class ExactSquaredDistance(const TrianglePoints& s, const TrianglePoints& t)
 namespace far::reference {
 
 std::vector<QVec> ExactIntersectionExtremes(const TrianglePoints& s, const TrianglePoints& t) {
-  const Tri qs = ToQTri(s);
-  const Tri qt = ToQTri(t);
+  const QTri qs = ToQTri(s);
+  const QTri qt = ToQTri(t);
   std::vector<QVec> candidates;
   const auto add = [&](const QVec& x) {
     for (const QVec& y : candidates) {

@@ -15,8 +15,6 @@ namespace {
 
 using Eigen::Vector3d;
 
-TrianglePoints Tri(const Vector3d& a, const Vector3d& b, const Vector3d& c) { return {a, b, c}; }
-
 const TrianglePoints kUnit = Tri(Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0));
 
 TEST(ExactReferenceTest, AnswersHandComputedIntersections) {

@@ -26,10 +26,6 @@ struct Base {
   int away_sign = 0;
 };
 
-TrianglePoints Tri(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-  return TrianglePoints{a, b, c};
-}
-
 Vector3d V(double x, double y, double z) { return Vector3d(x, y, z); }
 
 std::vector<Base> MakeBases() {

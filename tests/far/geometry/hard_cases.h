@@ -15,6 +15,12 @@
 
 namespace far::reference {
 
+/// The triangle (a, b, c): the suite's and the tests' shorthand.
+inline TrianglePoints Tri(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                          const Eigen::Vector3d& c) {
+  return {a, b, c};
+}
+
 /// One hard pair of triangles.
 struct HardCase {
   std::string name;      ///< "<base>@<transform>[<variant>]", e.g. "sliver_apex_touch@1e6+ulp"

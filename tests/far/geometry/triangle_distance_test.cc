@@ -21,6 +21,7 @@ namespace {
 using Eigen::Vector3d;
 using reference::Describe;
 using reference::ExactSquaredDistance;
+using reference::Tri;
 
 constexpr double kEps = 0x1p-53;
 // The documented bound (triangle_distance.cc): d - 32 eps L <= d~ <= d + 128 eps L, and the
@@ -28,8 +29,6 @@ constexpr double kEps = 0x1p-53;
 constexpr double kUnder = 32.0;
 constexpr double kOver = 128.0;
 constexpr double kIncludeWindow = 288.0;
-
-TrianglePoints Tri(const Vector3d& a, const Vector3d& b, const Vector3d& c) { return {a, b, c}; }
 
 double PairScale(const TrianglePoints& s, const TrianglePoints& t) {
   Eigen::Array3d lo = s.a.array(), hi = s.a.array();

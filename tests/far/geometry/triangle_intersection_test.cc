@@ -16,8 +16,7 @@ namespace {
 using Eigen::Vector3d;
 using reference::Describe;
 using reference::ExactTrianglesIntersect;
-
-TrianglePoints Tri(const Vector3d& a, const Vector3d& b, const Vector3d& c) { return {a, b, c}; }
+using reference::Tri;
 
 const TrianglePoints kBase = Tri(Vector3d(0, 0, 0), Vector3d(4, 0, 0), Vector3d(0, 4, 0));
 

@@ -10,12 +10,15 @@
 #include <set>
 #include <vector>
 
+#include "pairs_of.h"
 #include <gtest/gtest.h>
 
 #include "far/pairs/triangle_bvh.h"
 
 namespace far {
 namespace {
+
+using testing::PairsOf;
 
 // One object: mesh in its frame M, pose, world vertices and hierarchy. Object o of a scene is
 // slot o.
@@ -91,7 +94,7 @@ std::vector<SlotPair> AllPairs(const std::vector<Object>& scene) {
   return pairs;
 }
 
-ExactResult Reference(const std::vector<Object>& scene, std::optional<double> distance) {
+ExactResult ReferenceResult(const std::vector<Object>& scene, std::optional<double> distance) {
   ThreadPool pool(2);
   return BruteForceReference(Views(scene), distance, pool);
 }
@@ -108,12 +111,6 @@ BvhResult RunStage(const std::vector<Object>& scene, std::optional<double> dista
   query.hierarchies = hierarchies;
   ThreadPool pool(threads);
   return RunBvhTests(query, pool);
-}
-
-std::vector<SlotContact> PairsOf(const std::vector<SlotDistancePair>& list) {
-  std::vector<SlotContact> pairs;
-  for (const SlotDistancePair& d : list) pairs.push_back(d.pair);
-  return pairs;
 }
 
 // Every leaf box holds its triangles and every inner box its children; each triangle once.
@@ -256,7 +253,7 @@ TEST(BvhStageTest, ContactsMatchTheReferenceUnderRandomPoses) {
   for (uint32_t seed = 1; seed <= 12; ++seed) {
     SCOPED_TRACE(seed);
     const std::vector<Object> scene = RandomScene(seed, 6, 150, 0);
-    const ExactResult expected = Reference(scene, std::nullopt);
+    const ExactResult expected = ReferenceResult(scene, std::nullopt);
     const BvhResult got = RunStage(scene, std::nullopt);
     EXPECT_EQ(got.exact.contacts, expected.contacts);
     // Every contact's triangles are candidates.
@@ -275,7 +272,7 @@ TEST(BvhStageTest, FarFromTheOriginAndAtTinyScales) {
   for (const auto& [offset, scale] : {std::pair{1e5, 1.0}, {1e6, 1e-3}, {-3e4, 1e-5}}) {
     SCOPED_TRACE(offset);
     const std::vector<Object> scene = RandomScene(31, 5, 120, offset, scale);
-    const ExactResult expected = Reference(scene, std::nullopt);
+    const ExactResult expected = ReferenceResult(scene, std::nullopt);
     EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
     EXPECT_GT(expected.contacts.size(), 0u);
   }
@@ -289,7 +286,7 @@ TEST(BvhStageTest, AroundAndBelowTheTinyWorldCoordinate) {
   for (const double scale : {0x1p-250, 0x1p-254, 0x1p-262}) {
     SCOPED_TRACE(scale);
     const std::vector<Object> scene = RandomScene(37, 4, 60, 0, scale);
-    const ExactResult expected = Reference(scene, std::nullopt);
+    const ExactResult expected = ReferenceResult(scene, std::nullopt);
     EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
     EXPECT_GT(expected.contacts.size(), 0u);
   }
@@ -311,7 +308,7 @@ TEST(BvhStageTest, TouchingAtACornerUnderARotatedPose) {
     o->bvh.Build(o->p_MV, o->triangles);
   }
   const std::vector<Object> scene = {a, b};
-  const ExactResult expected = Reference(scene, std::nullopt);
+  const ExactResult expected = ReferenceResult(scene, std::nullopt);
   ASSERT_EQ(expected.contacts.size(), 1u);
   const BvhResult found = RunStage(scene, std::nullopt);
   EXPECT_EQ(found.exact.contacts, expected.contacts);
@@ -374,7 +371,7 @@ void ExpectTheReferenceContacts(Object& a, Object& b, size_t min_contacts) {
     o->bvh.Build(o->p_MV, o->triangles);
   }
   const std::vector<Object> scene = {a, b};
-  const ExactResult expected = Reference(scene, std::nullopt);
+  const ExactResult expected = ReferenceResult(scene, std::nullopt);
   EXPECT_GT(expected.contacts.size(), min_contacts);
   EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts, expected.contacts);
 }
@@ -412,7 +409,7 @@ TEST(BvhStageTest, DistancePairsMatchTheReference) {
   for (double d : {0.0, 0.01, 0.2}) {
     SCOPED_TRACE(d);
     const std::vector<Object> scene = RandomScene(44, 5, 100, 0);
-    const ExactResult expected = Reference(scene, d);
+    const ExactResult expected = ReferenceResult(scene, d);
     const BvhResult got = RunStage(scene, d);
     EXPECT_EQ(PairsOf(got.exact.distance_pairs), PairsOf(expected.distance_pairs));
     EXPECT_EQ(got.exact.contacts, expected.contacts);
@@ -432,7 +429,7 @@ TEST(BvhStageTest, RefitObjectsStayExact) {
       (void)o.bvh.Refit(o.p_MV, o.triangles);
     }
     EXPECT_EQ(RunStage(scene, std::nullopt).exact.contacts,
-              Reference(scene, std::nullopt).contacts);
+              ReferenceResult(scene, std::nullopt).contacts);
   }
 }
 
@@ -469,7 +466,7 @@ TEST(BvhStageTest, SliverFansMatchTheReferenceAndTheirSlabsPrune) {
       scene[o].bvh.Build(scene[o].p_MV, scene[o].triangles);
     }
     for (const std::optional<double> distance : {std::optional<double>(), {0.02}}) {
-      const ExactResult expected = Reference(scene, distance);
+      const ExactResult expected = ReferenceResult(scene, distance);
       const BvhResult with_slabs = RunStage(scene, distance);
       EXPECT_EQ(with_slabs.exact.contacts, expected.contacts);
       EXPECT_EQ(PairsOf(with_slabs.exact.distance_pairs), PairsOf(expected.distance_pairs));

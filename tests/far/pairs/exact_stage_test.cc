@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "pairs_of.h"
 #include <gtest/gtest.h>
 
 #include "far/base/assert.h"
@@ -18,8 +19,10 @@
 namespace far {
 namespace {
 
+using testing::PairsOf;
+
 // Objects that own their vertices and triangles, and views of them: object o is slot o.
-struct Scene {
+struct SoupScene {
   std::vector<std::vector<Eigen::Vector3d>> positions;
   std::vector<std::vector<TriangleIndices>> triangles;
 
@@ -60,8 +63,8 @@ ExactQuery Query(std::span<const WorldObjectView> views, std::span<const SlotPai
 // of later objects are copied from earlier objects' corners or edge midpoints, so that shared
 // vertices, vertex-on-edge, touching boxes and coplanar pairs are common; one triangle in ten is
 // degenerate (a segment or a point).
-Scene RandomSoup(uint32_t seed, int num_objects, int triangles_each, double extent, double size,
-                 bool grid, double offset = 0) {
+SoupScene RandomSoup(uint32_t seed, int num_objects, int triangles_each, double extent, double size,
+                     bool grid, double offset = 0) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0, 1);
   const auto quantize = [&](double x) { return grid ? std::round(x * 8) / 8 : x; };
@@ -71,7 +74,7 @@ Scene RandomSoup(uint32_t seed, int num_objects, int triangles_each, double exte
       p[axis] = quantize(center[axis] + (2 * unit(rng) - 1) * radius);
     return p;
   };
-  Scene scene;
+  SoupScene scene;
   for (int o = 0; o < num_objects; ++o) {
     std::vector<Eigen::Vector3d> points;
     std::vector<TriangleIndices> triangles;
@@ -110,7 +113,7 @@ Scene RandomSoup(uint32_t seed, int num_objects, int triangles_each, double exte
 }
 
 // The unfiltered O(n^2) loops: every cross-object triangle pair straight into the predicates.
-std::vector<SlotContact> UnfilteredContacts(const Scene& scene) {
+std::vector<SlotContact> UnfilteredContacts(const SoupScene& scene) {
   std::vector<SlotContact> contacts;
   for (size_t i = 0; i < scene.size(); ++i) {
     for (size_t j = i + 1; j < scene.size(); ++j) {
@@ -127,7 +130,7 @@ std::vector<SlotContact> UnfilteredContacts(const Scene& scene) {
   return contacts;
 }
 
-std::vector<SlotContact> UnfilteredWithin(const Scene& scene, double max_distance) {
+std::vector<SlotContact> UnfilteredWithin(const SoupScene& scene, double max_distance) {
   std::vector<SlotContact> pairs;
   for (size_t i = 0; i < scene.size(); ++i) {
     for (size_t j = i + 1; j < scene.size(); ++j) {
@@ -144,14 +147,8 @@ std::vector<SlotContact> UnfilteredWithin(const Scene& scene, double max_distanc
   return pairs;
 }
 
-std::vector<SlotContact> PairsOf(const std::vector<SlotDistancePair>& distance_pairs) {
-  std::vector<SlotContact> pairs;
-  for (const SlotDistancePair& d : distance_pairs) pairs.push_back(d.pair);
-  return pairs;
-}
-
 // Sorted, unique, object_a < object_b, and every distance is TriangleDistance of the pair.
-void ExpectWellFormed(const Scene& scene, const ExactResult& result) {
+void ExpectWellFormed(const SoupScene& scene, const ExactResult& result) {
   for (const SlotContact& c : result.contacts) EXPECT_LT(c.object_a, c.object_b);
   for (size_t i = 1; i < result.contacts.size(); ++i) {
     EXPECT_LT(result.contacts[i - 1], result.contacts[i]);
@@ -172,8 +169,8 @@ void ExpectWellFormed(const Scene& scene, const ExactResult& result) {
 TEST(ExactStageTest, FullQueryMatchesBruteForce) {
   ThreadPool pool(2);
   for (uint32_t seed : {1u, 2u, 3u, 4u}) {
-    SCOPED_TRACE(testing::Message() << "seed " << seed);
-    const Scene scene = RandomSoup(seed, 5, 60, 4.0, 0.6, seed % 2 == 0);
+    SCOPED_TRACE(::testing::Message() << "seed " << seed);
+    const SoupScene scene = RandomSoup(seed, 5, 60, 4.0, 0.6, seed % 2 == 0);
     const std::vector<WorldObjectView> views = scene.Views();
     const std::vector<SlotPair> pairs = scene.AllPairs();
     const ExactQuery query = Query(views, pairs, {}, 0.1);
@@ -194,8 +191,8 @@ TEST(ExactStageTest, FullQueryMatchesBruteForce) {
 TEST(ExactStageTest, SubsetsMatchBruteForceRestrictedToThem) {
   ThreadPool pool(3);
   for (uint32_t seed : {11u, 12u, 13u}) {
-    SCOPED_TRACE(testing::Message() << "seed " << seed);
-    const Scene scene = RandomSoup(seed, 6, 50, 4.0, 0.7, true);
+    SCOPED_TRACE(::testing::Message() << "seed " << seed);
+    const SoupScene scene = RandomSoup(seed, 6, 50, 4.0, 0.7, true);
     const std::vector<WorldObjectView> views = scene.Views();
     std::mt19937 rng(seed);
     std::uniform_int_distribution<int> percent(0, 99);
@@ -247,9 +244,9 @@ TEST(ExactStageTest, SubsetsMatchBruteForceRestrictedToThem) {
 TEST(ExactStageTest, PrefilterNeverDropsAnIntersectingPair) {
   ThreadPool pool(2);
   for (uint32_t seed = 21; seed < 29; ++seed) {
-    SCOPED_TRACE(testing::Message() << "seed " << seed);
+    SCOPED_TRACE(::testing::Message() << "seed " << seed);
     // Dense, small, on a grid: many touching and coplanar pairs.
-    const Scene scene = RandomSoup(seed, 4, 40, 2.0, 0.5, true);
+    const SoupScene scene = RandomSoup(seed, 4, 40, 2.0, 0.5, true);
     const std::vector<WorldObjectView> views = scene.Views();
     const std::vector<SlotPair> pairs = scene.AllPairs();
     const std::vector<SlotContact> expected = UnfilteredContacts(scene);
@@ -265,7 +262,7 @@ TEST(ExactStageTest, PrefilterNeverDropsAnIntersectingPair) {
 
 TEST(ExactStageTest, TouchingAtOneCornerIsAContact) {
   // Two triangles that share a vertex and whose boxes share only boundary points.
-  Scene scene;
+  SoupScene scene;
   scene.positions = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{1, 0, 0}, {2, 1, 1}, {2, 0, 1}}};
   scene.triangles = {{{0, 1, 2}}, {{0, 1, 2}}};
   // And a point triangle lying on the first one's face, on its box's boundary plane z = 0.
@@ -284,10 +281,10 @@ TEST(ExactStageTest, DistancePairsMatchUnfilteredLoop) {
   ThreadPool pool(2);
   for (uint32_t seed = 31; seed < 37; ++seed) {
     for (double max_distance : {0.0, 0.05, 0.3}) {
-      SCOPED_TRACE(testing::Message() << "seed " << seed << " D " << max_distance);
+      SCOPED_TRACE(::testing::Message() << "seed " << seed << " D " << max_distance);
       const bool grid = seed % 2 == 1;
       const double offset = seed % 3 == 0 ? 1e5 : 0.0;  // far from the origin
-      const Scene scene = RandomSoup(seed, 4, 30, 3.0, 0.4, grid, offset);
+      const SoupScene scene = RandomSoup(seed, 4, 30, 3.0, 0.4, grid, offset);
       const std::vector<WorldObjectView> views = scene.Views();
       const std::vector<SlotPair> pairs = scene.AllPairs();
       const std::vector<SlotContact> expected = UnfilteredWithin(scene, max_distance);
@@ -308,8 +305,8 @@ TEST(ExactStageTest, DistancePrefilterIsNoStricterThanThePredicate) {
   ThreadPool pool(2);
   for (double offset : {0.0, 1e3, 1e5}) {
     for (double max_distance : {0.0, 0.1}) {
-      SCOPED_TRACE(testing::Message() << "offset " << offset << " D " << max_distance);
-      Scene scene;
+      SCOPED_TRACE(::testing::Message() << "offset " << offset << " D " << max_distance);
+      SoupScene scene;
       scene.positions = {{{offset, 0, 0}, {offset, 1, 0}, {offset, 0, 1}}, {}};
       scene.triangles = {{{0, 1, 2}}, {}};
       double x = offset + max_distance;
@@ -336,8 +333,8 @@ TEST(ExactStageTest, DistancePrefilterIsNoStricterThanThePredicate) {
 
 TEST(ExactStageTest, ThreadCountsGiveIdenticalOutput) {
   // Two big objects (many work items each) and several small ones.
-  Scene scene = RandomSoup(41, 2, 3000, 10.0, 0.4, false);
-  const Scene small = RandomSoup(42, 6, 40, 10.0, 1.0, true);
+  SoupScene scene = RandomSoup(41, 2, 3000, 10.0, 0.4, false);
+  const SoupScene small = RandomSoup(42, 6, 40, 10.0, 1.0, true);
   for (size_t o = 0; o < small.size(); ++o) {
     scene.positions.push_back(small.positions[o]);
     scene.triangles.push_back(small.triangles[o]);
@@ -367,7 +364,7 @@ TEST(ExactStageTest, ThreadCountsGiveIdenticalOutput) {
 }
 
 TEST(ExactStageTest, ObjectsWithoutTrianglesGiveNothing) {
-  Scene scene = RandomSoup(51, 3, 20, 1.0, 0.5, true);
+  SoupScene scene = RandomSoup(51, 3, 20, 1.0, 0.5, true);
   scene.positions.emplace_back();  // slot 3: no triangles
   scene.triangles.emplace_back();
   const std::vector<WorldObjectView> views = scene.Views();
@@ -396,7 +393,7 @@ TEST(ExactStageTest, ObjectsWithoutTrianglesGiveNothing) {
 }
 
 TEST(ExactStageTest, OnlyTheAskedOutputsAreComputed) {
-  const Scene scene = RandomSoup(61, 3, 40, 2.0, 0.5, true);
+  const SoupScene scene = RandomSoup(61, 3, 40, 2.0, 0.5, true);
   const std::vector<WorldObjectView> views = scene.Views();
   const std::vector<SlotPair> pairs = scene.AllPairs();
   ThreadPool pool(2);
@@ -429,7 +426,7 @@ TEST(ExactStageTest, APairOfSlotsOutsideTheObjectsIsRefusedBeforeAnyRead) {
       internal::SetAssertionHandler([](const internal::AssertionFailure& failure) {
         throw std::logic_error(std::string(failure.message));
       });
-  const Scene scene = RandomSoup(71, 2, 10, 1.0, 0.5, true);
+  const SoupScene scene = RandomSoup(71, 2, 10, 1.0, 0.5, true);
   const std::vector<WorldObjectView> views = scene.Views();
   const std::vector<SlotPair> pairs = {{SlotAt(0), SlotAt(2)}};
   ThreadPool pool(1);

@@ -37,7 +37,7 @@ bool WithinMargin(const Eigen::AlignedBox3d& a, const Eigen::AlignedBox3d& b, do
 }
 
 // The O(n^2) reference: every pair i < j by slot whose boxes are within margin.
-std::vector<SlotPair> BruteForcePairs(const std::vector<SlotBox>& boxes, double margin) {
+std::vector<SlotPair> BruteForceOverlaps(const std::vector<SlotBox>& boxes, double margin) {
   std::vector<SlotPair> pairs;
   for (size_t i = 0; i < boxes.size(); ++i) {
     for (size_t j = i + 1; j < boxes.size(); ++j) {
@@ -107,7 +107,7 @@ TEST(SweepAndPruneTest, TouchingBoxesArePairs) {
   SweepAndPrune sap;
   const std::vector<SlotPair> expected = Pairs({{10, 20}, {10, 40}, {20, 30}});
   EXPECT_EQ(sap.Update(boxes), expected);
-  EXPECT_EQ(BruteForcePairs(boxes, 0.0), expected);
+  EXPECT_EQ(BruteForceOverlaps(boxes, 0.0), expected);
 }
 
 TEST(SweepAndPruneTest, IdenticalAndDegenerateBoxesOverlap) {
@@ -214,13 +214,13 @@ TEST(SweepAndPruneTest, SmallMotionsCostFewSwaps) {
       const Eigen::Vector3d delta(jitter(rng), jitter(rng), jitter(rng));
       box.box_W = Eigen::AlignedBox3d(box.box_W.min() + delta, box.box_W.max() + delta);
     }
-    EXPECT_EQ(sap.Update(boxes), BruteForcePairs(boxes, 0.0));
+    EXPECT_EQ(sap.Update(boxes), BruteForceOverlaps(boxes, 0.0));
     EXPECT_LT(sap.last_swaps(), num_endpoints / 10) << "step " << step;
   }
   // A scene that jumps is still right (and re-sorted rather than insertion-sorted).
   std::shuffle(boxes.begin(), boxes.end(), rng);
   for (uint32_t i = 0; i < boxes.size(); ++i) boxes[i].slot = SlotAt(i);
-  EXPECT_EQ(sap.Update(boxes), BruteForcePairs(boxes, 0.0));
+  EXPECT_EQ(sap.Update(boxes), BruteForceOverlaps(boxes, 0.0));
   EXPECT_GT(sap.last_swaps(), num_endpoints / 10);
 }
 
@@ -245,7 +245,7 @@ TEST(SweepAndPruneTest, ASlotGivenToAnotherObjectInOneUpdateIsAMove) {
   EXPECT_EQ(sap.Update(boxes), Pairs({{0, 1}}));
   boxes[1] = MakeBox(1, {10.5, 10.5, 10.5}, {12, 12, 12});  // another object in slot 1
   EXPECT_EQ(sap.Update(boxes), Pairs({{1, 2}}));
-  EXPECT_EQ(sap.Update(boxes), BruteForcePairs(boxes, 0.0));
+  EXPECT_EQ(sap.Update(boxes), BruteForceOverlaps(boxes, 0.0));
 }
 
 TEST(SweepAndPruneTest, RandomScenesMatchBruteForceAcrossSteps) {
@@ -269,11 +269,11 @@ TEST(SweepAndPruneTest, RandomScenesMatchBruteForceAcrossSteps) {
       for (int i = 0; i < num_objects; ++i) boxes.push_back({new_slot(), scene.RandomBox()});
       SweepAndPrune sap;
       for (int step = 0; step < 12; ++step) {
-        SCOPED_TRACE(testing::Message()
+        SCOPED_TRACE(::testing::Message()
                      << "seed " << seed << " objects " << num_objects << " step " << step);
         const std::vector<SlotPair> pairs = sap.Update(boxes, margin);
         ExpectSortedAndOrdered(pairs);
-        ASSERT_EQ(pairs, BruteForcePairs(boxes, margin));
+        ASSERT_EQ(pairs, BruteForceOverlaps(boxes, margin));
 
         // Next step: most objects nudge, a few are removed, a few turn empty (inverted) or
         // back, a few are added.
@@ -322,8 +322,8 @@ TEST(SweepAndPruneTest, RandomRealScenesBracketBruteForce) {
     for (int step = 0; step < 8; ++step) {
       const std::vector<SlotPair> pairs = sap.Update(boxes, margin);
       ExpectSortedAndOrdered(pairs);
-      const std::vector<SlotPair> inner = BruteForcePairs(boxes, margin * (1 - 1e-9));
-      const std::vector<SlotPair> outer = BruteForcePairs(boxes, margin * (1 + 1e-9));
+      const std::vector<SlotPair> inner = BruteForceOverlaps(boxes, margin * (1 - 1e-9));
+      const std::vector<SlotPair> outer = BruteForceOverlaps(boxes, margin * (1 + 1e-9));
       EXPECT_TRUE(std::includes(pairs.begin(), pairs.end(), inner.begin(), inner.end()));
       EXPECT_TRUE(std::includes(outer.begin(), outer.end(), pairs.begin(), pairs.end()));
       for (SlotBox& box : boxes) {
