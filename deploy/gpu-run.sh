@@ -86,8 +86,9 @@ stage() {
 
 # Issue 42's load runs: one far-daemon, 16 clients of the paper's leaves, each burning
 # FAR_CLIENT_CPU_MS of its own CPU per step (a simulator's physics), for each method of
-# FAR_LOAD_METHODS; then gpu again with the compute step outside the GL lock
-# (FAR_COMPUTE_GL_LOCK=off). Exported and
+# FAR_LOAD_METHODS, the sessions' gpu steps issued together (--gpu-batch true, the default);
+# then gpu again with each session's steps on its own context in turns under the GL lock
+# (--gpu-batch false), and without the lock (FAR_COMPUTE_GL_LOCK=off). Exported and
 # run by a fresh bash (under timeout, maybe in a network namespace).
 load_runs() {
   set -euo pipefail
@@ -97,12 +98,15 @@ load_runs() {
   client() { far "$bin/far-client" --socket "$work/far.sock" "$@"; }
   # shellcheck disable=SC2086 # FAR_LOAD_SCENE_ARGS is a list of flags
   client make-scene "$work/leaves/scene.json" $FAR_LOAD_SCENE_ARGS >/dev/null
-  one_daemon() { # LOCK METHOD...: a daemon, then a load run per method
-    local lock=$1 daemon answered=0
+  one_daemon() { # MODE METHOD...: a daemon (MODE batch, turns or unlocked), a load run per method
+    local mode=$1 daemon answered=0 batch=true lock=on
     shift
+    [ "$mode" = batch ] || batch=false
+    [ "$mode" != unlocked ] || lock=off
     env LD_LIBRARY_PATH="$FAR_LIB_PATH" FAR_COMPUTE_GL_LOCK="$lock" "$bin/far-daemon" \
       --gl-platform "$FAR_PLATFORM" --socket "$work/far.sock" --log-level warn \
-      >"$work/daemon-$lock.log" 2>&1 &
+      --gpu-batch "$batch" --metrics-file "$work/daemon-$mode.prom" --metrics-interval-s 0.5 \
+      >"$work/daemon-$mode.log" 2>&1 &
     daemon=$!
     for _ in $(seq 50); do
       if client --connect-timeout 300ms ping >/dev/null 2>&1; then
@@ -111,21 +115,24 @@ load_runs() {
       fi
       sleep 0.2
     done
-    [ "$answered" = 1 ] || { cat "$work/daemon-$lock.log"; kill "$daemon" || true; return 1; }
+    [ "$answered" = 1 ] || { cat "$work/daemon-$mode.log"; kill "$daemon" || true; return 1; }
     for method in "$@"; do
       echo
-      echo "--- load: method $method, GL lock for the compute step: $lock"
+      echo "--- load: method $method, gpu steps: $mode (--gpu-batch $batch, GL lock $lock)"
       client load --clients "$FAR_LOAD_CLIENTS" --seconds "$FAR_LOAD_SECONDS" --steps 0 \
         --method "$method" --scene "$work/leaves/scene.json" \
         --client-cpu-ms "$FAR_CLIENT_CPU_MS" || rc=$?
     done
     client status | grep -i "steps\|renderer\|error" || true
+    sleep 1  # the metrics file's next rewrite: how many steps went in how many batches
+    grep '^far_gpu_batch' "$work/daemon-$mode.prom" || true
     kill -TERM "$daemon"
     wait "$daemon" || rc=$?
   }
   # shellcheck disable=SC2086 # FAR_LOAD_METHODS is a list of methods
-  one_daemon on $FAR_LOAD_METHODS
-  one_daemon off gpu
+  one_daemon batch $FAR_LOAD_METHODS
+  one_daemon turns gpu
+  one_daemon unlocked gpu
   rm -rf "$work"
   return "$rc"
 }
@@ -258,7 +265,7 @@ main() {
   # Issue 42: the gpu method held to exact on this GPU's own rasterizer and arithmetic, then
   # timed beside bvh and FAR (far-study, one interleaved run per family), then the shared case
   # through the daemon (16 clients burning CPU per step).
-  local gpu_tests='ComputeCollider*:PipelineCullingTest.Reliable*:PipelineCullingTest.HardCases*:PipelineCullingTest.DistanceCulling*:PipelineCullingTest.OneHuge*:PipelineCullingTest.TinyContact*:PipelineCullingTest.AutoRuns*'
+  local gpu_tests='ComputeCollider*:ComputeBatcher*:PipelineCullingTest.Reliable*:PipelineCullingTest.HardCases*:PipelineCullingTest.DistanceCulling*:PipelineCullingTest.OneHuge*:PipelineCullingTest.TinyContact*:PipelineCullingTest.AutoRuns*'
   local paper=(--scenes paper-leaves --methods bvh,gpu,auto,far --paper-gpu far/id-buffer/256
     --steps 8 --distance paper --reference-steps 2)
   local scaling=(--scenes scaling --scaling-sizes 50000,100000,150000,300000,600000,1000000
@@ -294,7 +301,7 @@ main() {
     netns=(bash "$here/netns-run.sh")
   fi
   [[ "$stages" == *" load "* ]] &&
-  stage "daemon load (16 clients)" 100 "${netns[@]}" bash -c load_runs
+  stage "daemon load (16 clients)" 120 "${netns[@]}" bash -c load_runs
 
   echo
   echo "=== summary ($(($(date +%s) - start))s in all; GL_RENDERER: $renderer)"

@@ -21,6 +21,7 @@
 #include <spdlog/spdlog.h>
 
 #include "far/base/gpu_identity.h"
+#include "far/gpu/compute_batcher.h"
 #include "far/gpu/gl_context.h"
 #include "far/model/scene_budget.h"
 #include "far/pipeline/pipeline.h"
@@ -81,6 +82,8 @@ struct Daemon::Impl {
   std::unique_ptr<protocol::LocalListener> listener;
   DaemonStats stats;
   SharedSceneBudget budget{BudgetTotalsOf(config)};
+  // Before the sessions: their pipelines' gpu steps go to it until they end.
+  std::unique_ptr<ComputeBatcher> compute_batcher;
   SessionRegistry sessions{config, budget};
   SetupAllowance setup_allowance{config.setup_allowance_ms};
   std::unique_ptr<Replier> replier;
@@ -219,9 +222,16 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
     gpu_names = ServedGpuNames(d.config, (*context)->drm_device_file());
     // auto's GPU cost model, once for every session to come.
     if (!MeasureGpuCost()) spdlog::warn("event=gpu_cost_unknown renderer=\"{}\"", d.renderer);
+    if (d.config.gpu_batch) {
+      auto batcher = ComputeBatcher::Create(d.config.gl_platform, gpu);
+      if (!batcher) return batcher.error();
+      d.compute_batcher = std::move(*batcher);
+      d.workers->compute_batcher = d.compute_batcher.get();
+    }
   }
-  d.status = std::make_unique<StatusSources>(StatusSources{
-      d.config, d.stats, d.sessions, d.budget, d.renderer, device, gpu_names, d.created});
+  d.status = std::make_unique<StatusSources>(StatusSources{d.config, d.stats, d.sessions, d.budget,
+                                                           d.renderer, device, gpu_names, d.created,
+                                                           d.compute_batcher.get()});
   // The metrics file's first write and the port come before the daemon is ready: a file that
   // cannot be written or a port taken is a start-up error, not a silent gap in the metrics.
   auto metrics = MetricsExport::Start(d.config, *d.status);
@@ -230,10 +240,11 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   // Both lines come before the socket answers: whoever finds the daemon ready finds them logged.
   spdlog::info(
       "event=daemon_ready name={} socket={} gl_renderer=\"{}\" gl_device=\"{}\" "
-      "gpu_names=\"{}\" lcm_url={} max_sessions={} cpu_cores={} threads_per_session={}",
+      "gpu_names=\"{}\" lcm_url={} max_sessions={} cpu_cores={} threads_per_session={} "
+      "gpu_batch={}",
       d.config.name, SocketPathOf(d.config), d.renderer, device, fmt::join(gpu_names, ","),
       d.config.lcm_url, d.config.max_sessions, CpuCoresOf(d.config),
-      CpuPoolThreads(d.config.exact_threads, CpuCoresOf(d.config)));
+      CpuPoolThreads(d.config.exact_threads, CpuCoresOf(d.config)), d.config.gpu_batch);
   if (protocol::IsInProcessUrl(d.config.lcm_url)) {
     spdlog::warn(
         "event=lcm_in_process lcm_url={} message=\"no client can reach the session channels "

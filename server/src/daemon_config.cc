@@ -73,6 +73,10 @@ Result<void> ReadKey(const std::string& key, const nlohmann::json& value, Daemon
     if constexpr (std::is_same_v<std::decay_t<decltype(field)>, std::string>) {
       field = value.get<std::string>();
       return {};
+    } else if constexpr (std::is_same_v<std::decay_t<decltype(field)>, bool>) {
+      if (!value.is_boolean()) return Invalid(key, value.dump() + " is not true or false");
+      field = value.get<bool>();
+      return {};
     } else {
       return ReadNumber(key, value, &field);
     }
@@ -83,6 +87,7 @@ Result<void> ReadKey(const std::string& key, const nlohmann::json& value, Daemon
   if (key == "lcm_url") return set(config.lcm_url);
   if (key == "gpu") return set(config.gpu);
   if (key == "gpu_id") return set(config.gpu_id);
+  if (key == "gpu_batch") return set(config.gpu_batch);
   if (key == "serves_gpus") {
     config.serves_gpus = value.get<std::vector<std::string>>();
     return {};

@@ -34,6 +34,10 @@ struct DaemonConfig {
   /// --daemon auto), beside those detected from its EGL device: for schedulers that number
   /// GPUs their own way, and for daemons on a software renderer standing in for a GPU.
   std::vector<std::string> serves_gpus;
+  /// The gpu method's GPU work of every session goes to one thread and context that issues the
+  /// steps waiting at the time together (far::ComputeBatcher); false: each session issues its
+  /// own on its own context, in turns under the GL lock.
+  bool gpu_batch = true;
   // Sessions.
   int max_sessions = 64;
   int max_sessions_per_user = 16;

@@ -108,6 +108,9 @@ struct CommandLine {
         "a step's statuses (queued, started, stage) are sent once it is this old; quicker steps "
         "get their reply alone (0: every status)");
     Add("--threads", &DaemonConfig::exact_threads, "CPU threads for exact tests (0: all)");
+    Add("--gpu-batch", &DaemonConfig::gpu_batch,
+        "the gpu method's steps of all sessions go to the GPU together, from one thread and "
+        "context (true), or each session's on its own context in turns (false)");
     Add("--cpu-cores", &DaemonConfig::cpu_cores,
         "CPU cores the daemon may use in all (0: all): no session's threads exceed it (nor "
         "--threads), and a heavy session gets half of it");

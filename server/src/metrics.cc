@@ -116,6 +116,14 @@ std::vector<MetricFamily> MetricFamilies(const far_lcm::status_reply_t& status,
                 static_cast<double>(status.method_steps[i]),
                 {{"method", status.method_name[i]}, {"device", DeviceOf(status.method_name[i])}});
   }
+  out.Counter("far_gpu_batched_steps_total",
+              "gpu method steps whose GPU work went in a batch with the steps waiting beside it "
+              "(--gpu-batch)",
+              static_cast<double>(extras.gpu_batched_steps));
+  out.Counter("far_gpu_batches_total",
+              "batches of gpu method steps issued together; steps over batches is the mean "
+              "batch",
+              static_cast<double>(extras.gpu_batches));
   ClientMetric& latency = out.Sample(
       "far_step_latency_seconds",
       "step latency, request received to reply ready; quantiles over the last 8192 steps, "

@@ -16,6 +16,9 @@ struct MetricsExtras {
   double latency_sum_ms = 0;
   /// far_up: 1 while the daemon serves; 0 in the last metrics file, written at a clean stop.
   bool up = true;
+  /// The gpu method's steps issued in batches (far::ComputeBatcher) and the batches.
+  int64_t gpu_batched_steps = 0;
+  int64_t gpu_batches = 0;
 };
 
 /// Turns a status into Prometheus metric families (docs/daemon.md, "Metrics", lists them): the

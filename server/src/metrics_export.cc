@@ -41,7 +41,12 @@ Error IoError(const std::string& path, const std::string& what) {
 std::vector<prometheus::MetricFamily> CollectMetrics(const StatusSources& sources, bool up) {
   // The count and the sum from one reading, so that sum/count is a true mean.
   const DaemonStats::Snapshot stats = sources.stats.Read();
-  const MetricsExtras extras{stats.latency_samples, stats.latency_sum_ms, up};
+  MetricsExtras extras{stats.latency_samples, stats.latency_sum_ms, up};
+  if (sources.compute_batcher != nullptr) {
+    const ComputeBatcher::Counters batches = sources.compute_batcher->counters();
+    extras.gpu_batched_steps = batches.steps;
+    extras.gpu_batches = batches.batches;
+  }
   return MetricFamilies(MakeStatusReply(sources, /*asker=*/0, /*request_id=*/0), extras);
 }
 

@@ -100,6 +100,7 @@ class SessionWorker {
     options.scene_limits = SceneLimitsOf(context_.config);
     options.shared_budget = &context_.budget;
     options.budget_holder = session_->id;
+    options.compute_batcher = context_.compute_batcher;
     auto pipeline = Pipeline::Create(options);
     if (!pipeline && options.use_gl) {
       // No GL context for this session (the driver's limit?): the CPU methods still work.

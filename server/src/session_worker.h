@@ -11,6 +11,7 @@
 #include "session.h"
 #include "setup_allowance.h"
 
+#include "far/gpu/compute_batcher.h"
 #include "far/model/scene_budget.h"
 
 namespace far::server {
@@ -27,6 +28,9 @@ struct WorkerContext {
   std::function<void(int64_t session_id, const std::string& reason)> close_session;
   /// The sessions stepping now (the daemon's); null: each session counts on all cpu_cores.
   ActiveSessions* active = nullptr;
+  /// Where the sessions' gpu steps go together (DaemonConfig::gpu_batch); null: each session's
+  /// own context.
+  ComputeBatcher* compute_batcher = nullptr;
 };
 
 /// Starts the thread that serves one session: it takes the session's queued steps one at a

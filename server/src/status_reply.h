@@ -12,6 +12,7 @@
 #include "far_lcm/status_reply_t.hpp"
 #include "session_registry.h"
 
+#include "far/gpu/compute_batcher.h"
 #include "far/model/scene_budget.h"
 
 namespace far::server {
@@ -25,6 +26,8 @@ struct StatusSources {
   std::string gl_renderer, gl_device;
   std::vector<std::string> gpu_names;  ///< what schedulers call its GPU (docs/cluster.md)
   std::chrono::steady_clock::time_point started;
+  /// Where the sessions' gpu steps go together (DaemonConfig::gpu_batch); null: none.
+  const ComputeBatcher* compute_batcher = nullptr;
 };
 
 /// The status for user `asker`: daemon-wide totals, and the sessions of that user only (every

@@ -6,6 +6,7 @@ target_link_libraries(far_test_scenes PUBLIC far::pairs far::scenes PRIVATE far_
 # GPU tests: headless GL (llvmpipe in CI). Label gpu.
 far_add_test(far_gpu_test gpu far/gpu/gl_context_test.cc far/gpu/snapshot_test.cc
              far/gpu/gl_lock_test.cc far/gpu/compute_collider_test.cc
+             far/gpu/compute_batcher_test.cc
              far/pipeline/pipeline_culling_test.cc
              far/pipeline/certificate_test.cc far/pipeline/gl_deadline_test.cc)
 target_link_libraries(far_gpu_test PRIVATE far::pipeline far::io far_test_scenes far_hard_cases)

@@ -49,16 +49,32 @@ std::vector<SceneObject> Frame(std::vector<SceneObject> objects, int k) {
   return objects;
 }
 
-StepRequest BvhContacts() {
+StepRequest Contacts(Method method) {
   StepRequest request;
-  request.method = Method::kBvh;
+  request.method = method;
   request.output = Output::kContacts;
   return request;
 }
 
-class ManyThreadsTest : public DaemonTest {};
+StepRequest BvhContacts() { return Contacts(Method::kBvh); }
+
+class ManyThreadsTest : public DaemonTest {
+ protected:
+  // Eight threads, each stepping its own session with `method`, every answer the reference's.
+  void EightThreadsGetExactAnswers(Method method);
+};
 
 TEST_F(ManyThreadsTest, EightThreadsEachSteppingTheirOwnSessionGetExactAnswers) {
+  EightThreadsGetExactAnswers(Method::kBvh);
+}
+
+// The gpu method's steps of the eight sessions go to the daemon's batcher (--gpu-batch, on by
+// default), several in a batch: each session gets its own answer, exact.
+TEST_F(ManyThreadsTest, EightThreadsSteppingTheGpuMethodThroughTheBatcherGetExactAnswers) {
+  EightThreadsGetExactAnswers(Method::kGpu);
+}
+
+void ManyThreadsTest::EightThreadsGetExactAnswers(Method method) {
   ASSERT_NE(StartDaemon(), nullptr);
   // The references, before any thread starts: [thread][frame].
   std::vector<std::vector<SceneObject>> scenes;
@@ -111,11 +127,13 @@ TEST_F(ManyThreadsTest, EightThreadsEachSteppingTheirOwnSessionGetExactAnswers) 
             }
           }
         }
-        auto result = (*client)->Step(BvhContacts());
+        auto result = (*client)->Step(Contacts(method));
         if (!result)
           return problem("step " + std::to_string(s) + ": " + far::ToString(result.error()));
         ++mine.steps;
-        if (result->contacts != expected[t][k]) {
+        if (result->stats.method != ToString(method)) {
+          problem("step " + std::to_string(s) + " ran " + result->stats.method);
+        } else if (result->contacts != expected[t][k]) {
           problem("step " + std::to_string(s) + " (frame " + std::to_string(k) +
                   "): " + std::to_string(result->contacts.size()) + " contacts " +
                   ToString(result->contacts, 5) + ", the reference " +

@@ -39,6 +39,7 @@ FAR_FAMILIES = {
     "far_sessions_max_per_user", "far_scene_objects", "far_scene_triangles", "far_steps",
     "far_step_latency_seconds", "far_errors", "far_rejected_messages", "far_gpu_info",
     "far_memory_rss_bytes", "far_segment_bytes", "far_opens_refused", "far_steps_by_method",
+    "far_gpu_batched_steps", "far_gpu_batches",
 }
 # What the daemon's scheduler calls its GPU (--serves-gpus), added to what it detects.
 SERVES_GPUS = ["3", "GPU-metrics-test"]

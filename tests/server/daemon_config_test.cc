@@ -26,8 +26,10 @@ TEST(DaemonConfigTest, ReadsKnownKeys) {
   auto config =
       LoadDaemonConfig(WriteTemp("ok", R"({"max_resolution": 512, "gl_platform": "surfaceless",
       "max_sessions": 3, "log_level": "debug", "lcm_url": "memq://", "setup_allowance_ms": 250,
-      "status_after_ms": 0})"));
+      "status_after_ms": 0, "gpu_batch": false})"));
   ASSERT_TRUE(config.ok()) << ToString(config.error());
+  EXPECT_FALSE(config->gpu_batch);
+  EXPECT_TRUE(DaemonConfig{}.gpu_batch);
   EXPECT_EQ(config->setup_allowance_ms, 250);
   EXPECT_EQ(config->status_after_ms, 0);
   EXPECT_EQ(config->max_resolution, 512);
@@ -49,6 +51,7 @@ TEST(DaemonConfigTest, RejectsUnknownKeysWrongTypesAndRanges) {
       {R"({"setup_allowance_ms": -1})", "setup_allowance_ms"},
       {R"({"status_after_ms": -1})", "status_after_ms"},
       {R"({"status_after_ms": 60001})", "status_after_ms"},
+      {R"({"gpu_batch": 1})", "'gpu_batch': 1 is not true or false"},
       {R"([1, 2])", "not a JSON object"},
       {R"({"max_sessions": )", ""},
   };

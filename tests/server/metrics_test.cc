@@ -95,14 +95,16 @@ TEST(MetricFamiliesTest, EveryFamilyHasHelpATypeAndTheDaemonLabelOnEverySample) 
         "far_sessions_max_per_user", "far_scene_objects", "far_scene_triangles", "far_steps_total",
         "far_step_latency_seconds", "far_errors_total", "far_rejected_messages_total",
         "far_gpu_info", "far_memory_rss_bytes", "far_segment_bytes", "far_opens_refused_total",
-        "far_steps_by_method_total"}) {
+        "far_steps_by_method_total", "far_gpu_batched_steps_total", "far_gpu_batches_total"}) {
     EXPECT_EQ(seen.count(name), 1u) << name;
   }
 }
 
 TEST(MetricFamiliesTest, ValuesAreTheStatusInBaseUnits) {
-  const auto families = MetricFamilies(SampleStatus(), {1000, 2500, true});
+  const auto families = MetricFamilies(SampleStatus(), {1000, 2500, true, 96, 10});
   EXPECT_EQ(Find(families, "far_up").metric.at(0).gauge.value, 1);
+  EXPECT_EQ(Find(families, "far_gpu_batched_steps_total").metric.at(0).counter.value, 96);
+  EXPECT_EQ(Find(families, "far_gpu_batches_total").metric.at(0).counter.value, 10);
   const ClientMetric& info = Find(families, "far_info").metric.at(0);
   EXPECT_EQ(Label(info, "version"), "0.1.0");
   EXPECT_EQ(Label(info, "gl_renderer"), R"(NVIDIA "H100")");

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <optional>
 #include <string>
 #include <thread>
 #include <utility>
@@ -114,8 +115,6 @@ struct ComputeCollider::Impl {
   Buffer& buffer(internal::ComputeBinding binding) { return buffers[binding]; }
   Result<int64_t> EnsureLayout(std::span<const ComputeObject> objects);
   int64_t UploadVertices(std::span<const ComputeObject> objects);
-  Result<ComputeAnswer> Traverse(const ComputeQuery& query, uint32_t pairs, uint32_t items,
-                                 Clock::time_point submit_start);
   // The boxes of the moved objects' triangles, then their hierarchies level by level, deepest
   // first (the other objects' boxes stay as computed before); returns the bytes uploaded.
   int64_t RefitMoved();
@@ -123,10 +122,31 @@ struct ComputeCollider::Impl {
   void ReadPcs(ComputeAnswer& answer);
   // The crossing and undecided pairs the traversal wrote (counts from its counters).
   void ReadPairs(uint32_t num_crossing, uint32_t num_undecided, ComputeAnswer& answer);
-  // Run's GL work: uploads, the three kernels and the read-back.
-  Result<ComputeAnswer> RunGl(const ComputeQuery& query,
-                              std::span<const std::array<uint32_t, 4>> work,
-                              std::span<const uint32_t> work_start, uint64_t items);
+
+  // A step between Submit and Finish: its query, and the work Prepare made of it.
+  struct Pending {
+    ComputeQuery query;
+    // Per object pair: (driver's slot, partner's slot, driver is object_a, 0); work_start[p]
+    // is the first invocation of pair p, items the invocations of all.
+    std::vector<std::array<uint32_t, 4>> work;
+    std::vector<uint32_t> work_start;
+    uint64_t items = 0;
+    Clock::time_point submit_start;
+    int64_t uploaded = 0;
+    double cpu_submit_ms = 0;
+  };
+  std::optional<Pending> pending;
+
+  // The CPU's part of a step: which triangles descend which hierarchy (no GL call).
+  Result<void> Prepare(const ComputeQuery& query);
+  // Uploads, boxes, refit and the traversal's dispatch.
+  Result<void> SubmitGl();
+  // Binds this collider's buffers, clears the counters and bits, and dispatches the traversal
+  // with the output buffers at `capacity`.
+  void DispatchTraversal();
+  // Waits for the traversal (again, with larger output buffers, when they overflowed) and
+  // reads the answer back.
+  Result<ComputeAnswer> Collect();
 };
 
 namespace {
@@ -389,36 +409,38 @@ void ComputeCollider::Impl::ReadPairs(uint32_t num_crossing, uint32_t num_undeci
   }
 }
 
-Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query, uint32_t pairs,
-                                                      uint32_t items,
-                                                      Clock::time_point submit_start) {
+void ComputeCollider::Impl::DispatchTraversal() {
+  const ComputeQuery& query = pending->query;
+  buffer(internal::kCrossingBinding).Reserve(capacity * 16);
+  buffer(internal::kUndecidedBinding).Reserve(capacity * 16);
+  const uint32_t zero = 0;
+  glClearNamedBufferData(buffer(internal::kCountersBinding).id, GL_R32UI, GL_RED_INTEGER,
+                         GL_UNSIGNED_INT, &zero);
+  glClearNamedBufferData(buffer(internal::kPcsBitsBinding).id, GL_R32UI, GL_RED_INTEGER,
+                         GL_UNSIGNED_INT, &zero);
+  // Every binding again: another collider of the context may have bound its own since.
+  for (size_t binding = 0; binding < buffers.size(); ++binding) {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding), buffers[binding].id);
+  }
+  glUseProgram(traverse_program);
+  glProgramUniform1ui(traverse_program, traverse_count, static_cast<GLuint>(pending->items));
+  glProgramUniform1ui(traverse_program, traverse_pairs, static_cast<GLuint>(pending->work.size()));
+  glProgramUniform1ui(traverse_program, traverse_capacity, static_cast<GLuint>(capacity));
+  glProgramUniform1i(traverse_program, traverse_distance, query.distance ? 1 : 0);
+  glProgramUniform1f(traverse_program, traverse_slack, FloatAtLeast(query.slack));
+  glBeginQuery(GL_TIME_ELAPSED, traverse_query);
+  glDispatchCompute(Groups(pending->items), 1, 1);
+  glEndQuery(GL_TIME_ELAPSED);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glUseProgram(0);
+}
+
+Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
   ComputeAnswer answer;
-  answer.runs = 0;
+  answer.cpu_submit_ms = pending->cpu_submit_ms;
+  answer.bytes_uploaded = pending->uploaded;
   std::array<uint32_t, internal::kNumCounters> counters{};
   for (;;) {
-    ++answer.runs;
-    Buffer& crossing = buffer(internal::kCrossingBinding);
-    Buffer& undecided = buffer(internal::kUndecidedBinding);
-    crossing.Reserve(capacity * 16);
-    undecided.Reserve(capacity * 16);
-    const uint32_t zero = 0;
-    glClearNamedBufferData(buffer(internal::kCountersBinding).id, GL_R32UI, GL_RED_INTEGER,
-                           GL_UNSIGNED_INT, &zero);
-    glClearNamedBufferData(buffer(internal::kPcsBitsBinding).id, GL_R32UI, GL_RED_INTEGER,
-                           GL_UNSIGNED_INT, &zero);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kCrossingBinding, crossing.id);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kUndecidedBinding, undecided.id);
-    glUseProgram(traverse_program);
-    glProgramUniform1ui(traverse_program, traverse_count, items);
-    glProgramUniform1ui(traverse_program, traverse_pairs, pairs);
-    glProgramUniform1ui(traverse_program, traverse_capacity, static_cast<GLuint>(capacity));
-    glProgramUniform1i(traverse_program, traverse_distance, query.distance ? 1 : 0);
-    glProgramUniform1f(traverse_program, traverse_slack, FloatAtLeast(query.slack));
-    glBeginQuery(GL_TIME_ELAPSED, traverse_query);
-    glDispatchCompute(Groups(items), 1, 1);
-    glEndQuery(GL_TIME_ELAPSED);
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    if (answer.runs == 1) answer.cpu_submit_ms = MsSince(submit_start);
     const auto wait_start = Clock::now();
     WaitForGpu();
     glGetNamedBufferSubData(buffer(internal::kCountersBinding).id, 0, sizeof(counters),
@@ -440,6 +462,8 @@ Result<ComputeAnswer> ComputeCollider::Impl::Traverse(const ComputeQuery& query,
                            std::to_string(kMostCapacity) + "; 'bvh' answers this scene");
     }
     capacity = std::bit_ceil(most);
+    ++answer.runs;
+    DispatchTraversal();
   }
   const auto read_start = Clock::now();
   ReadPairs(counters[internal::kCrossingCount], counters[internal::kUndecidedCount], answer);
@@ -499,12 +523,12 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   return std::unique_ptr<ComputeCollider>(new ComputeCollider(std::move(impl)));
 }
 
-Result<ComputeAnswer> ComputeCollider::Run(const ComputeQuery& query) {
+Result<void> ComputeCollider::Impl::Prepare(const ComputeQuery& query) {
   // The work: for each object pair, the triangles of the smaller object (the driver) descend
   // the larger one's hierarchy.
-  std::vector<std::array<uint32_t, 4>> work;
-  std::vector<uint32_t> work_start = {0};
-  uint64_t items = 0;
+  Pending next;
+  next.query = query;
+  next.work_start = {0};
   for (const SlotPair& pair : query.object_pairs) {
     const ComputeObject& a = query.objects[Index(pair.object_a)];
     const ComputeObject& b = query.objects[Index(pair.object_b)];
@@ -512,46 +536,36 @@ Result<ComputeAnswer> ComputeCollider::Run(const ComputeQuery& query) {
     const bool a_drives = a.triangles.size() <= b.triangles.size();
     const ObjectSlot driver = a_drives ? pair.object_a : pair.object_b;
     const ObjectSlot other = a_drives ? pair.object_b : pair.object_a;
-    work.push_back({static_cast<uint32_t>(Index(driver)), static_cast<uint32_t>(Index(other)),
-                    a_drives ? 1u : 0u, 0u});  // bases filled in below, once laid out
-    items += (a_drives ? a : b).triangles.size();
-    if (items >= std::numeric_limits<uint32_t>::max()) {
+    next.work.push_back({static_cast<uint32_t>(Index(driver)), static_cast<uint32_t>(Index(other)),
+                         a_drives ? 1u : 0u, 0u});
+    next.items += (a_drives ? a : b).triangles.size();
+    if (next.items >= std::numeric_limits<uint32_t>::max()) {
       return MakeError(ErrorCode::kUnavailable,
                        "gpu method: over 2^32 triangles to descend in one step; 'bvh' answers "
                        "this scene");
     }
-    work_start.push_back(static_cast<uint32_t>(items));
+    next.work_start.push_back(static_cast<uint32_t>(next.items));
   }
-  if (work.empty()) return ComputeAnswer{};
-  // FAR_COMPUTE_GL_LOCK=off: this step's GL work runs without far::LockGl, beside other
-  // sessions' (an experiment for drivers that need no lock between contexts: docs/daemon.md).
-  static const bool unlocked = [] {
-    const char* value = std::getenv("FAR_COMPUTE_GL_LOCK");
-    return value != nullptr && std::string(value) == "off";
-  }();
-  if (unlocked) return impl_->RunGl(query, work, work_start, items);
-  const auto lock = LockGl();
-  return impl_->RunGl(query, work, work_start, items);
+  pending = std::move(next);
+  return {};
 }
 
-Result<ComputeAnswer> ComputeCollider::Impl::RunGl(const ComputeQuery& query,
-                                                   std::span<const std::array<uint32_t, 4>> work,
-                                                   std::span<const uint32_t> work_start,
-                                                   uint64_t items) {
-  const auto submit_start = Clock::now();
+Result<void> ComputeCollider::Impl::SubmitGl() {
+  Pending& step = *pending;
+  step.submit_start = Clock::now();
   glBeginQuery(GL_TIME_ELAPSED, refit_query);
-  auto laid_out = EnsureLayout(query.objects);
+  auto laid_out = EnsureLayout(step.query.objects);
   if (!laid_out) {
     glEndQuery(GL_TIME_ELAPSED);
     return laid_out.error();
   }
-  int64_t uploaded = *laid_out + UploadVertices(query.objects);
+  int64_t uploaded = *laid_out + UploadVertices(step.query.objects);
 
   // Per pair: (driver's first triangle, partner's first triangle, partner's root, 0) and
   // (driver's slot, partner's slot, driver is object_a, 0).
   std::vector<std::array<uint32_t, 4>> work_data;
-  work_data.reserve(2 * work.size());
-  for (const auto& w : work) {
+  work_data.reserve(2 * step.work.size());
+  for (const auto& w : step.work) {
     const SlotLayout& driver = layout[w[0]];
     const SlotLayout& other = layout[w[1]];
     work_data.push_back({driver.triangle_base, other.triangle_base, other.node_base, 0});
@@ -560,26 +574,67 @@ Result<ComputeAnswer> ComputeCollider::Impl::RunGl(const ComputeQuery& query,
   Buffer& work_buffer = buffer(internal::kWorkBinding);
   Buffer& start_buffer = buffer(internal::kWorkStartBinding);
   work_buffer.Reserve(work_data.size() * 16);
-  start_buffer.Reserve(work_start.size() * sizeof(uint32_t));
+  start_buffer.Reserve(step.work_start.size() * sizeof(uint32_t));
   glNamedBufferSubData(work_buffer.id, 0, static_cast<GLsizeiptr>(work_data.size() * 16),
                        work_data.data());
   glNamedBufferSubData(start_buffer.id, 0,
-                       static_cast<GLsizeiptr>(work_start.size() * sizeof(uint32_t)),
-                       work_start.data());
-  uploaded += static_cast<int64_t>(work_data.size() * 16 + work_start.size() * 4);
+                       static_cast<GLsizeiptr>(step.work_start.size() * sizeof(uint32_t)),
+                       step.work_start.data());
+  uploaded += static_cast<int64_t>(work_data.size() * 16 + step.work_start.size() * 4);
   for (size_t binding = 0; binding < buffers.size(); ++binding) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding), buffers[binding].id);
   }
   uploaded += RefitMoved();
   glEndQuery(GL_TIME_ELAPSED);
-  if (auto ok = CheckGl("gpu method: boxes and refit"); !ok) return ok.error();
-
-  auto traversed = Traverse(query, static_cast<uint32_t>(work.size()), static_cast<uint32_t>(items),
-                            submit_start);
   glUseProgram(0);
-  if (!traversed) return traversed.error();
-  traversed->bytes_uploaded = uploaded;
-  return traversed;
+  if (auto ok = CheckGl("gpu method: boxes and refit"); !ok) return ok.error();
+  DispatchTraversal();
+  step.uploaded = uploaded;
+  step.cpu_submit_ms = MsSince(step.submit_start);
+  return {};
+}
+
+Result<void> ComputeCollider::Submit(const ComputeQuery& query) {
+  impl_->pending.reset();
+  if (auto ok = impl_->Prepare(query); !ok) return ok;
+  if (impl_->pending->work.empty()) return {};
+  if (auto ok = impl_->SubmitGl(); !ok) {
+    impl_->pending.reset();
+    return ok;
+  }
+  return {};
+}
+
+Result<ComputeAnswer> ComputeCollider::Finish() {
+  if (!impl_->pending)
+    return MakeError(ErrorCode::kInternal, "gpu method: Finish without a step submitted");
+  Result<ComputeAnswer> answer = impl_->pending->work.empty() ? ComputeAnswer{} : impl_->Collect();
+  impl_->pending.reset();
+  return answer;
+}
+
+Result<ComputeAnswer> ComputeCollider::Run(const ComputeQuery& query) {
+  if (auto ok = impl_->Prepare(query); !ok) return ok.error();
+  if (impl_->pending->work.empty()) {  // no GL work: not even the lock
+    impl_->pending.reset();
+    return ComputeAnswer{};
+  }
+  // FAR_COMPUTE_GL_LOCK=off: this step's GL work runs without far::LockGl, beside other
+  // sessions' (an experiment for drivers that need no lock between contexts: docs/daemon.md).
+  static const bool unlocked = [] {
+    const char* value = std::getenv("FAR_COMPUTE_GL_LOCK");
+    return value != nullptr && std::string(value) == "off";
+  }();
+  const auto submit_and_finish = [&]() -> Result<ComputeAnswer> {
+    if (auto ok = impl_->SubmitGl(); !ok) {
+      impl_->pending.reset();
+      return ok.error();
+    }
+    return Finish();
+  };
+  if (unlocked) return submit_and_finish();
+  const auto lock = LockGl();
+  return submit_and_finish();
 }
 
 }  // namespace far

@@ -68,13 +68,7 @@ Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> 
                                            StopReason* stopped) {
   *stopped = BuildTopologies(objects, control);
   if (*stopped != StopReason::kNone) return ComputeAnswer{};
-  if (!collider_) {
-    SetupScope setup(&control);  // compiling the kernels and checking them is one-off work
-    auto made = ComputeCollider::Create();
-    if (!made) return made.error();
-    collider_ = std::move(*made);
-    trusted_ = CheckedOnThisDriver(*collider_);
-  }
+  if (auto made = MakeCollider(control); !made) return made.error();
   if (!trusted_) return trusted_.error();
   std::vector<ComputeObject> views(objects.size());
   for (size_t s = 0; s < objects.size(); ++s) {
@@ -96,7 +90,33 @@ Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> 
   query.object_pairs = object_pairs;
   query.slack = slack;
   query.distance = distance;
+  return Run(query);
+}
+
+Result<void> ComputeStage::MakeCollider(const StepControl& control) {
+  if (collider_ || batched_id_) return {};
+  SetupScope setup(&control);  // compiling the kernels and checking them is one-off work
+  if (batcher_ == nullptr) {
+    auto made = ComputeCollider::Create();
+    if (!made) return made.error();
+    collider_ = std::move(*made);
+    trusted_ = CheckedOnThisDriver(*collider_);
+    return {};
+  }
+  auto added = batcher_->AddCollider();
+  if (!added) return added.error();
+  batched_id_ = *added;
+  trusted_ = batcher_->WithCollider(*batched_id_, CheckedOnThisDriver);
+  return {};
+}
+
+Result<ComputeAnswer> ComputeStage::Run(const ComputeQuery& query) {
+  if (batched_id_) return batcher_->Run(*batched_id_, query);
   return collider_->Run(query);
+}
+
+ComputeStage::~ComputeStage() {
+  if (batched_id_) batcher_->RemoveCollider(*batched_id_);
 }
 
 void ComputeStage::RemoveSlot(ObjectSlot slot) {

@@ -12,6 +12,7 @@
 #include "far/base/result.h"
 #include "far/base/step_control.h"
 #include "far/base/thread_pool.h"
+#include "far/gpu/compute_batcher.h"
 #include "far/gpu/compute_collider.h"
 #include "far/model/contact_pair.h"
 
@@ -22,11 +23,17 @@ namespace far::internal {
 /// only refit, on the GPU), and what changed since the last step, handed to far::
 /// ComputeCollider. Its first step holds the collider to the exact predicates on this driver
 /// (SelfCheckComputeCollider, once per renderer and process): a driver that fails it gets
-/// kUnavailable for every gpu step (auto then runs bvh). Owned by the GL thread
-/// (far::GlContext's contract).
+/// kUnavailable for every gpu step (auto then runs bvh). With a far::ComputeBatcher the
+/// collider lives on the batcher's thread and context, and each step goes to the GPU in a batch
+/// with other pipelines' steps; without one, on the pipeline's own context. Owned by the GL
+/// thread (far::GlContext's contract).
 class ComputeStage {
  public:
-  explicit ComputeStage(ThreadPool& pool) : pool_(pool) {}
+  /// `batcher`: null, or where the collider lives (must outlive this stage).
+  ComputeStage(ThreadPool& pool, ComputeBatcher* batcher) : pool_(pool), batcher_(batcher) {}
+  ~ComputeStage();
+  ComputeStage(const ComputeStage&) = delete;
+  ComputeStage& operator=(const ComputeStage&) = delete;
 
   /// Filters the triangle pairs of `object_pairs` on the GPU (ComputeCollider::Run): `objects`
   /// by slot (null: free), world vertices up to date. `slack` and `distance` as ComputeQuery's.
@@ -52,10 +59,17 @@ class ComputeStage {
   StopReason BuildTopologies(std::span<const CachedObject* const> objects,
                              const StepControl& control);
 
+  // Makes the collider (here or on the batcher's thread) and checks the driver, once.
+  Result<void> MakeCollider(const StepControl& control);
+  Result<ComputeAnswer> Run(const ComputeQuery& query);
+
   ThreadPool& pool_;
+  ComputeBatcher* batcher_;
   std::vector<std::optional<SlotState>> slots_;
-  std::unique_ptr<ComputeCollider> collider_;  // made on the first step (a GL context current)
-  Result<void> trusted_;                       // the driver's self-check (compute_self_check.h)
+  // Made on the first step: on this thread's context, or the batcher's collider `batched_id_`.
+  std::unique_ptr<ComputeCollider> collider_;
+  std::optional<ComputeBatcher::ColliderId> batched_id_;
+  Result<void> trusted_;  // the driver's self-check (compute_self_check.h)
   uint64_t next_key_ = 1;
 };
 

@@ -30,7 +30,7 @@ struct Pipeline::Impl {
       : options(o),
         pool(CpuPoolThreads(o.num_threads, o.cpu_cores)),
         model(o.scene_limits, o.shared_budget, o.budget_holder),
-        world(pool, o.use_gl, o.gl_batch_ms) {}
+        world(pool, o.use_gl, o.gl_batch_ms, o.compute_batcher) {}
 
   Result<void> Apply(std::vector<SceneUpdate> updates,
                      const std::function<std::string(size_t)>& where);

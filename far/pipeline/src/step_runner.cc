@@ -489,10 +489,12 @@ Result<void> Stages::RunStages(StageTimer& timer) {
 
 }  // namespace
 
-StepWorld::StepWorld(ThreadPool& pool, bool with_gpu, double gl_batch_ms) : pool(pool) {
+StepWorld::StepWorld(ThreadPool& pool, bool with_gpu, double gl_batch_ms,
+                     ComputeBatcher* compute_batcher)
+    : pool(pool) {
   if (with_gpu) {
     gpu = std::make_unique<GpuCuller>(cache.counters(), pool, gl_batch_ms);
-    compute = std::make_unique<ComputeStage>(pool);
+    compute = std::make_unique<ComputeStage>(pool, compute_batcher);
   }
 }
 

@@ -24,7 +24,9 @@ struct StepWorld {
   /// `pool` runs the stages' parallel work; aliased, must outlive *this. `with_gpu`: a GPU
   /// culler, which needs a GL context current on this thread for its steps, drawing views in
   /// batches of about `gl_batch_ms` (PipelineOptions::gl_batch_ms).
-  StepWorld(ThreadPool& pool, bool with_gpu, double gl_batch_ms = 8);
+  /// `compute_batcher`: PipelineOptions::compute_batcher.
+  StepWorld(ThreadPool& pool, bool with_gpu, double gl_batch_ms = 8,
+            ComputeBatcher* compute_batcher = nullptr);
 
   /// Applies one update the scene model has accepted; an object removed takes what the stages
   /// keep of it along (its slot and id may come back).

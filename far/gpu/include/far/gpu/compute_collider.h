@@ -92,6 +92,15 @@ class ComputeCollider {
   /// stack or the work is over the kernels' 32-bit counts; kInternal for a GL error.
   Result<ComputeAnswer> Run(const ComputeQuery& query);
 
+  /// Run in two halves, for a caller that puts several colliders' steps on the GPU together
+  /// (far::ComputeBatcher): Submit issues the step's uploads and kernels and returns at once,
+  /// Finish waits for them and reads the answer back. Between the two the query's spans must
+  /// live, and other colliders of the same context may submit theirs. @pre the caller holds the
+  /// GL lock (far::LockGl) across both. Errors: as Run's; Finish fails with kInternal when no
+  /// Submit came first.
+  Result<void> Submit(const ComputeQuery& query);
+  Result<ComputeAnswer> Finish();
+
   /// Depth limit of a hierarchy the traversal can descend (root at depth 0).
   static int MaxDepth();
 

@@ -11,6 +11,7 @@
 
 #include "far/base/result.h"
 #include "far/base/step_control.h"
+#include "far/gpu/compute_batcher.h"
 #include "far/gpu/gl_context.h"
 #include "far/model/mesh.h"
 #include "far/model/scene.h"
@@ -46,6 +47,10 @@ struct PipelineOptions {
   /// the threads waiting for it, so that a view stops within about a batch of its deadline and
   /// other pipelines' views wait about a batch. <= 0: one piece per batch (tests).
   double gl_batch_ms = 8;
+  /// The gpu method's GPU work goes to this batcher's thread and context, with other pipelines'
+  /// (a daemon's sessions: ComputeBatcher), instead of running on this pipeline's context under
+  /// the GL lock; null: on this pipeline's context. Not owned; must outlive the pipeline.
+  ComputeBatcher* compute_batcher = nullptr;
 };
 
 /// The threads of a pipeline's CPU pool: the smaller of `num_threads` and `cpu_cores` where

@@ -1,0 +1,71 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "far/base/result.h"
+#include "far/gpu/compute_collider.h"
+#include "far/gpu/gl_platform.h"
+
+namespace far {
+
+/// One GL thread, with an OpenGL context of its own, that runs the gpu method's GPU work for
+/// every pipeline of a process that hands it over (far-daemon's sessions). The steps that are
+/// waiting when the thread turns to them go to the GPU together: every step's uploads and
+/// kernels are issued, then the thread waits for the GPU once and reads each answer back. A step
+/// that arrives while a batch runs goes with the next one. Compared with every session issuing
+/// its step on its own context in turns under the GL lock (ComputeCollider::Run), the GPU gets
+/// one context's work back to back, without a switch between contexts or a wait per step.
+///
+/// Each session keeps its own collider (its buffers and hierarchies on the GPU), made, run and
+/// destroyed on the batcher's thread. Thread-safe: any thread may call any method.
+class ComputeBatcher {
+ public:
+  /// Starts the thread and makes its context there (GlContext::Create(platform, device)).
+  /// Errors: the context's.
+  static Result<std::unique_ptr<ComputeBatcher>> Create(GlPlatform platform = GlPlatform::kAuto,
+                                                        int device = -1);
+  /// Destroys the colliders still alive and the context, on the thread, and joins it.
+  ~ComputeBatcher();
+  ComputeBatcher(const ComputeBatcher&) = delete;
+  ComputeBatcher& operator=(const ComputeBatcher&) = delete;
+
+  using ColliderId = uint64_t;
+
+  /// Makes a collider on the batcher's thread (ComputeCollider::Create); blocks until it is made.
+  Result<ColliderId> AddCollider();
+  /// Destroys collider `id` on the batcher's thread, after the steps already handed over; returns
+  /// at once.
+  void RemoveCollider(ColliderId id);
+  /// Runs `query` on collider `id` in the next batch (ComputeCollider::Submit, then Finish once
+  /// the batch's GPU work is issued); blocks until its answer is read back. The query's spans
+  /// must live until it returns. Errors: ComputeCollider's; kInternal for an unknown id.
+  Result<ComputeAnswer> Run(ColliderId id, const ComputeQuery& query);
+  /// Runs `work` with collider `id` on the batcher's thread, outside any batch, and returns its
+  /// result (a driver's self-check: far/pipeline's compute_self_check.h).
+  Result<void> WithCollider(ColliderId id, std::function<Result<void>(ComputeCollider&)> work);
+
+  /// GL_RENDERER of the batcher's context.
+  const std::string& renderer() const;
+
+  /// Steps run so far and the batches that carried them.
+  struct Counters {
+    int64_t steps = 0;
+    int64_t batches = 0;
+    int64_t largest_batch = 0;
+  };
+  Counters counters() const;
+
+  /// For tests: while held, steps queue up and no batch starts; `queued` says how many wait.
+  void HoldBatches(bool hold);
+  size_t queued() const;
+
+ private:
+  struct Impl;
+  explicit ComputeBatcher(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace far
