@@ -321,7 +321,8 @@ void GpuStepBar(const std::vector<SceneReport>& reports, const RunInfo& info, Ou
         "on the scaling family gpu at least as fast as bvh from 150K triangles and bvh / gpu >= "
         "5x at 1M, with the crossover named.\n\n"
      << "| scene | triangles | bvh ms | gpu ms (p25-p75) | bvh / gpu | gpu missed / spurious | "
-        "gpu distance: ms, missed / spurious | where gpu's time goes (median ms) | triangle pairs: "
+        "gpu distance: ms, missed / spurious, pairs to the CPU, cut on the GPU | where gpu's time "
+        "goes (median ms) | triangle pairs: "
         "boxes met, decided in float, in fp64, to the CPU; GPU ms: refit, traversal |\n"
      << "|---|--:|--:|--:|--:|--:|---|---|---|\n";
   bool exact = true, any_checked = false;
@@ -345,7 +346,11 @@ void GpuStepBar(const std::vector<SceneReport>& reports, const RunInfo& info, Ou
     md << "| " << report.name << " | " << report.triangles << " | "
        << (bvh ? Ms(bvh->ms_median) : "-") << " | " << Ms(gpu->ms_median) << " (" << Ms(gpu->ms_p25)
        << "-" << Ms(gpu->ms_p75) << ") | " << (bvh ? Ratio(ratio) : "-") << " | " << Misses(*gpu)
-       << " | " << (gpu_d ? Ms(gpu_d->ms_median) + " ms, " + DistanceMisses(*gpu_d) : "not run")
+       << " | "
+       << (gpu_d ? Ms(gpu_d->ms_median) + " ms, " + DistanceMisses(*gpu_d) + ", " +
+                       Count(gpu_d->gpu_cpu) + " to the CPU, " + Count(gpu_d->gpu_distance_culled) +
+                       " cut"
+                 : "not run")
        << " | " << StageText(*gpu) << " | " << Count(gpu->gpu_box_pairs) << ", "
        << Count(gpu->gpu_float) << ", " << Count(gpu->gpu_double) << ", " << Count(gpu->gpu_cpu)
        << "; " << Ms(gpu->gpu_refit_ms) << ", " << Ms(gpu->gpu_traverse_ms) << " |\n";

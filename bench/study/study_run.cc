@@ -335,6 +335,7 @@ void SummarizeCounts(const std::vector<Sample>& s, Row& row) {
   row.gpu_float = filter(&far::GpuFilterCounters::float_decided);
   row.gpu_double = filter(&far::GpuFilterCounters::double_decided);
   row.gpu_cpu = filter(&far::GpuFilterCounters::sent_to_cpu);
+  row.gpu_distance_culled = filter(&far::GpuFilterCounters::distance_culled);
   row.gpu_refit_ms = filter(&far::GpuFilterCounters::gpu_refit_ms);
   row.gpu_traverse_ms = filter(&far::GpuFilterCounters::gpu_traverse_ms);
   row.contacts = SumOf(s, [](const Sample& x) { return x.contacts; });

@@ -108,7 +108,7 @@ struct ComputeCollider::Impl {
   // Uniform locations, looked up once.
   GLint boxes_count = -1, boxes_ranges = -1, refit_count = -1, refit_first = -1;
   GLint traverse_count = -1, traverse_pairs = -1, traverse_capacity = -1;
-  GLint traverse_distance = -1, traverse_slack = -1;
+  GLint traverse_distance = -1, traverse_slack = -1, traverse_max_distance = -1;
   // GL_TIME_ELAPSED queries: uploads, boxes and refit; the traversal.
   GLuint refit_query = 0, traverse_query = 0;
 
@@ -427,6 +427,7 @@ void ComputeCollider::Impl::DispatchTraversal() {
   glProgramUniform1ui(traverse_program, traverse_pairs, static_cast<GLuint>(pending->work.size()));
   glProgramUniform1ui(traverse_program, traverse_capacity, static_cast<GLuint>(capacity));
   glProgramUniform1i(traverse_program, traverse_distance, query.distance ? 1 : 0);
+  glProgramUniform1d(traverse_program, traverse_max_distance, query.max_distance);
   glProgramUniform1f(traverse_program, traverse_slack, FloatAtLeast(query.slack));
   glBeginQuery(GL_TIME_ELAPSED, traverse_query);
   glDispatchCompute(Groups(pending->items), 1, 1);
@@ -478,6 +479,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
   answer.box_pairs = counters[internal::kBoxPairs];
   answer.float_decided = counters[internal::kFloatDecided];
   answer.double_decided = counters[internal::kDoubleDecided];
+  answer.distance_culled = counters[internal::kDistanceCulled];
   return answer;
 }
 
@@ -514,6 +516,7 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   impl->traverse_pairs = glGetUniformLocation(impl->traverse_program, "u_pairs");
   impl->traverse_capacity = glGetUniformLocation(impl->traverse_program, "u_capacity");
   impl->traverse_distance = glGetUniformLocation(impl->traverse_program, "u_distance");
+  impl->traverse_max_distance = glGetUniformLocation(impl->traverse_program, "u_max_distance");
   impl->traverse_slack = glGetUniformLocation(impl->traverse_program, "u_slack");
   for (Buffer& b : impl->buffers) glCreateBuffers(1, &b.id);
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->refit_query);

@@ -121,7 +121,8 @@ constexpr const char* kTraverse = R"(
 uniform uint u_pairs;
 uniform float u_slack;    // triangle boxes within this on every axis meet (0: share a point)
 uniform uint u_capacity;  // entries of each output buffer
-uniform bool u_distance;  // a distance query: every pair within the slack goes to the CPU
+uniform bool u_distance;  // a distance query: every pair within the slack goes to the CPU...
+uniform double u_max_distance;  // ...unless proven farther than it would accept beside this D
 
 const int kApart = 0;
 const int kCross = 1;
@@ -190,9 +191,79 @@ int SideDouble(dvec3 a, dvec3 b, dvec3 c, dvec3 d) {
 }
 $CLASSIFY_FLOAT
 $CLASSIFY_DOUBLE
+
+// A distance query's cut. The CPU's TriangleDistanceIfWithin(s, t, D) accepts a pair only when
+// its distance d satisfies d <= D + 288 eps L (L: the diagonal of the six vertices' box, eps =
+// 2^-53: its slack of 256 eps L and its distance's underestimate of at most 32 eps L;
+// far/geometry/src/triangle_distance.cc). A pair proven farther than that is dropped here, by
+// the CPU's own lower bounds evaluated in fp64: the boxes' gap along an axis, and the gap
+// between the projections onto the triangles' normals, the line between their centroids and
+// the nine cross products of an edge of each. L1 = the box's extents summed, rounded up, stands
+// for L (L1 >= L). docs/culling.md has the argument.
+//
+// The gap of the two triangles' projections onto axis n proves d > `limit` - 64 eps L1 (see
+// GapExceeds in triangle_distance.cc: the projections' rounding costs at most 8.02 eps |n| L),
+// compared without a square root: gap^2 > |n|^2 limit^2 (1 + 2^-46), the margin 128 roundings
+// of 2^-53 for the few made in squaring. An axis too short to square (|n|^2 < 2^-900, or a gap
+// that small, where a device that flushes subnormals loses precision) or one that overflows
+// proves nothing.
+bool GapShowsFar(dvec3 n, dvec3 sb, dvec3 sc, dvec3 ta, dvec3 tb, dvec3 tc, double limit) {
+  double tiny = ldexp(1.0lf, -900);
+  precise double length2 = dot(n, n);
+  if (!(length2 >= tiny) || isinf(length2)) return false;
+  precise double s1 = dot(n, sb);
+  precise double s2 = dot(n, sc);
+  precise double t0 = dot(n, ta);
+  precise double t1 = dot(n, tb);
+  precise double t2 = dot(n, tc);
+  double s_lo = min(0.0lf, min(s1, s2));
+  double s_hi = max(0.0lf, max(s1, s2));
+  double t_lo = min(t0, min(t1, t2));
+  double t_hi = max(t0, max(t1, t2));
+  precise double gap = max(t_lo - s_hi, s_lo - t_hi);
+  if (!(gap >= tiny)) return false;
+  precise double gap2 = gap * gap;
+  precise double bound2 = length2 * (limit * limit) * (1.0lf + ldexp(1.0lf, -46));
+  return !isinf(gap2) && gap2 > bound2;
+}
+
+// Whether the CPU's distance test would reject the pair, proven (then it need not go there).
+bool FartherThanTheCpuAccepts(dvec3 s[3], dvec3 t[3]) {
+  double eps = ldexp(1.0lf, -53);
+  double margin = 1.0lf + ldexp(1.0lf, -46);
+  dvec3 s_lo = min(min(s[0], s[1]), s[2]);
+  dvec3 s_hi = max(max(s[0], s[1]), s[2]);
+  dvec3 t_lo = min(min(t[0], t[1]), t[2]);
+  dvec3 t_hi = max(max(t[0], t[1]), t[2]);
+  precise dvec3 extent = max(s_hi, t_hi) - min(s_lo, t_lo);
+  precise double l1 = (extent.x + extent.y + extent.z) * margin;
+  precise double far_limit = u_max_distance + 288.0lf * eps * l1;
+  // The boxes' gap along a coordinate axis: a lower bound of d, rounded by one subtraction.
+  precise dvec3 gaps = max(t_lo - s_hi, s_lo - t_hi);
+  if (max(gaps.x, max(gaps.y, gaps.z)) > far_limit * margin) return true;
+  precise double axis_limit = far_limit + 64.0lf * eps * l1;
+  precise dvec3 sb = s[1] - s[0];
+  precise dvec3 sc = s[2] - s[0];
+  precise dvec3 ta = t[0] - s[0];
+  precise dvec3 tb = t[1] - s[0];
+  precise dvec3 tc = t[2] - s[0];
+  if (GapShowsFar(cross(sb, sc), sb, sc, ta, tb, tc, axis_limit)) return true;
+  if (GapShowsFar(cross(tb - ta, tc - ta), sb, sc, ta, tb, tc, axis_limit)) return true;
+  if (GapShowsFar(ta + tb + tc - sb - sc, sb, sc, ta, tb, tc, axis_limit)) return true;
+  dvec3 s_edges[3] = dvec3[3](sb, sc - sb, sc);
+  dvec3 t_edges[3] = dvec3[3](tb - ta, tc - tb, tc - ta);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (GapShowsFar(cross(s_edges[i], t_edges[j]), sb, sc, ta, tb, tc, axis_limit)) return true;
+    }
+  }
+  return false;
+}
+
 uint g_box_pairs = 0u;
 uint g_float_decided = 0u;
 uint g_double_decided = 0u;
+uint g_distance_culled = 0u;
 
 void Append(bool to_crossing, uvec4 entry) {
   uint i = atomicAdd(counters[to_crossing ? 0 : 1], 1u);
@@ -221,15 +292,19 @@ void Visit(uint driver_tri, uint other_tri, uvec4 w0, uvec4 w1) {
     if (c != kUndecided) ++g_double_decided;
   }
   if (c == kApart && !u_distance) return;
+  // Both triangles are in the primitive PCS: a bit each, read back instead of the CPU sorting
+  // the pairs' triangles.
+  atomicOr(pcs_bits[driver_tri >> 5], 1u << (driver_tri & 31u));
+  atomicOr(pcs_bits[other_tri >> 5], 1u << (other_tri & 31u));
+  if (c == kApart && FartherThanTheCpuAccepts(s, t)) {
+    ++g_distance_culled;
+    return;
+  }
   uint a = driver_tri - w0.x;
   uint b = other_tri - w0.y;
   uvec4 entry = w1.z != 0u ? uvec4(w1.x, a, w1.y, b) : uvec4(w1.y, b, w1.x, a);
   if (c == kApart) entry.z |= 0x80000000u;
   Append(c == kCross, entry);
-  // Both triangles are in the primitive PCS: a bit each, read back instead of the CPU sorting
-  // the pairs' triangles.
-  atomicOr(pcs_bits[driver_tri >> 5], 1u << (driver_tri & 31u));
-  atomicOr(pcs_bits[other_tri >> 5], 1u << (other_tri & 31u));
 }
 
 // Each invocation's traversal stack, in shared memory: as a private array (uint stack[64]),
@@ -282,6 +357,7 @@ void main() {
     atomicAdd(counters[2], g_box_pairs);
     atomicAdd(counters[3], g_float_decided);
     atomicAdd(counters[4], g_double_decided);
+    atomicAdd(counters[6], g_distance_culled);
   }
 }
 )";

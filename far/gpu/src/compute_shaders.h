@@ -36,7 +36,8 @@ enum ComputeCounter : int {
   kFloatDecided = 3,    // of those, decided by the float filter
   kDoubleDecided = 4,   // decided by the fp64 filter
   kStackOverflow = 5,   // nonzero: a traversal ran out of stack (never expected: depth checked)
-  kNumCounters = 6,
+  kDistanceCulled = 6,  // a distance query's pairs proven farther than the CPU would accept
+  kNumCounters = 7,
 };
 
 /// Threads per work group of every kernel.

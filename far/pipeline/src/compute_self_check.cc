@@ -93,6 +93,39 @@ std::vector<CheckObject> FilterCases() {
   return objects;
 }
 
+// A distance query's D in DistanceCases.
+constexpr double kCheckDistance = 0.05;
+
+// Pairs (2i, 2i + 1) of single triangles around a distance query's D: small triangles with
+// centers up to a few D apart, and translated copies of a triangle about D away along its
+// normal, at the origin and 1e6 from it: the distance cut's case.
+std::vector<CheckObject> DistanceCases() {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<CheckObject> objects;
+  const auto add = [&](const TrianglePoints& s, const TrianglePoints& t) {
+    objects.push_back(MakeObject(OneTriangle(s)));
+    objects.push_back(MakeObject(OneTriangle(t)));
+  };
+  for (int i = 0; i < 1000; ++i) {
+    const Vector3d c = Random(rng, 0.5);
+    const Vector3d d = c + Random(rng, 1).normalized() * (0.2 + 3 * kCheckDistance) * u(rng);
+    add({c + Random(rng, 0.1), c + Random(rng, 0.1), c + Random(rng, 0.1)},
+        {d + Random(rng, 0.1), d + Random(rng, 0.1), d + Random(rng, 0.1)});
+  }
+  for (int i = 0; i < 400; ++i) {
+    const Vector3d a = Vector3d::Constant(i % 2 ? 1e6 : 0) + Random(rng, 0.5);
+    const Vector3d b = a + Random(rng, 0.3), c = a + Random(rng, 0.3);
+    // D + (k - 4) 24 eps L, k = 0..16: across the CPU's limit D + 256 eps L (at the origin;
+    // 1e6 away the vertices' rounding moves the copies more than that).
+    const double scale = (b - a).cwiseAbs().cwiseMax((c - a).cwiseAbs()).norm() + kCheckDistance;
+    const double length = kCheckDistance + (i % 17 - 4) * 24 * std::ldexp(scale, -53);
+    const Vector3d shift = (b - a).cross(c - a).normalized() * length;
+    add({a, b, c}, {a + shift, b + shift, c + shift});
+  }
+  return objects;
+}
+
 // Meshes of small random triangles, overlapping, from a few hundred triangles to 30K (deep
 // hierarchies, many descents): the traversal's case.
 std::vector<CheckObject> TraversalCases() {
@@ -194,6 +227,38 @@ Result<std::string> Compare(ComputeCollider& collider, const std::vector<CheckOb
   return std::string();
 }
 
+// Runs DistanceCases' pairs as a distance query; "" when every pair the CPU's distance test
+// accepts came back.
+Result<std::string> CompareDistance(ComputeCollider& collider,
+                                    const std::vector<CheckObject>& objects, uint64_t key_base) {
+  std::vector<ComputeObject> views;
+  std::vector<SlotPair> pairs;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const CheckObject& object = objects[i];
+    views.push_back({object.mesh.p_MV, object.mesh.triangles, object.nodes, object.order,
+                     key_base + i, key_base + i});
+    if (i % 2 == 1) pairs.push_back({SlotAt(i - 1), SlotAt(i)});
+  }
+  ComputeQuery query;
+  query.objects = views;
+  query.object_pairs = pairs;
+  query.slack = 1.0;  // every pair's boxes meet: the cut alone decides what is dropped
+  query.distance = true;
+  query.max_distance = kCheckDistance;
+  auto answer = collider.Run(query);
+  if (!answer) return answer.error();
+  std::set<SlotContact> kept(answer->crossing.begin(), answer->crossing.end());
+  kept.insert(answer->undecided.begin(), answer->undecided.end());
+  for (const SlotPair& pair : pairs) {
+    const SlotContact c{pair.object_a, 0, pair.object_b, 0};
+    if (!kept.count(c) &&
+        TriangleDistanceIfWithin(Corners(objects[Index(pair.object_a)].mesh, 0),
+                                 Corners(objects[Index(pair.object_b)].mesh, 0), kCheckDistance))
+      return "pair " + Name(c) + " is within the distance, and was dropped";
+  }
+  return std::string();
+}
+
 }  // namespace
 
 Result<void> SelfCheckComputeCollider(ComputeCollider& collider) {
@@ -209,19 +274,23 @@ Result<void> SelfCheckComputeCollider(ComputeCollider& collider) {
   for (size_t a = 0; a < meshes.size(); ++a) {
     for (size_t b = a + 1; b < meshes.size(); ++b) mesh_pairs.push_back({SlotAt(a), SlotAt(b)});
   }
+  const auto disagree = [](const char* what, const std::string& disagreement) {
+    return MakeError(ErrorCode::kUnavailable,
+                     std::string("gpu method: this GL driver's compute results disagree with the "
+                                 "exact predicates in the self-check of ") +
+                         what + " (" + disagreement +
+                         "); the method is not used on it (docs/culling.md)");
+  };
   for (const auto& [objects, pairs, what] : {std::tuple{&filters, &filter_pairs, "the filters"},
                                              std::tuple{&meshes, &mesh_pairs, "the traversal"}}) {
     auto disagreement =
         Compare(collider, *objects, *pairs, kKeys + (objects == &meshes ? 1 << 20 : 0));
     if (!disagreement) return disagreement.error();
-    if (!disagreement->empty()) {
-      return MakeError(ErrorCode::kUnavailable,
-                       std::string("gpu method: this GL driver's compute results disagree with the "
-                                   "exact predicates in the self-check of ") +
-                           what + " (" + *disagreement +
-                           "); the method is not used on it (docs/culling.md)");
-    }
+    if (!disagreement->empty()) return disagree(what, *disagreement);
   }
+  auto distance = CompareDistance(collider, DistanceCases(), kKeys + (2 << 20));
+  if (!distance) return distance.error();
+  if (!distance->empty()) return disagree("the distance cut", *distance);
   return {};
 }
 

@@ -64,8 +64,8 @@ StopReason ComputeStage::BuildTopologies(std::span<const CachedObject* const> ob
 
 Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> objects,
                                            std::span<const SlotPair> object_pairs, double slack,
-                                           bool distance, const StepControl& control,
-                                           StopReason* stopped) {
+                                           std::optional<double> distance,
+                                           const StepControl& control, StopReason* stopped) {
   *stopped = BuildTopologies(objects, control);
   if (*stopped != StopReason::kNone) return ComputeAnswer{};
   if (auto made = MakeCollider(control); !made) return made.error();
@@ -89,7 +89,8 @@ Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> 
   query.objects = views;
   query.object_pairs = object_pairs;
   query.slack = slack;
-  query.distance = distance;
+  query.distance = distance.has_value();
+  if (distance) query.max_distance = *distance;
   return Run(query);
 }
 

@@ -36,12 +36,14 @@ class ComputeStage {
   ComputeStage& operator=(const ComputeStage&) = delete;
 
   /// Filters the triangle pairs of `object_pairs` on the GPU (ComputeCollider::Run): `objects`
-  /// by slot (null: free), world vertices up to date. `slack` and `distance` as ComputeQuery's.
+  /// by slot (null: free), world vertices up to date; `slack` as ComputeQuery's. `distance`: a
+  /// distance query's D (ComputeQuery::distance and max_distance); none: a contact query.
   /// The topologies built for new objects are setup (`control`'s on_setup_begin/end); their
   /// builds poll `control` (stopped: returns the stop's reason in `*stopped`, no answer).
   Result<ComputeAnswer> Filter(std::span<const CachedObject* const> objects,
-                               std::span<const SlotPair> object_pairs, double slack, bool distance,
-                               const StepControl& control, StopReason* stopped);
+                               std::span<const SlotPair> object_pairs, double slack,
+                               std::optional<double> distance, const StepControl& control,
+                               StopReason* stopped);
 
   /// Forgets a removed object (its slot may hold another one next).
   void RemoveSlot(ObjectSlot slot);

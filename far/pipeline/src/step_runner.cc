@@ -370,9 +370,9 @@ Result<void> Stages::FilterOnGpu() {
   const bool distance = request.distance.has_value() && (request.output == Output::kDistancePairs ||
                                                          request.output == Output::kPrimitivePcs);
   StopReason stopped = StopReason::kNone;
-  auto computed = world_.compute->Filter(state_.objects, state_.answer.object_pairs,
-                                         distance ? state_.cull_margin : 0.0, distance,
-                                         state_.control, &stopped);
+  auto computed = world_.compute->Filter(
+      state_.objects, state_.answer.object_pairs, distance ? state_.cull_margin : 0.0,
+      distance ? request.distance : std::nullopt, state_.control, &stopped);
   if (stopped != StopReason::kNone)
     return StopError(stopped, Stage::kPrimitiveCull, state_.control);
   if (!computed) return computed.error();
@@ -380,10 +380,10 @@ Result<void> Stages::FilterOnGpu() {
   state_.stats.bytes_uploaded += state_.computed.bytes_uploaded;
   state_.stats.pairs_considered = state_.computed.box_pairs;
   const ComputeAnswer& answer = state_.computed;
-  state_.stats.gpu_filter = {answer.box_pairs,      answer.float_decided,
-                             answer.double_decided, static_cast<int64_t>(answer.undecided.size()),
-                             answer.runs,           answer.gpu_refit_ms,
-                             answer.gpu_traverse_ms};
+  state_.stats.gpu_filter = {answer.box_pairs,       answer.float_decided,
+                             answer.double_decided,  static_cast<int64_t>(answer.undecided.size()),
+                             answer.distance_culled, answer.runs,
+                             answer.gpu_refit_ms,    answer.gpu_traverse_ms};
   // As the raster methods report their views: CPU issuing, CPU waiting and reading, GPU time.
   state_.stats.gl_prepare_ms += answer.cpu_submit_ms;
   state_.stats.gl_passes_ms += answer.cpu_wait_ms;

@@ -216,6 +216,88 @@ TEST_F(ComputeColliderTest, SliversAndTinyTrianglesGoToTheFp64Filter) {
   EXPECT_GT(answer.double_decided, 500) << "the tiny pairs are decided in fp64";
 }
 
+// A translated copy of `s` this far along its normal lies D + (k - 4) 24 eps L from it (L: the
+// pair's scale, as TriangleDistanceIfWithin measures it; eps = 2^-53): k = 0..16 straddles
+// the CPU's limit D + 256 eps L, so a GPU cut without the CPU's slack drops some it accepts.
+double ShiftAroundTheCpusLimit(double D, const TrianglePoints& s, int k) {
+  Eigen::AlignedBox3d box;
+  for (const Vector3d& p : {s.a, s.b, s.c}) box.extend(p);
+  const double L = box.diagonal().norm() + D;
+  return D + (k - 4) * 24 * std::ldexp(L, -53);
+}
+
+// Pairs at distances around D for a distance query: random small triangles with centers up to
+// a few D apart, translated copies of a triangle D + (k - 4) 24 eps L along its normal (around
+// the CPU's limit, ShiftAroundTheCpusLimit), slivers beside a plane at D, at the origin and 1e6
+// from it.
+// Every pair the CPU's distance test accepts must come back (crossing or undecided), and most
+// of those it rejects must be dropped on the GPU.
+TEST_F(ComputeColliderTest, ADistanceQueryDropsOnlyPairsTheCpuWouldReject) {
+  std::mt19937_64 rng(99);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (double D : {0.01, 0.2}) {
+    TriangleObjects triangles;
+    for (double origin : {0.0, 1e6}) {
+      const Vector3d o(origin, -origin, origin);
+      for (int i = 0; i < 800; ++i) {
+        const Vector3d c = o + RandomPoint(rng, 0.5);
+        const Vector3d d = c + RandomPoint(rng, 1).normalized() * (0.2 + 3 * D) * u(rng);
+        triangles.Add(
+            {c + RandomPoint(rng, 0.1), c + RandomPoint(rng, 0.1), c + RandomPoint(rng, 0.1)});
+        triangles.Add(
+            {d + RandomPoint(rng, 0.1), d + RandomPoint(rng, 0.1), d + RandomPoint(rng, 0.1)});
+      }
+      for (int i = 0; i < 340; ++i) {
+        const Vector3d a = o + RandomPoint(rng, 0.5), b = a + RandomPoint(rng, 0.3),
+                       c = a + RandomPoint(rng, 0.3);
+        const Vector3d n = (b - a).cross(c - a).normalized();
+        triangles.Add({a, b, c});
+        const Vector3d shift = n * ShiftAroundTheCpusLimit(D, {a, b, c}, i % 17);
+        triangles.Add({a + shift, b + shift, c + shift});
+      }
+      for (int i = 0; i < 200; ++i) {
+        const Vector3d a = o + RandomPoint(rng, 0.5), b = a + RandomPoint(rng, 0.3);
+        const double z = a.z() - D * (0.99 + 0.02 * u(rng));
+        triangles.Add({a, b, a + 1e-9 * (b - a) + RandomPoint(rng, 1e-9)});
+        triangles.Add({Vector3d(a.x() - 1, a.y() - 1, z), Vector3d(a.x() + 1, a.y() - 1, z),
+                       Vector3d(a.x(), a.y() + 2, z)});
+      }
+    }
+    std::vector<SlotPair> pairs;
+    for (size_t i = 0; i + 1 < triangles.vertices.size(); i += 2)
+      pairs.push_back({SlotAt(i), SlotAt(i + 1)});
+    ComputeQuery query;
+    query.objects = triangles.Views(++world_key_);
+    query.object_pairs = pairs;
+    query.slack = 1.0;  // wide: every pair the CPU accepts has boxes within it
+    query.distance = true;
+    query.max_distance = D;
+    auto answer = collider_->Run(query);
+    ASSERT_TRUE(answer.ok()) << ToString(answer.error());
+    std::set<size_t> kept;
+    for (const auto* list : {&answer->crossing, &answer->undecided}) {
+      for (const SlotContact& c : *list) kept.insert(Index(c.object_a) / 2);
+    }
+    int accepted = 0, rejected = 0, rejected_kept = 0;
+    for (size_t p = 0; p < pairs.size(); ++p) {
+      const auto& s = triangles.vertices[2 * p];
+      const auto& t = triangles.vertices[2 * p + 1];
+      if (TriangleDistanceIfWithin({s[0], s[1], s[2]}, {t[0], t[1], t[2]}, D)) {
+        ++accepted;
+        EXPECT_TRUE(kept.count(p))
+            << "D " << D << ": pair " << p << " accepted by the CPU, dropped";
+      } else {
+        ++rejected;
+        rejected_kept += static_cast<int>(kept.count(p));
+      }
+    }
+    EXPECT_GT(accepted, 300) << "D " << D;
+    EXPECT_EQ(answer->distance_culled, static_cast<int64_t>(pairs.size() - kept.size()));
+    EXPECT_LT(rejected_kept, rejected / 4)
+        << "D " << D << ": the GPU should drop most of the pairs the CPU rejects";
+  }
+}
+
 // Meshes of random triangles with their hierarchies: every intersecting triangle pair of every
 // object pair is found (crossing or undecided), none twice.
 TEST_F(ComputeColliderTest, TraversalFindsEveryIntersectingPairOfMeshes) {

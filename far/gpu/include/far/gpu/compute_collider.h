@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -42,8 +43,12 @@ struct ComputeQuery {
   /// Triangle boxes within this of each other on every axis meet (0: they share a point).
   double slack = 0;
   /// A distance query: every pair whose boxes meet is kept (for the CPU's distance), not only
-  /// those the filters cannot prove apart.
+  /// those the filters cannot prove apart...
   bool distance = false;
+  /// ...except the pairs proven farther than TriangleDistanceIfWithin(s, t, max_distance) would
+  /// ever accept (the CPU's own lower bounds, in fp64 with their rounding: docs/culling.md).
+  /// +infinity: none is dropped.
+  double max_distance = std::numeric_limits<double>::infinity();
 };
 
 /// The GPU step's answer, unsorted.
@@ -59,9 +64,10 @@ struct ComputeAnswer {
   /// By slot (indexed like ComputeQuery::objects), sorted: the triangles in some crossing or
   /// undecided pair, the primitive PCS.
   std::vector<std::vector<uint32_t>> pcs;
-  int64_t box_pairs = 0;       ///< triangle pairs whose boxes met
-  int64_t float_decided = 0;   ///< of those, decided by the float filter
-  int64_t double_decided = 0;  ///< decided by the fp64 filter (the float one could not)
+  int64_t box_pairs = 0;        ///< triangle pairs whose boxes met
+  int64_t float_decided = 0;    ///< of those, decided by the float filter
+  int64_t double_decided = 0;   ///< decided by the fp64 filter (the float one could not)
+  int64_t distance_culled = 0;  ///< a distance query's pairs dropped by max_distance
   int64_t bytes_uploaded = 0;
   int runs = 1;  ///< traversals run: more than one when the output buffers had to grow
   // Where the time went (milliseconds). CPU: issuing the uploads and kernels, then waiting for

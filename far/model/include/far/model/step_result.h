@@ -71,6 +71,9 @@ struct GpuFilterCounters {
   int64_t float_decided = 0;   ///< of those, decided by the float filter
   int64_t double_decided = 0;  ///< decided by the fp64 filter (the float one could not)
   int64_t sent_to_cpu = 0;     ///< pairs left to the CPU's exact predicates
+  /// A distance query's pairs within the slack that the GPU proved farther than D (with the
+  /// CPU's rounding): not sent to the CPU.
+  int64_t distance_culled = 0;
   int traversals = 0;          ///< GPU traversals run (more than 1: its output buffers grew)
   double gpu_refit_ms = 0;     ///< GPU time of the uploads, triangle boxes and refit
   double gpu_traverse_ms = 0;  ///< GPU time of the traversal with the filters
