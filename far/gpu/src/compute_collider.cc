@@ -98,7 +98,13 @@ Result<GLuint> CompileCompute(const std::string& source, const char* what) {
 }  // namespace
 
 struct ComputeCollider::Impl {
-  GLuint boxes_program = 0, refit_program = 0, traverse_program = 0;
+  GLuint boxes_program = 0, refit_program = 0;
+  // The traversal: [0] for contact queries, [1] for distance queries (TraverseSource).
+  struct TraverseKernel {
+    GLuint program = 0;
+    GLint count = -1, pairs = -1, capacity = -1, slack = -1, max_distance = -1;
+  };
+  std::array<TraverseKernel, 2> traverse;
   std::array<Buffer, internal::kNumBindings> buffers;
   std::vector<SlotLayout> layout;
   uint32_t total_vertices = 0, total_triangles = 0, total_nodes = 0;
@@ -107,8 +113,6 @@ struct ComputeCollider::Impl {
   std::vector<size_t> moved;             // slots whose vertices this step uploaded
   // Uniform locations, looked up once.
   GLint boxes_count = -1, boxes_ranges = -1, refit_count = -1, refit_first = -1;
-  GLint traverse_count = -1, traverse_pairs = -1, traverse_capacity = -1;
-  GLint traverse_distance = -1, traverse_slack = -1, traverse_max_distance = -1;
   // GL_TIME_ELAPSED queries: uploads, boxes and refit; the traversal.
   GLuint refit_query = 0, traverse_query = 0;
 
@@ -422,13 +426,13 @@ void ComputeCollider::Impl::DispatchTraversal() {
   for (size_t binding = 0; binding < buffers.size(); ++binding) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding), buffers[binding].id);
   }
-  glUseProgram(traverse_program);
-  glProgramUniform1ui(traverse_program, traverse_count, static_cast<GLuint>(pending->items));
-  glProgramUniform1ui(traverse_program, traverse_pairs, static_cast<GLuint>(pending->work.size()));
-  glProgramUniform1ui(traverse_program, traverse_capacity, static_cast<GLuint>(capacity));
-  glProgramUniform1i(traverse_program, traverse_distance, query.distance ? 1 : 0);
-  glProgramUniform1d(traverse_program, traverse_max_distance, query.max_distance);
-  glProgramUniform1f(traverse_program, traverse_slack, FloatAtLeast(query.slack));
+  const TraverseKernel& kernel = traverse[query.distance ? 1 : 0];
+  glUseProgram(kernel.program);
+  glProgramUniform1ui(kernel.program, kernel.count, static_cast<GLuint>(pending->items));
+  glProgramUniform1ui(kernel.program, kernel.pairs, static_cast<GLuint>(pending->work.size()));
+  glProgramUniform1ui(kernel.program, kernel.capacity, static_cast<GLuint>(capacity));
+  glProgramUniform1f(kernel.program, kernel.slack, FloatAtLeast(query.slack));
+  if (query.distance) glProgramUniform1d(kernel.program, kernel.max_distance, query.max_distance);
   glBeginQuery(GL_TIME_ELAPSED, traverse_query);
   glDispatchCompute(Groups(pending->items), 1, 1);
   glEndQuery(GL_TIME_ELAPSED);
@@ -490,7 +494,8 @@ ComputeCollider::~ComputeCollider() {
   for (Buffer& b : impl_->buffers) glDeleteBuffers(1, &b.id);
   glDeleteQueries(1, &impl_->refit_query);
   glDeleteQueries(1, &impl_->traverse_query);
-  for (GLuint program : {impl_->boxes_program, impl_->refit_program, impl_->traverse_program})
+  for (GLuint program : {impl_->boxes_program, impl_->refit_program, impl_->traverse[0].program,
+                         impl_->traverse[1].program})
     glDeleteProgram(program);
 }
 
@@ -505,19 +510,22 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   auto refit = CompileCompute(internal::RefitSource(), "refit");
   if (!refit) return refit.error();
   impl->refit_program = *refit;
-  auto traverse = CompileCompute(internal::TraverseSource(), "traversal");
-  if (!traverse) return traverse.error();
-  impl->traverse_program = *traverse;
+  for (bool distance : {false, true}) {
+    auto traverse = CompileCompute(internal::TraverseSource(distance),
+                                   distance ? "distance traversal" : "traversal");
+    if (!traverse) return traverse.error();
+    Impl::TraverseKernel& kernel = impl->traverse[distance ? 1 : 0];
+    kernel.program = *traverse;
+    kernel.count = glGetUniformLocation(kernel.program, "u_count");
+    kernel.pairs = glGetUniformLocation(kernel.program, "u_pairs");
+    kernel.capacity = glGetUniformLocation(kernel.program, "u_capacity");
+    kernel.slack = glGetUniformLocation(kernel.program, "u_slack");
+    kernel.max_distance = glGetUniformLocation(kernel.program, "u_max_distance");
+  }
   impl->boxes_count = glGetUniformLocation(impl->boxes_program, "u_count");
   impl->boxes_ranges = glGetUniformLocation(impl->boxes_program, "u_ranges");
   impl->refit_count = glGetUniformLocation(impl->refit_program, "u_count");
   impl->refit_first = glGetUniformLocation(impl->refit_program, "u_first");
-  impl->traverse_count = glGetUniformLocation(impl->traverse_program, "u_count");
-  impl->traverse_pairs = glGetUniformLocation(impl->traverse_program, "u_pairs");
-  impl->traverse_capacity = glGetUniformLocation(impl->traverse_program, "u_capacity");
-  impl->traverse_distance = glGetUniformLocation(impl->traverse_program, "u_distance");
-  impl->traverse_max_distance = glGetUniformLocation(impl->traverse_program, "u_max_distance");
-  impl->traverse_slack = glGetUniformLocation(impl->traverse_program, "u_slack");
   for (Buffer& b : impl->buffers) glCreateBuffers(1, &b.id);
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->refit_query);
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->traverse_query);

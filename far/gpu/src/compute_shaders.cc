@@ -121,8 +121,11 @@ constexpr const char* kTraverse = R"(
 uniform uint u_pairs;
 uniform float u_slack;    // triangle boxes within this on every axis meet (0: share a point)
 uniform uint u_capacity;  // entries of each output buffer
-uniform bool u_distance;  // a distance query: every pair within the slack goes to the CPU...
-uniform double u_max_distance;  // ...unless proven farther than it would accept beside this D
+// FAR_DISTANCE (defined before this, 0 or 1: two programs): a distance query, where every pair
+// within the slack goes to the CPU unless proven farther than it would accept beside this D.
+#if FAR_DISTANCE
+uniform double u_max_distance;
+#endif
 
 const int kApart = 0;
 const int kCross = 1;
@@ -192,6 +195,7 @@ int SideDouble(dvec3 a, dvec3 b, dvec3 c, dvec3 d) {
 $CLASSIFY_FLOAT
 $CLASSIFY_DOUBLE
 
+#if FAR_DISTANCE
 // A distance query's cut. The CPU's TriangleDistanceIfWithin(s, t, D) accepts a pair only when
 // its distance d satisfies d <= D + 288 eps L (L: the diagonal of the six vertices' box, eps =
 // 2^-53: its slack of 256 eps L and its distance's underestimate of at most 32 eps L;
@@ -250,15 +254,22 @@ bool FartherThanTheCpuAccepts(dvec3 s[3], dvec3 t[3]) {
   if (GapShowsFar(cross(sb, sc), sb, sc, ta, tb, tc, axis_limit)) return true;
   if (GapShowsFar(cross(tb - ta, tc - ta), sb, sc, ta, tb, tc, axis_limit)) return true;
   if (GapShowsFar(ta + tb + tc - sb - sc, sb, sc, ta, tb, tc, axis_limit)) return true;
-  dvec3 s_edges[3] = dvec3[3](sb, sc - sb, sc);
-  dvec3 t_edges[3] = dvec3[3](tb - ta, tc - tb, tc - ta);
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      if (GapShowsFar(cross(s_edges[i], t_edges[j]), sb, sc, ta, tb, tc, axis_limit)) return true;
-    }
-  }
-  return false;
+  // The nine edge pairs, unrolled (no array: see the traversal's stack below).
+  precise dvec3 s1 = sc - sb;
+  precise dvec3 t0 = tb - ta;
+  precise dvec3 t1 = tc - tb;
+  precise dvec3 t2 = tc - ta;
+  return GapShowsFar(cross(sb, t0), sb, sc, ta, tb, tc, axis_limit) ||
+         GapShowsFar(cross(sb, t1), sb, sc, ta, tb, tc, axis_limit) ||
+         GapShowsFar(cross(sb, t2), sb, sc, ta, tb, tc, axis_limit) ||
+         GapShowsFar(cross(s1, t0), sb, sc, ta, tb, tc, axis_limit) ||
+         GapShowsFar(cross(s1, t1), sb, sc, ta, tb, tc, axis_limit) ||
+         GapShowsFar(cross(s1, t2), sb, sc, ta, tb, tc, axis_limit) ||
+         GapShowsFar(cross(sc, t0), sb, sc, ta, tb, tc, axis_limit) ||
+         GapShowsFar(cross(sc, t1), sb, sc, ta, tb, tc, axis_limit) ||
+         GapShowsFar(cross(sc, t2), sb, sc, ta, tb, tc, axis_limit);
 }
+#endif
 
 uint g_box_pairs = 0u;
 uint g_float_decided = 0u;
@@ -291,15 +302,19 @@ void Visit(uint driver_tri, uint other_tri, uvec4 w0, uvec4 w1) {
     c = ClassifyDouble(s, t);
     if (c != kUndecided) ++g_double_decided;
   }
-  if (c == kApart && !u_distance) return;
+#if !FAR_DISTANCE
+  if (c == kApart) return;
+#endif
   // Both triangles are in the primitive PCS: a bit each, read back instead of the CPU sorting
   // the pairs' triangles.
   atomicOr(pcs_bits[driver_tri >> 5], 1u << (driver_tri & 31u));
   atomicOr(pcs_bits[other_tri >> 5], 1u << (other_tri & 31u));
+#if FAR_DISTANCE
   if (c == kApart && FartherThanTheCpuAccepts(s, t)) {
     ++g_distance_culled;
     return;
   }
+#endif
   uint a = driver_tri - w0.x;
   uint b = other_tri - w0.y;
   uvec4 entry = w1.z != 0u ? uvec4(w1.x, a, w1.y, b) : uvec4(w1.y, b, w1.x, a);
@@ -419,8 +434,9 @@ std::string TriangleBoxesSource() { return std::string(kCommon) + kTriangleBoxes
 
 std::string RefitSource() { return std::string(kCommon) + kRefit; }
 
-std::string TraverseSource() {
-  std::string text = std::string(kCommon) + kTraverse;
+std::string TraverseSource(bool distance) {
+  std::string text =
+      std::string(kCommon) + "#define FAR_DISTANCE " + (distance ? "1" : "0") + "\n" + kTraverse;
   ReplaceAll(text, "$CLASSIFY_FLOAT", Classify("ClassifyFloat", "SideFloat"));
   ReplaceAll(text, "$CLASSIFY_DOUBLE", Classify("ClassifyDouble", "SideDouble"));
   return text;

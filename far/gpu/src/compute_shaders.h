@@ -52,7 +52,10 @@ std::string TriangleBoxesSource();
 std::string RefitSource();
 /// One driver triangle of one object pair per invocation: descends the partner's hierarchy,
 /// and classifies each triangle pair whose boxes meet with the float filter, then the fp64
-/// filter, appending the certified intersecting pairs and the undecided ones.
-std::string TraverseSource();
+/// filter, appending the certified intersecting pairs and the undecided ones. `distance`: the
+/// distance queries' kernel (the pairs proven apart go to the CPU too, but for those proven
+/// farther than it would accept); a separate program, so that the contact queries' kernel
+/// carries none of that code (on llvmpipe it slowed theirs by 12-50%).
+std::string TraverseSource(bool distance);
 
 }  // namespace far::internal

@@ -33,6 +33,12 @@ struct TriangleObjects {
   std::vector<ComputeObject> objects;
 
   void Add(const TrianglePoints& t) { vertices.push_back({t.a, t.b, t.c}); }
+  // Objects (2i, 2i + 1): the pairs as they were added.
+  std::vector<SlotPair> Pairs() const {
+    std::vector<SlotPair> pairs;
+    for (size_t i = 0; i + 1 < vertices.size(); i += 2) pairs.push_back({SlotAt(i), SlotAt(i + 1)});
+    return pairs;
+  }
   std::span<const ComputeObject> Views(uint64_t world_key) {
     objects.clear();
     for (size_t i = 0; i < vertices.size(); ++i)
@@ -59,9 +65,7 @@ class ComputeColliderTest : public ::testing::Test {
   // Runs pairs (2i, 2i + 1) of `triangles` and checks each against TrianglesIntersect: a
   // crossing pair must intersect, and no intersecting pair may be dropped. Returns the answer.
   ComputeAnswer CheckPairs(TriangleObjects& triangles) {
-    std::vector<SlotPair> pairs;
-    for (size_t i = 0; i + 1 < triangles.vertices.size(); i += 2)
-      pairs.push_back({SlotAt(i), SlotAt(i + 1)});
+    const std::vector<SlotPair> pairs = triangles.Pairs();
     ComputeQuery query;
     query.objects = triangles.Views(++world_key_);
     query.object_pairs = pairs;
@@ -263,9 +267,7 @@ TEST_F(ComputeColliderTest, ADistanceQueryDropsOnlyPairsTheCpuWouldReject) {
                        Vector3d(a.x(), a.y() + 2, z)});
       }
     }
-    std::vector<SlotPair> pairs;
-    for (size_t i = 0; i + 1 < triangles.vertices.size(); i += 2)
-      pairs.push_back({SlotAt(i), SlotAt(i + 1)});
+    const std::vector<SlotPair> pairs = triangles.Pairs();
     ComputeQuery query;
     query.objects = triangles.Views(++world_key_);
     query.object_pairs = pairs;
