@@ -223,10 +223,14 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
     // auto's GPU cost model, once for every session to come.
     if (!MeasureGpuCost()) spdlog::warn("event=gpu_cost_unknown renderer=\"{}\"", d.renderer);
     if (d.config.gpu_batch) {
+      // Its own context: where a driver gives no second one, each session issues its own steps.
       auto batcher = ComputeBatcher::Create(d.config.gl_platform, gpu);
-      if (!batcher) return batcher.error();
-      d.compute_batcher = std::move(*batcher);
-      d.workers->compute_batcher = d.compute_batcher.get();
+      if (batcher) {
+        d.compute_batcher = std::move(*batcher);
+        d.workers->compute_batcher = d.compute_batcher.get();
+      } else {
+        spdlog::warn("event=gpu_batch_unavailable reason=\"{}\"", batcher.error().message);
+      }
     }
   }
   d.status = std::make_unique<StatusSources>(StatusSources{d.config, d.stats, d.sessions, d.budget,
@@ -244,7 +248,7 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
       "gpu_batch={}",
       d.config.name, SocketPathOf(d.config), d.renderer, device, fmt::join(gpu_names, ","),
       d.config.lcm_url, d.config.max_sessions, CpuCoresOf(d.config),
-      CpuPoolThreads(d.config.exact_threads, CpuCoresOf(d.config)), d.config.gpu_batch);
+      CpuPoolThreads(d.config.exact_threads, CpuCoresOf(d.config)), d.compute_batcher != nullptr);
   if (protocol::IsInProcessUrl(d.config.lcm_url)) {
     spdlog::warn(
         "event=lcm_in_process lcm_url={} message=\"no client can reach the session channels "

@@ -106,15 +106,16 @@ void ComputeBatcher::Impl::RunBatch(std::vector<Job>& batch) {
                                      "gpu method: no collider " + std::to_string(step->id)))
             : runners.back()->Submit(*step->query));
   }
+  if (!steps.empty()) {  // counted before any answer: a caller that has one sees its batch
+    std::lock_guard lock(mutex);
+    counters.steps += static_cast<int64_t>(steps.size());
+    counters.batches += 1;
+    counters.largest_batch = std::max(counters.largest_batch, static_cast<int64_t>(steps.size()));
+  }
   for (size_t i = 0; i < steps.size(); ++i) {
     steps[i]->answer.set_value(submitted[i] ? runners[i]->Finish()
                                             : Result<ComputeAnswer>(submitted[i].error()));
   }
-  if (steps.empty()) return;
-  std::lock_guard lock(mutex);
-  counters.steps += static_cast<int64_t>(steps.size());
-  counters.batches += 1;
-  counters.largest_batch = std::max(counters.largest_batch, static_cast<int64_t>(steps.size()));
 }
 
 ComputeBatcher::ComputeBatcher(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
