@@ -64,6 +64,40 @@ std::string DeviceOf(const std::string& method) {
   return NeedsGl(*parsed) ? "gpu" : "cpu";
 }
 
+// Steps: counted, by method, batched on the GPU, and their latency.
+void AddStepFamilies(const far_lcm::status_reply_t& status, const MetricsExtras& extras,
+                     Families& out) {
+  out.Counter("far_steps_total", "steps answered since the daemon started, all users",
+              static_cast<double>(status.steps_total));
+  const std::string by_method_help =
+      "steps answered since start by the method that ran (auto's choice), on the GPU or the CPU";
+  out.Declare("far_steps_by_method_total", by_method_help, MetricType::Counter);
+  for (int i = 0; i < status.num_methods; ++i) {
+    out.Counter("far_steps_by_method_total", by_method_help,
+                static_cast<double>(status.method_steps[i]),
+                {{"method", status.method_name[i]}, {"device", DeviceOf(status.method_name[i])}});
+  }
+  out.Counter("far_gpu_batched_steps_total",
+              "gpu method steps whose GPU work went in a batch with the steps waiting beside it "
+              "(--gpu-batch)",
+              static_cast<double>(extras.gpu_batched_steps));
+  out.Counter("far_gpu_batches_total",
+              "batches of gpu method steps issued together; steps over batches is the mean "
+              "batch",
+              static_cast<double>(extras.gpu_batches));
+  ClientMetric& latency = out.Sample(
+      "far_step_latency_seconds",
+      "step latency, request received to reply ready; quantiles over the last 8192 steps, "
+      "count and sum since start",
+      MetricType::Summary, {});
+  latency.summary.sample_count = static_cast<uint64_t>(extras.latency_samples);
+  latency.summary.sample_sum = Seconds(extras.latency_sum_ms);
+  latency.summary.quantile = {{0.5, Seconds(status.latency_p50_ms)},
+                              {0.9, Seconds(status.latency_p90_ms)},
+                              {0.99, Seconds(status.latency_p99_ms)},
+                              {1.0, Seconds(status.latency_max_ms)}};
+}
+
 }  // namespace
 
 std::vector<MetricFamily> MetricFamilies(const far_lcm::status_reply_t& status,
@@ -105,36 +139,7 @@ std::vector<MetricFamily> MetricFamilies(const far_lcm::status_reply_t& status,
   }
   out.Gauge("far_scene_objects", "objects alive in all sessions' scenes together", objects);
   out.Gauge("far_scene_triangles", "triangles in all sessions' scenes together", triangles);
-  // Steps and their latency.
-  out.Counter("far_steps_total", "steps answered since the daemon started, all users",
-              static_cast<double>(status.steps_total));
-  const std::string by_method_help =
-      "steps answered since start by the method that ran (auto's choice), on the GPU or the CPU";
-  out.Declare("far_steps_by_method_total", by_method_help, MetricType::Counter);
-  for (int i = 0; i < status.num_methods; ++i) {
-    out.Counter("far_steps_by_method_total", by_method_help,
-                static_cast<double>(status.method_steps[i]),
-                {{"method", status.method_name[i]}, {"device", DeviceOf(status.method_name[i])}});
-  }
-  out.Counter("far_gpu_batched_steps_total",
-              "gpu method steps whose GPU work went in a batch with the steps waiting beside it "
-              "(--gpu-batch)",
-              static_cast<double>(extras.gpu_batched_steps));
-  out.Counter("far_gpu_batches_total",
-              "batches of gpu method steps issued together; steps over batches is the mean "
-              "batch",
-              static_cast<double>(extras.gpu_batches));
-  ClientMetric& latency = out.Sample(
-      "far_step_latency_seconds",
-      "step latency, request received to reply ready; quantiles over the last 8192 steps, "
-      "count and sum since start",
-      MetricType::Summary, {});
-  latency.summary.sample_count = static_cast<uint64_t>(extras.latency_samples);
-  latency.summary.sample_sum = Seconds(extras.latency_sum_ms);
-  latency.summary.quantile = {{0.5, Seconds(status.latency_p50_ms)},
-                              {0.9, Seconds(status.latency_p90_ms)},
-                              {0.99, Seconds(status.latency_p99_ms)},
-                              {1.0, Seconds(status.latency_max_ms)}};
+  AddStepFamilies(status, extras, out);
   // Errors.
   const std::string errors_help = "error replies and dropped messages since start, by kind";
   out.Declare("far_errors_total", errors_help, MetricType::Counter);
