@@ -69,7 +69,7 @@ TEST_F(ManyThreadsTest, EightThreadsEachSteppingTheirOwnSessionGetExactAnswers) 
 }
 
 // The gpu method's steps of the eight sessions go to the daemon's batcher (--gpu-batch, on by
-// default), several in a batch: each session gets its own answer, exact.
+// default; several in a batch when they wait together): each session gets its own answer, exact.
 TEST_F(ManyThreadsTest, EightThreadsSteppingTheGpuMethodThroughTheBatcherGetExactAnswers) {
   EightThreadsGetExactAnswers(Method::kGpu);
 }
