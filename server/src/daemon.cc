@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "daemon_stats.h"
+#include "gpu_cost_cache.h"
 #include "log_limiter.h"
 #include "message_handlers.h"
 #include "metrics_export.h"
@@ -207,6 +208,7 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   // GL must work before anyone is served: each session makes its own context later.
   std::string device;
   std::vector<std::string> gpu_names;
+  std::string gpu_cost;
   {
     int gpu = d.config.gpu;
     if (!d.config.gpu_id.empty()) {
@@ -220,8 +222,8 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
     d.renderer = (*context)->renderer();
     device = (*context)->platform_description();
     gpu_names = ServedGpuNames(d.config, (*context)->drm_device_file());
-    // auto's GPU cost model, once for every session to come.
-    if (!MeasureGpuCost()) spdlog::warn("event=gpu_cost_unknown renderer=\"{}\"", d.renderer);
+    // auto's GPU cost model, once for every session to come (kept between starts).
+    gpu_cost = PrepareGpuCost(d.config.gpu_cost_cache, d.renderer, (*context)->version());
     if (d.config.gpu_batch) {
       // Its own context: where a driver gives no second one, each session issues its own steps.
       auto batcher = ComputeBatcher::Create(d.config.gl_platform, gpu);
@@ -245,10 +247,11 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
   spdlog::info(
       "event=daemon_ready name={} socket={} gl_renderer=\"{}\" gl_device=\"{}\" "
       "gpu_names=\"{}\" lcm_url={} max_sessions={} cpu_cores={} threads_per_session={} "
-      "gpu_batch={}",
+      "gpu_batch={} gpu_cost={}",
       d.config.name, SocketPathOf(d.config), d.renderer, device, fmt::join(gpu_names, ","),
       d.config.lcm_url, d.config.max_sessions, CpuCoresOf(d.config),
-      CpuPoolThreads(d.config.exact_threads, CpuCoresOf(d.config)), d.compute_batcher != nullptr);
+      CpuPoolThreads(d.config.exact_threads, CpuCoresOf(d.config)), d.compute_batcher != nullptr,
+      gpu_cost);
   if (protocol::IsInProcessUrl(d.config.lcm_url)) {
     spdlog::warn(
         "event=lcm_in_process lcm_url={} message=\"no client can reach the session channels "

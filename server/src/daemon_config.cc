@@ -88,6 +88,7 @@ Result<void> ReadKey(const std::string& key, const nlohmann::json& value, Daemon
   if (key == "gpu") return set(config.gpu);
   if (key == "gpu_id") return set(config.gpu_id);
   if (key == "gpu_batch") return set(config.gpu_batch);
+  if (key == "gpu_cost_cache") return set(config.gpu_cost_cache);
   if (key == "serves_gpus") {
     config.serves_gpus = value.get<std::vector<std::string>>();
     return {};

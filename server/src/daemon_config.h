@@ -38,6 +38,10 @@ struct DaemonConfig {
   /// steps waiting at the time together (far::ComputeBatcher); false: each session issues its
   /// own on its own context, in turns under the GL lock.
   bool gpu_batch = true;
+  /// The file auto's GPU cost is kept in between starts (gpu_cost_cache.h): "" or "default" =
+  /// $XDG_CACHE_HOME/far/gpu-costs.json (else ~/.cache/far/gpu-costs.json); "off" = measure
+  /// at every start.
+  std::string gpu_cost_cache;
   // Sessions.
   int max_sessions = 64;
   int max_sessions_per_user = 16;

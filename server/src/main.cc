@@ -111,6 +111,11 @@ struct CommandLine {
     Add("--gpu-batch", &DaemonConfig::gpu_batch,
         "the gpu method's steps of all sessions go to the GPU together, from one thread and "
         "context (true), or each session's on its own context in turns (false)");
+    Add("--gpu-cost-cache", &DaemonConfig::gpu_cost_cache,
+        "file that keeps auto's GPU cost between starts, so that a start on the same renderer, "
+        "driver and CPUs skips the probe: a path, default ($XDG_CACHE_HOME/far/gpu-costs.json, "
+        "else ~/.cache/far/gpu-costs.json) or off (measure at every start)",
+        false);
     Add("--cpu-cores", &DaemonConfig::cpu_cores,
         "CPU cores the daemon may use in all (0: all): no session's threads exceed it (nor "
         "--threads), and a heavy session gets half of it");

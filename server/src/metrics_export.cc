@@ -1,16 +1,10 @@
 #include "metrics_export.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <chrono>
-#include <cstring>
-#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
+#include "atomic_file.h"
 #include <prometheus/collectable.h>
 #include <prometheus/exposer.h>
 #include <prometheus/text_serializer.h>
@@ -30,11 +24,6 @@ class StatusCollectable : public prometheus::Collectable {
  private:
   const StatusSources& sources_;
 };
-
-Error IoError(const std::string& path, const std::string& what) {
-  return MakeError(ErrorCode::kIoError,
-                   "metrics_file '" + path + "': " + what + ": " + std::strerror(errno));
-}
 
 }  // namespace
 
@@ -56,50 +45,6 @@ std::string MetricsText(const std::vector<prometheus::MetricFamily>& families) {
   return text.str();
 }
 
-Result<void> WriteFileAtomically(const std::string& path, const std::string& text) {
-  const std::filesystem::path target(path);
-  const std::filesystem::path directory =
-      target.parent_path().empty() ? std::filesystem::path(".") : target.parent_path();
-  std::string temp = (directory / ("." + target.filename().string() + ".XXXXXX")).string();
-  const int fd = mkstemp(temp.data());
-  if (fd < 0) return IoError(path, "cannot create a temporary file in " + directory.string());
-  // Written whole, readable by the collector's user, then renamed over the old file.
-  const char* data = text.data();
-  size_t left = text.size();
-  bool ok = true;
-  std::string failed;
-  while (ok && left > 0) {
-    const ssize_t n = write(fd, data, left);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      ok = false;
-      failed = "cannot write " + temp;
-      break;
-    }
-    data += n;
-    left -= static_cast<size_t>(n);
-  }
-  if (ok && fchmod(fd, 0644) != 0) {
-    ok = false;
-    failed = "cannot chmod " + temp;
-  }
-  const int saved_errno = errno;
-  if (close(fd) != 0 && ok) {
-    ok = false;
-    failed = "cannot close " + temp;
-  } else {
-    errno = saved_errno;
-  }
-  if (ok && rename(temp.c_str(), path.c_str()) != 0) {
-    ok = false;
-    failed = "cannot rename " + temp + " over it";
-  }
-  if (ok) return {};
-  Error error = IoError(path, failed);
-  unlink(temp.c_str());
-  return error;
-}
-
 MetricsExport::MetricsExport(const DaemonConfig& config, const StatusSources& sources)
     : config_(config), sources_(sources) {}
 
@@ -111,7 +56,7 @@ Result<std::unique_ptr<MetricsExport>> MetricsExport::Start(const DaemonConfig& 
     if (auto written =
             WriteFileAtomically(config.metrics_file, MetricsText(CollectMetrics(sources, true)));
         !written) {
-      return written.error();
+      return MakeError(written.error().code, "metrics_file " + written.error().message);
     }
     metrics->writer_ = std::thread([raw = metrics.get()] { raw->WriterLoop(); });
   }
@@ -142,7 +87,7 @@ void MetricsExport::WriteFile(bool up) {
       WriteFileAtomically(config_.metrics_file, MetricsText(CollectMetrics(sources_, up)));
   // One line when writing starts failing and one when it works again, not one per interval.
   if (!written && last_write_ok_) {
-    spdlog::warn("event=metrics_file_error message=\"{}\"", written.error().message);
+    spdlog::warn("event=metrics_file_error message=\"metrics_file {}\"", written.error().message);
   } else if (written && !last_write_ok_) {
     spdlog::info("event=metrics_file_written file=\"{}\"", config_.metrics_file);
   }

@@ -26,12 +26,6 @@ std::vector<prometheus::MetricFamily> CollectMetrics(const StatusSources& source
 /// Families in Prometheus' text format (prometheus::TextSerializer).
 std::string MetricsText(const std::vector<prometheus::MetricFamily>& families);
 
-/// Replaces `path` with `text` atomically: writes a temporary file beside it (a dot file, which
-/// node_exporter's textfile collector, reading *.prom only, never reads), makes it readable by
-/// all (the collector runs as another user) and renames it over `path`, so that a reader sees
-/// the old file or the new one, never part of one. Errors: kIoError naming the path and errno.
-Result<void> WriteFileAtomically(const std::string& path, const std::string& text);
-
 /// Publishes the metrics the configuration asks for (docs/daemon.md, "Metrics"):
 ///  - metrics_file: written at Start, every metrics_interval_s on a thread of its own, and a
 ///    last time at Stop (far_up 0);

@@ -8,7 +8,8 @@ far_add_test(far_gpu_test gpu far/gpu/gl_context_test.cc far/gpu/snapshot_test.c
              far/gpu/gl_lock_test.cc far/gpu/compute_collider_test.cc
              far/gpu/compute_batcher_test.cc
              far/pipeline/pipeline_culling_test.cc
-             far/pipeline/certificate_test.cc far/pipeline/gl_deadline_test.cc)
+             far/pipeline/certificate_test.cc far/pipeline/gl_deadline_test.cc
+             far/pipeline/gpu_cost_test.cc)
 target_link_libraries(far_gpu_test PRIVATE far::pipeline far::io far_test_scenes far_hard_cases)
 
 

@@ -104,6 +104,10 @@ Result<void> DaemonProcess::Start(std::chrono::milliseconds ready_timeout) {
   std::vector<std::string> args = {FAR_DAEMON_PATH};
   if (!HasFlag(args_, "--lcm-url")) args.insert(args.end(), {"--lcm-url", TestLcmUrl()});
   if (!HasFlag(args_, "--log-level")) args.insert(args.end(), {"--log-level", "info"});
+  // One cost cache for the tree's tests: the first daemon measures auto's GPU cost, the rest
+  // start without the probe's seconds of rendering (docs/testing.md).
+  if (!HasFlag(args_, "--gpu-cost-cache"))
+    args.insert(args.end(), {"--gpu-cost-cache", FAR_TEST_GPU_COST_CACHE});
   if (!HasFlag(args_, "--socket") && !HasFlag(args_, "--name"))
     args.insert(args.end(), {"--socket", socket_path_});
   args.insert(args.end(), args_.begin(), args_.end());

@@ -39,7 +39,8 @@ class TempDir {
 };
 
 /// One far-daemon process. Start() forks and execs FAR_DAEMON_PATH with `args` (plus
-/// --lcm-url, --log-level and --socket <its folder>/far.sock unless given; with --name and no
+/// --lcm-url, --log-level, --gpu-cost-cache (the tree's FAR_TEST_GPU_COST_CACHE, shared by its
+/// tests) and --socket <its folder>/far.sock unless given; with --name and no
 /// --socket the daemon takes its default socket for that name), its stdout and
 /// stderr in a log file, then waits until it answers a status request (Client::Status,
 /// retried for up to `ready_timeout`). The most recently started daemon's socket is the one

@@ -22,6 +22,7 @@ TEST(DispatchTest, AHandlerThatThrowsIsAnErrorAndTheDaemonKeepsServing) {
   config.lcm_url = TestLcmUrl();
   config.socket_path = (dir.path() / "far.sock").string();
   config.log_level = "warn";
+  config.gpu_cost_cache = FAR_TEST_GPU_COST_CACHE;  // the tree's, as DaemonProcess passes it
   std::atomic<bool> armed{false};
   std::atomic<int> thrown{0};
   server::DaemonTestHooks hooks;

@@ -75,7 +75,11 @@ class Daemon:
         os.makedirs(self.env["FAR_SOCKET_DIR"], mode=0o700, exist_ok=True)
         self.log_path = os.path.join(work, name + ".log")
         with open(self.log_path, "w") as log:
-            self.process = subprocess.Popen([daemon, "--name", name, *flags], env=self.env,
+            # The tree's shared GPU cost cache, when ctest names it (docs/testing.md).
+            cache = os.environ.get("FAR_TEST_GPU_COST_CACHE")
+            cache_flags = ["--gpu-cost-cache", cache] if cache else []
+            self.process = subprocess.Popen([daemon, "--name", name, *cache_flags, *flags],
+                                            env=self.env,
                                             stdout=log, stderr=subprocess.STDOUT,
                                             preexec_fn=die_with_parent)
         ping = self.run_client("--connect-timeout", "60s", "ping", check_rc=False)

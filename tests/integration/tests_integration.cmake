@@ -33,6 +33,7 @@ set(far_integration_sanitizer_subset
 )
 set(far_integration_tests
   integration/end_to_end_test.cc
+  integration/gpu_cost_start_test.cc
   integration/readable_output_test.cc
   integration/two_daemons_test.cc
   integration/auto_daemon_test.cc
@@ -61,7 +62,8 @@ target_link_libraries(far_integration_test PRIVATE far::client far_client_intern
 target_compile_definitions(far_integration_test PRIVATE
   FAR_DAEMON_PATH="$<TARGET_FILE:far-daemon>"
   FAR_CLIENT_PATH="$<TARGET_FILE:far-client>"
-  FAR_NETNS_RUN_PATH="${PROJECT_SOURCE_DIR}/deploy/netns-run.sh")
+  FAR_NETNS_RUN_PATH="${PROJECT_SOURCE_DIR}/deploy/netns-run.sh"
+  FAR_TEST_GPU_COST_CACHE="${PROJECT_BINARY_DIR}/tests/gpu-costs.json")
 add_dependencies(far_integration_test far-daemon far-client)
 set_target_properties(far_integration_test PROPERTIES
   CROSSCOMPILING_EMULATOR "${PROJECT_SOURCE_DIR}/deploy/netns-run.sh")
@@ -102,5 +104,6 @@ foreach(mode values loopback)
            COMMAND ${PROJECT_SOURCE_DIR}/deploy/netns-run.sh /usr/bin/python3
                    ${CMAKE_CURRENT_SOURCE_DIR}/integration/metrics_test.py ${mode}
                    $<TARGET_FILE:far-daemon> $<TARGET_FILE:far-client>)
-  set_tests_properties(${name} PROPERTIES LABELS integration TIMEOUT 120)
+  set_tests_properties(${name} PROPERTIES LABELS integration TIMEOUT 120
+    ENVIRONMENT "FAR_TEST_GPU_COST_CACHE=${PROJECT_BINARY_DIR}/tests/gpu-costs.json")
 endforeach()

@@ -23,6 +23,13 @@ sys.path.insert(0, os.path.dirname(__file__))
 import far  # noqa: E402
 
 
+def cost_cache_flags():
+    """The tree's shared GPU cost cache (ctest sets FAR_TEST_GPU_COST_CACHE): the first daemon
+    measures auto's GPU cost, the others start without the probe (docs/testing.md)."""
+    path = os.environ.get("FAR_TEST_GPU_COST_CACHE")
+    return ["--gpu-cost-cache", path] if path else []
+
+
 class Daemon:
     def __init__(self, args=()):
         path = os.environ.get("FAR_DAEMON_PATH")
@@ -37,7 +44,7 @@ class Daemon:
         with open(self.log_path, "wb") as log:
             self.process = subprocess.Popen(
                 [path, "--socket", self.socket, "--log-level", "info",
-                 "--max-opens-per-second", "1000", *args],
+                 "--max-opens-per-second", "1000", *cost_cache_flags(), *args],
                 stdout=log, stderr=subprocess.STDOUT)
         deadline = time.monotonic() + 60
         while True:

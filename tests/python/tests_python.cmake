@@ -12,7 +12,7 @@ function(far_add_python_test file label)
            COMMAND ${PROJECT_SOURCE_DIR}/deploy/netns-run.sh ${Python3_EXECUTABLE} -m pytest
                    -p no:cacheprovider -q -rs ${CMAKE_CURRENT_SOURCE_DIR}/python/${file})
   set_tests_properties(PythonTest.${name} PROPERTIES LABELS "${label};python" TIMEOUT 300
-    ENVIRONMENT "PYTHONPATH=${PROJECT_BINARY_DIR}/python;PYTHONDONTWRITEBYTECODE=1;FAR_DAEMON_PATH=$<TARGET_FILE:far-daemon>;FAR_CLIENT_PATH=$<TARGET_FILE:far-client>")
+    ENVIRONMENT "PYTHONPATH=${PROJECT_BINARY_DIR}/python;PYTHONDONTWRITEBYTECODE=1;FAR_DAEMON_PATH=$<TARGET_FILE:far-daemon>;FAR_CLIENT_PATH=$<TARGET_FILE:far-client>;FAR_TEST_GPU_COST_CACHE=${PROJECT_BINARY_DIR}/tests/gpu-costs.json")
 endfunction()
 far_add_python_test(test_arrays.py unit)
 far_add_python_test(test_pipeline.py gpu)

@@ -26,10 +26,12 @@ TEST(DaemonConfigTest, ReadsKnownKeys) {
   auto config =
       LoadDaemonConfig(WriteTemp("ok", R"({"max_resolution": 512, "gl_platform": "surfaceless",
       "max_sessions": 3, "log_level": "debug", "lcm_url": "memq://", "setup_allowance_ms": 250,
-      "status_after_ms": 0, "gpu_batch": false})"));
+      "status_after_ms": 0, "gpu_batch": false, "gpu_cost_cache": "off"})"));
   ASSERT_TRUE(config.ok()) << ToString(config.error());
   EXPECT_FALSE(config->gpu_batch);
   EXPECT_TRUE(DaemonConfig{}.gpu_batch);
+  EXPECT_EQ(config->gpu_cost_cache, "off");
+  EXPECT_EQ(DaemonConfig{}.gpu_cost_cache, "");
   EXPECT_EQ(config->setup_allowance_ms, 250);
   EXPECT_EQ(config->status_after_ms, 0);
   EXPECT_EQ(config->max_resolution, 512);
@@ -52,6 +54,7 @@ TEST(DaemonConfigTest, RejectsUnknownKeysWrongTypesAndRanges) {
       {R"({"status_after_ms": -1})", "status_after_ms"},
       {R"({"status_after_ms": 60001})", "status_after_ms"},
       {R"({"gpu_batch": 1})", "'gpu_batch': 1 is not true or false"},
+      {R"({"gpu_cost_cache": false})", "wrong type"},
       {R"([1, 2])", "not a JSON object"},
       {R"({"max_sessions": )", ""},
   };

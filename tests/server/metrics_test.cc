@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "atomic_file.h"
 #include "metrics_export.h"
 #include <gtest/gtest.h>
 

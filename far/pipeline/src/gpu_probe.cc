@@ -75,18 +75,24 @@ std::optional<double> Measure(Method method, int ball_n, int* triangles) {
   return ms;
 }
 
+// This process's costs, by renderer (measured or adopted).
+std::mutex cost_mutex;
+std::map<std::string, GpuCost> cost_by_renderer;
+
+std::optional<GpuCost> KnownCost(const std::string& renderer) {
+  std::lock_guard lock(cost_mutex);
+  auto it = cost_by_renderer.find(renderer);
+  if (it == cost_by_renderer.end()) return std::nullopt;
+  return it->second;
+}
+
 }  // namespace
 
 std::optional<GpuCost> ProbeGpuCost() {
   const auto gl = LockGl();
-  static std::mutex mutex;
-  static std::map<std::string, GpuCost> cost_by_renderer;
   const std::string renderer = CurrentGlRenderer();
   if (renderer.empty()) return std::nullopt;
-  {
-    std::lock_guard lock(mutex);
-    if (auto it = cost_by_renderer.find(renderer); it != cost_by_renderer.end()) return it->second;
-  }
+  if (auto known = KnownCost(renderer)) return known;
   // Two sizes give the fixed part (clears, reads back, draw calls) and the part per triangle.
   int small_triangles = 0, large_triangles = 0;
   const std::optional<double> small = Measure(Method::kFar, 5, &small_triangles);
@@ -104,9 +110,17 @@ std::optional<GpuCost> ProbeGpuCost() {
     cost.compute_ms_per_triangle = per_triangle;
     cost.compute_fixed_ms = std::max(0.0, *compute_small - per_triangle * small_triangles);
   }
-  std::lock_guard lock(mutex);
+  std::lock_guard lock(cost_mutex);
   cost_by_renderer[renderer] = cost;
   return cost;
+}
+
+bool AdoptGpuCost(const GpuCost& cost) {
+  const std::string renderer = CurrentGlRenderer();
+  if (renderer.empty()) return false;
+  std::lock_guard lock(cost_mutex);
+  cost_by_renderer[renderer] = cost;
+  return true;
 }
 
 }  // namespace far::internal

@@ -15,4 +15,8 @@ namespace far::internal {
 /// Thread-safe (the cache is locked); the measurement runs on the calling thread.
 std::optional<GpuCost> ProbeGpuCost();
 
+/// Makes `cost` the cached cost of the current context's renderer, as if ProbeGpuCost had
+/// measured it. False when no context is current.
+bool AdoptGpuCost(const GpuCost& cost);
+
 }  // namespace far::internal

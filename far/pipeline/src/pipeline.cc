@@ -167,7 +167,9 @@ Result<void> Pipeline::LoadScene(const Scene& scene) {
   return Apply(std::move(updates), [&](size_t i) { return "objects[" + std::to_string(i) + "]."; });
 }
 
-bool MeasureGpuCost() { return internal::ProbeGpuCost().has_value(); }
+std::optional<GpuCost> MeasureGpuCost() { return internal::ProbeGpuCost(); }
+
+bool UseGpuCost(const GpuCost& cost) { return internal::AdoptGpuCost(cost); }
 
 Result<StepResult> Pipeline::Step(const StepRequest& request, const StepControl& control) {
   return impl_->Step(request, control);

@@ -4,6 +4,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "far/model/scene_update.h"
 #include "far/model/step_request.h"
 #include "far/model/step_result.h"
+#include "far/pipeline/gpu_cost.h"
 #include "far/pipeline/scene_counters.h"
 
 namespace far {
@@ -122,10 +124,16 @@ class Pipeline {
   std::unique_ptr<Impl> impl_;
 };
 
-/// Measures what a FAR step costs on the renderer of the GL context current on this thread
-/// (the cost model `auto` predicts GPU steps from: measured once per process and renderer, then
-/// cached). A daemon calls it at start-up so that no client's first auto step pays for it
-/// (seconds on a software rasterizer). False when no context is current or the probe failed.
-bool MeasureGpuCost();
+/// Measures what a FAR step and a gpu step cost on the renderer of the GL context current on
+/// this thread (the cost model `auto` predicts GPU steps from: measured once per process and
+/// renderer, then cached). A daemon calls it at start-up so that no client's first auto step
+/// pays for it (seconds on a software rasterizer). nullopt when no context is current or the
+/// probe failed.
+std::optional<GpuCost> MeasureGpuCost();
+
+/// Makes `cost` this process's cost for the current context's renderer, as if MeasureGpuCost
+/// had measured it: a daemon's cost kept from an earlier start (server/src/gpu_cost_cache.h).
+/// False when no context is current.
+bool UseGpuCost(const GpuCost& cost);
 
 }  // namespace far

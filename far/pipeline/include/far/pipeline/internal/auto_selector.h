@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "far/model/step_request.h"
+#include "far/pipeline/gpu_cost.h"
 
 namespace far::internal {
 
@@ -25,21 +26,7 @@ struct Candidate {
   bool operator==(const Candidate&) const = default;
 };
 
-/// A GPU step's predicted cost: fixed + per_triangle * triangles (milliseconds), for the raster
-/// FAR configurations and, when it was measured, for the gpu method (compute shaders).
-struct GpuCost {
-  double fixed_ms = 0;
-  double ms_per_triangle = 0;
-  std::optional<double> compute_fixed_ms = std::nullopt;
-  std::optional<double> compute_ms_per_triangle = std::nullopt;
-  double Predict(int64_t triangles) const {
-    return fixed_ms + ms_per_triangle * static_cast<double>(triangles);
-  }
-  std::optional<double> PredictCompute(int64_t triangles) const {
-    if (!compute_fixed_ms || !compute_ms_per_triangle) return std::nullopt;
-    return *compute_fixed_ms + *compute_ms_per_triangle * static_cast<double>(triangles);
-  }
-};
+using far::GpuCost;  // far/pipeline/gpu_cost.h
 
 /// What auto knows of the scene when it chooses: its size, to tell when it changed enough that
 /// the costs measured before no longer hold.
