@@ -96,6 +96,7 @@ struct Daemon::Impl {
   const std::chrono::steady_clock::time_point created = std::chrono::steady_clock::now();
   mutable std::mutex renderer_mutex;
   std::string renderer;
+  bool batcher_context_fails = false;  // DaemonTestHooks
 
   explicit Impl(const DaemonConfig& c) : config(c) {}
   bool Stopping(const std::atomic<bool>* stop_flag) const {
@@ -115,6 +116,7 @@ Daemon::~Daemon() = default;
 Result<std::unique_ptr<Daemon>> Daemon::Create(const DaemonConfig& config, DaemonTestHooks hooks) {
   if (auto ok = ValidateDaemonConfig(config); !ok) return ok.error();
   auto impl = std::make_unique<Impl>(config);
+  impl->batcher_context_fails = hooks.batcher_context_fails;
   auto bus = protocol::LcmBus::Create(config.lcm_url);
   if (!bus) return bus.error();
   impl->bus = std::move(*bus);
@@ -226,7 +228,10 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
     gpu_cost = PrepareGpuCost(d.config.gpu_cost_cache, d.renderer, (*context)->version());
     if (d.config.gpu_batch) {
       // Its own context: where a driver gives no second one, each session issues its own steps.
-      auto batcher = ComputeBatcher::Create(d.config.gl_platform, gpu);
+      auto batcher = d.batcher_context_fails
+                         ? Result<std::unique_ptr<ComputeBatcher>>(
+                               MakeError(ErrorCode::kUnavailable, "no second context (test hook)"))
+                         : ComputeBatcher::Create(d.config.gl_platform, gpu);
       if (batcher) {
         d.compute_batcher = std::move(*batcher);
         d.workers->compute_batcher = d.compute_batcher.get();

@@ -17,6 +17,9 @@ struct DaemonTestHooks {
   /// Runs on the LCM thread before each message is handled; may throw, to prove that a
   /// handler's exception is caught instead of ending the daemon.
   std::function<void(std::string_view channel)> before_message;
+  /// The batcher's context is taken to fail (as on a driver that gives one context only), so
+  /// that the daemon's fallback, each session issuing its own gpu steps, can be tested.
+  bool batcher_context_fails = false;
 };
 
 /// far-daemon: serves many simulator sessions. Its parts:

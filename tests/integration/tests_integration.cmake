@@ -15,6 +15,7 @@ endif()
 # LcmRouteErrorTest, SessionLifetimeTest, DispatchTest, ManyThreadsTest): with FAR_INTEGRATION_SANITIZER_SUBSET
 # (their presets) they build only those files, which cuts a few minutes of CI's 2 cores.
 option(FAR_INTEGRATION_SANITIZER_SUBSET "build only the integration tests CI runs under sanitizers" OFF)
+find_package(spdlog REQUIRED)  # the in-process daemon tests read its log
 set(far_integration_support
   integration/integration_main.cc
   integration/daemon_process.cc
@@ -34,6 +35,7 @@ set(far_integration_sanitizer_subset
 set(far_integration_tests
   integration/end_to_end_test.cc
   integration/gpu_cost_start_test.cc
+  integration/gpu_batch_fallback_test.cc
   integration/readable_output_test.cc
   integration/two_daemons_test.cc
   integration/auto_daemon_test.cc
@@ -58,7 +60,7 @@ add_executable(far_integration_test ${far_integration_support} ${far_integration
 target_link_libraries(far_integration_test PRIVATE far::client far_client_internal far::protocol far::scenes far::io
                       far_server_core
                       far_test_scenes nlohmann_json::nlohmann_json GTest::gtest far_warnings
-                      Threads::Threads)
+                      spdlog::spdlog Threads::Threads)
 target_compile_definitions(far_integration_test PRIVATE
   FAR_DAEMON_PATH="$<TARGET_FILE:far-daemon>"
   FAR_CLIENT_PATH="$<TARGET_FILE:far-client>"
