@@ -106,6 +106,7 @@ load_runs() {
     env LD_LIBRARY_PATH="$FAR_LIB_PATH" FAR_COMPUTE_GL_LOCK="$lock" "$bin/far-daemon" \
       --gl-platform "$FAR_PLATFORM" --socket "$work/far.sock" --log-level warn \
       --gpu-batch "$batch" --metrics-file "$work/daemon-$mode.prom" --metrics-interval-s 0.5 \
+      --gpu-cost-cache "$FAR_GPU_COST_CACHE" \
       >"$work/daemon-$mode.log" 2>&1 &
     daemon=$!
     for _ in $(seq 50); do
@@ -243,8 +244,10 @@ main() {
   echo "=== GL context through the EGL $platform platform (far-daemon startup)"
   local renderer probe_log
   probe_log=$(mktemp)
+  # It measures auto's GPU cost (its log's event=gpu_cost line) and keeps it in the results,
+  # where the load stage's daemons read it instead of measuring again.
   renderer=$(bash "$here/gl-renderer.sh" "$platform" env LD_LIBRARY_PATH="$lib_path" \
-    "$bundle/bin/far-daemon" 2>"$probe_log") || true
+    "$bundle/bin/far-daemon" --gpu-cost-cache "$results/gpu-costs.json" 2>"$probe_log") || true
   cat "$probe_log"
   rm -f "$probe_log"
   [ -n "$renderer" ] ||
@@ -294,7 +297,8 @@ main() {
     --csv scaling.csv --results scaling.md
 
   # LCM is UDP multicast: in a private network namespace when this machine allows one.
-  export FAR_BUNDLE=$bundle FAR_LIB_PATH=$lib_path FAR_PLATFORM=$platform
+  export FAR_BUNDLE=$bundle FAR_LIB_PATH=$lib_path FAR_PLATFORM=$platform \
+    FAR_GPU_COST_CACHE=$results/gpu-costs.json
   export -f load_runs
   local netns=()
   if command -v unshare >/dev/null && command -v ip >/dev/null && unshare -n true 2>/dev/null; then

@@ -133,8 +133,9 @@ fi
 # 5. Run what the package holds, from the scratch root.
 step "packaged far-daemon and far-client"
 socket=$work/run/far.sock
-"$root/usr/bin/far-daemon" --config "$root/etc/far/daemon.json" --socket "$socket" \
-  >"$work/daemon.log" 2>&1 &
+# Its caches (auto's GPU cost, Mesa's shaders) in the test's folder, not the home.
+XDG_CACHE_HOME=$work/cache "$root/usr/bin/far-daemon" --config "$root/etc/far/daemon.json" \
+  --socket "$socket" >"$work/daemon.log" 2>&1 &
 daemon_pid=$!
 client() { "$root/usr/bin/far-client" --socket "$socket" --connect-timeout 30s "$@"; }
 check() {

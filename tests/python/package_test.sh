@@ -60,8 +60,9 @@ fi
 
 echo "== the packaged module and daemon"
 socket=$work/run/far.sock
-"$root/usr/bin/far-daemon" --config "$root/etc/far/daemon.json" --socket "$socket" \
-  >"$work/daemon.log" 2>&1 &
+# Its caches (auto's GPU cost, Mesa's shaders) in the test's folder, not the home.
+XDG_CACHE_HOME=$work/cache "$root/usr/bin/far-daemon" --config "$root/etc/far/daemon.json" \
+  --socket "$socket" >"$work/daemon.log" 2>&1 &
 daemon_pid=$!
 "$root/usr/bin/far-client" --socket "$socket" --connect-timeout 30s make-scene \
   "$work/scene/scene.json" --kind scaling --triangles 1000 --frames 2 >/dev/null

@@ -67,6 +67,9 @@ print_timings() {
 
 work=$(mktemp -d /tmp/far-slurm-test.XXXXXX)
 chmod 0755 "$work" # slurmd's job steps run as root too, but srun checks its cwd
+# The daemons' caches (auto's GPU cost, Mesa's shaders) stay in the test's folder, not root's
+# home; the jobs inherit it (sbatch exports the environment).
+export XDG_CACHE_HOME=$work/cache
 munged_pid=""
 slurmctld_pid=""
 slurmd_pid=""

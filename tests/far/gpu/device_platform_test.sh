@@ -9,7 +9,7 @@ script=$1
 daemon=$2
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
-renderer=$(bash "$script" device "$daemon" 2>"$log")
+renderer=$(bash "$script" device "$daemon" --gpu-cost-cache off 2>"$log")
 status=$?
 cat "$log"
 if [ "$status" -eq 0 ]; then

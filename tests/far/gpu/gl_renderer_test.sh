@@ -5,11 +5,11 @@
 set -u
 script=$1
 daemon=$2
-renderer=$(bash "$script" surfaceless "$daemon" 2>/dev/null)
+renderer=$(bash "$script" surfaceless "$daemon" --gpu-cost-cache off 2>/dev/null)
 status=$?
 if [ "$status" -ne 0 ] || [ -z "$renderer" ]; then
   echo "FAIL: gl-renderer.sh surfaceless exited $status with renderer '$renderer'; daemon output:"
-  bash "$script" surfaceless "$daemon"
+  bash "$script" surfaceless "$daemon" --gpu-cost-cache off
   exit 1
 fi
 if [ "$(wc -l <<<"$renderer")" -ne 1 ] || grep -q '[="]' <<<"$renderer"; then
@@ -17,7 +17,7 @@ if [ "$(wc -l <<<"$renderer")" -ne 1 ] || grep -q '[="]' <<<"$renderer"; then
   exit 1
 fi
 echo "renderer: $renderer"
-out=$(__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json bash "$script" surfaceless "$daemon" 2>/dev/null)
+out=$(__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json bash "$script" surfaceless "$daemon" --gpu-cost-cache off 2>/dev/null)
 status=$?
 if [ "$status" -ne 1 ] || [ -n "$out" ]; then
   echo "FAIL: without an EGL vendor: exit $status (expected 1), stdout '$out' (expected none)"
