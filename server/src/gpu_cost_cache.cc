@@ -1,6 +1,7 @@
 #include "gpu_cost_cache.h"
 
 #include <sched.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <chrono>
@@ -28,6 +29,14 @@ constexpr int kProbeVersion = 1;
 constexpr uintmax_t kMaxFileBytes = 1 << 20;
 constexpr size_t kMaxEntries = 32;
 constexpr double kMaxMs = 1e6;
+
+// This build of the daemon: its binary's size and modification time, so that a rebuild (a
+// developer's, or a package upgrade within one version) measures again.
+std::string ThisBuild() {
+  struct stat binary {};
+  if (stat("/proc/self/exe", &binary) != 0) return "unknown";
+  return std::to_string(binary.st_size) + "-" + std::to_string(binary.st_mtime);
+}
 
 int UsableCpus() {
   cpu_set_t cpus;
@@ -118,8 +127,8 @@ std::string Describe(const GpuCost& cost) {
 
 std::string GpuCostKey(std::string_view renderer, std::string_view gl_version) {
   std::ostringstream key;
-  key << renderer << " | " << gl_version << " | far " << kVersion << " | probe " << kProbeVersion
-      << " | cpus " << UsableCpus();
+  key << renderer << " | " << gl_version << " | far " << kVersion << " build " << ThisBuild()
+      << " | probe " << kProbeVersion << " | cpus " << UsableCpus();
   return key.str();
 }
 

@@ -17,8 +17,9 @@
 namespace far::server {
 
 /// What a kept cost holds for: the renderer (GL_RENDERER), its driver (GL_VERSION), far's
-/// version, the probe's version and the CPUs this process may run on (a software rasterizer's
-/// speed). A cost kept under another key is never used.
+/// version and this build of it (the binary's size and time), the probe's version and the CPUs
+/// this process may run on (a software rasterizer's speed). A cost kept under another key is
+/// never used.
 std::string GpuCostKey(std::string_view renderer, std::string_view gl_version);
 
 /// The default cache file: $XDG_CACHE_HOME/far/gpu-costs.json, else

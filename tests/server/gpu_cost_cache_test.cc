@@ -76,6 +76,7 @@ TEST_F(GpuCostCacheTest, AKeptCostIsReadBackExactlyUnderItsKeyOnly) {
     EXPECT_FALSE(*none) << other;
   }
   EXPECT_NE(key.find("far "), std::string::npos) << key;
+  EXPECT_NE(key.find(" build "), std::string::npos) << key;
   EXPECT_NE(key.find("cpus "), std::string::npos) << key;
 }
 
