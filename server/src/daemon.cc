@@ -107,6 +107,7 @@ struct Daemon::Impl {
   void EndSession(int64_t id, const Error& why);
   void ExpireIdleSessions();
   void CloseEverySession();
+  void StartBatcher(int gpu);
   Clock::time_point next_idle_check;
 };
 
@@ -179,6 +180,21 @@ void Daemon::Impl::ExpireIdleSessions() {
   }
 }
 
+// The gpu method's batcher, on a GL context of its own: where a driver gives no second one,
+// each session issues its own gpu steps instead.
+void Daemon::Impl::StartBatcher(int gpu) {
+  auto batcher = batcher_context_fails
+                     ? Result<std::unique_ptr<ComputeBatcher>>(
+                           MakeError(ErrorCode::kUnavailable, "no second context (test hook)"))
+                     : ComputeBatcher::Create(config.gl_platform, gpu);
+  if (!batcher) {
+    spdlog::warn("event=gpu_batch_unavailable reason=\"{}\"", batcher.error().message);
+    return;
+  }
+  compute_batcher = std::move(*batcher);
+  workers->compute_batcher = compute_batcher.get();
+}
+
 void Daemon::Impl::CloseEverySession() {
   for (auto& session : sessions.CloseAll()) {
     replier->SessionError(
@@ -226,19 +242,7 @@ Result<void> Daemon::Run(const std::atomic<bool>* stop_flag) {
     gpu_names = ServedGpuNames(d.config, (*context)->drm_device_file());
     // auto's GPU cost model, once for every session to come (kept between starts).
     gpu_cost = PrepareGpuCost(d.config.gpu_cost_cache, d.renderer, (*context)->version());
-    if (d.config.gpu_batch) {
-      // Its own context: where a driver gives no second one, each session issues its own steps.
-      auto batcher = d.batcher_context_fails
-                         ? Result<std::unique_ptr<ComputeBatcher>>(
-                               MakeError(ErrorCode::kUnavailable, "no second context (test hook)"))
-                         : ComputeBatcher::Create(d.config.gl_platform, gpu);
-      if (batcher) {
-        d.compute_batcher = std::move(*batcher);
-        d.workers->compute_batcher = d.compute_batcher.get();
-      } else {
-        spdlog::warn("event=gpu_batch_unavailable reason=\"{}\"", batcher.error().message);
-      }
-    }
+    if (d.config.gpu_batch) d.StartBatcher(gpu);
   }
   d.status = std::make_unique<StatusSources>(StatusSources{d.config, d.stats, d.sessions, d.budget,
                                                            d.renderer, device, gpu_names, d.created,
