@@ -366,47 +366,47 @@ Result<void> CheckGeometryArrays(const far_lcm::step_reply_t& reply) {
   return {};
 }
 
-// Checks a reply's arrays: sizes equal to their counts, object ids in [0, 2^32 - 1], indices
-// and counts >= 0, primitive counts that add up.
-Result<void> CheckReplyArrays(const far_lcm::step_reply_t& reply) {
+// Whether every array of a reply is as long as its count says.
+bool ArraysMatchTheirCounts(const far_lcm::step_reply_t& reply) {
   // A decoded reply has every array sized by its count; a hand-built one may not.
   const auto sized = [](size_t size, int32_t count) {
     return count >= 0 && size == static_cast<size_t>(count);
   };
-  if (!sized(reply.pcs_objects.size(), reply.num_pcs_objects) ||
-      !sized(reply.object_pair_a.size(), reply.num_object_pairs) ||
-      !sized(reply.object_pair_b.size(), reply.num_object_pairs) ||
-      !sized(reply.pcs_primitive_object.size(), reply.num_pcs_primitive_objects) ||
-      !sized(reply.pcs_primitive_count.size(), reply.num_pcs_primitive_objects) ||
-      !sized(reply.pcs_primitive_triangle.size(), reply.num_pcs_primitives) ||
-      !sized(reply.contact_object_a.size(), reply.num_contacts) ||
-      !sized(reply.contact_triangle_a.size(), reply.num_contacts) ||
-      !sized(reply.contact_object_b.size(), reply.num_contacts) ||
-      !sized(reply.contact_triangle_b.size(), reply.num_contacts) ||
-      !sized(reply.distance_object_a.size(), reply.num_distance_pairs) ||
-      !sized(reply.distance_triangle_a.size(), reply.num_distance_pairs) ||
-      !sized(reply.distance_object_b.size(), reply.num_distance_pairs) ||
-      !sized(reply.distance_triangle_b.size(), reply.num_distance_pairs) ||
-      !sized(reply.distance.size(), reply.num_distance_pairs) ||
-      !sized(reply.contact_point_count.size(), reply.num_contact_geometry) ||
-      !sized(reply.contact_coplanar.size(), reply.num_contact_geometry) ||
-      !sized(reply.contact_points.size(), reply.num_contact_point_coords) ||
-      !sized(reply.contact_normal_a.size(), reply.num_contact_normal_coords) ||
-      !sized(reply.contact_normal_b.size(), reply.num_contact_normal_coords) ||
-      !sized(reply.closest_point_a.size(), reply.num_closest_point_coords) ||
-      !sized(reply.closest_point_b.size(), reply.num_closest_point_coords) ||
-      !sized(reply.penetration_object_a.size(), reply.num_penetrations) ||
-      !sized(reply.penetration_object_b.size(), reply.num_penetrations) ||
-      !sized(reply.penetration_closed.size(), reply.num_penetrations) ||
-      !sized(reply.penetration_depth.size(), reply.num_penetrations) ||
-      !sized(reply.penetration_direction.size(), reply.num_penetration_coords) ||
-      !sized(reply.penetration_point_a.size(), reply.num_penetration_coords) ||
-      !sized(reply.penetration_point_b.size(), reply.num_penetration_coords) ||
-      !sized(reply.stage_name.size(), reply.num_stages) ||
-      !sized(reply.stage_ms.size(), reply.num_stages)) {
-    return BadReply("num_*", "an array's size differs from its count");
-  }
-  // Check the values and the sums: object ids are uint32 values, triangle indices >= 0.
+  return sized(reply.pcs_objects.size(), reply.num_pcs_objects) &&
+         sized(reply.object_pair_a.size(), reply.num_object_pairs) &&
+         sized(reply.object_pair_b.size(), reply.num_object_pairs) &&
+         sized(reply.pcs_primitive_object.size(), reply.num_pcs_primitive_objects) &&
+         sized(reply.pcs_primitive_count.size(), reply.num_pcs_primitive_objects) &&
+         sized(reply.pcs_primitive_triangle.size(), reply.num_pcs_primitives) &&
+         sized(reply.contact_object_a.size(), reply.num_contacts) &&
+         sized(reply.contact_triangle_a.size(), reply.num_contacts) &&
+         sized(reply.contact_object_b.size(), reply.num_contacts) &&
+         sized(reply.contact_triangle_b.size(), reply.num_contacts) &&
+         sized(reply.distance_object_a.size(), reply.num_distance_pairs) &&
+         sized(reply.distance_triangle_a.size(), reply.num_distance_pairs) &&
+         sized(reply.distance_object_b.size(), reply.num_distance_pairs) &&
+         sized(reply.distance_triangle_b.size(), reply.num_distance_pairs) &&
+         sized(reply.distance.size(), reply.num_distance_pairs) &&
+         sized(reply.contact_point_count.size(), reply.num_contact_geometry) &&
+         sized(reply.contact_coplanar.size(), reply.num_contact_geometry) &&
+         sized(reply.contact_points.size(), reply.num_contact_point_coords) &&
+         sized(reply.contact_normal_a.size(), reply.num_contact_normal_coords) &&
+         sized(reply.contact_normal_b.size(), reply.num_contact_normal_coords) &&
+         sized(reply.closest_point_a.size(), reply.num_closest_point_coords) &&
+         sized(reply.closest_point_b.size(), reply.num_closest_point_coords) &&
+         sized(reply.penetration_object_a.size(), reply.num_penetrations) &&
+         sized(reply.penetration_object_b.size(), reply.num_penetrations) &&
+         sized(reply.penetration_closed.size(), reply.num_penetrations) &&
+         sized(reply.penetration_depth.size(), reply.num_penetrations) &&
+         sized(reply.penetration_direction.size(), reply.num_penetration_coords) &&
+         sized(reply.penetration_point_a.size(), reply.num_penetration_coords) &&
+         sized(reply.penetration_point_b.size(), reply.num_penetration_coords) &&
+         sized(reply.stage_name.size(), reply.num_stages) &&
+         sized(reply.stage_ms.size(), reply.num_stages);
+}
+
+// Object ids in [0, 2^32 - 1], triangle indices and counts in [0, 2^31 - 1].
+Result<void> CheckIdsAndIndices(const far_lcm::step_reply_t& reply) {
   auto check = [](std::string_view field, const auto& values, int64_t max) -> Result<void> {
     for (size_t i = 0; i < values.size(); ++i) {
       if (values[i] < 0 || values[i] > max) {
@@ -438,6 +438,15 @@ Result<void> CheckReplyArrays(const far_lcm::step_reply_t& reply) {
                                       {"distance_triangle_b", &reply.distance_triangle_b}}) {
     if (auto ok = check(field, *values, int64_t{INT32_MAX}); !ok) return ok.error();
   }
+  return {};
+}
+
+// Checks a reply's arrays: sizes equal to their counts, object ids in [0, 2^32 - 1], indices
+// and counts >= 0, primitive counts that add up.
+Result<void> CheckReplyArrays(const far_lcm::step_reply_t& reply) {
+  if (!ArraysMatchTheirCounts(reply))
+    return BadReply("num_*", "an array's size differs from its count");
+  if (auto ok = CheckIdsAndIndices(reply); !ok) return ok;
   for (size_t i = 0; i < reply.stage_name.size(); ++i) {
     if (!ParseStage(reply.stage_name[i]))
       return BadReply("stage_name", "[" + std::to_string(i) + "] is no stage");

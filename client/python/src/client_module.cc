@@ -172,6 +172,26 @@ py::dict StatusDict(const client::DaemonStatus& s) {
   return out;
 }
 
+// Client.status: the daemon's status as a dict, asked with the GIL released.
+py::dict Status(const std::string& daemon, const std::string& socket_path,
+                const std::string& lcm_url, const std::string& client_name,
+                const py::handle& connect_timeout, const py::handle& hear_timeout,
+                const py::handle& timeout, std::optional<std::string> record_path) {
+  const auto options = ToOptions(daemon, socket_path, lcm_url, client_name, connect_timeout,
+                                 hear_timeout, timeout, record_path);
+  far::Result<far::client::DaemonStatus> status = [&] {
+    py::gil_scoped_release release;
+    return far::client::Client::Status(options);
+  }();
+  return StatusDict(Unwrap(std::move(status)));
+}
+
+// For tests (tests/python): the address set_vertices would read `vertices` from, to show that
+// the array's own memory is what the C++ side sees.
+std::uintptr_t Vector3SpanAddress(const py::handle& vertices) {
+  return reinterpret_cast<std::uintptr_t>(Vector3Span(vertices, "vertices").data());
+}
+
 }  // namespace
 }  // namespace far::python
 
@@ -243,29 +263,8 @@ Every wait (connect, step, close, status) runs with the GIL released. Errors: fa
              // Close errors (the daemon already gone) do not hide the block's own exception.
              (void)self.Released([](Client& c) { return c.Close(); });
            })
-      .def_static(
-          "status",
-          [](const std::string& daemon, const std::string& socket_path, const std::string& lcm_url,
-             const std::string& client_name, const py::handle& connect_timeout,
-             const py::handle& hear_timeout, const py::handle& timeout,
-             std::optional<std::string> record_path) {
-            const auto options = ToOptions(daemon, socket_path, lcm_url, client_name,
-                                           connect_timeout, hear_timeout, timeout, record_path);
-            far::Result<far::client::DaemonStatus> status = [&] {
-              py::gil_scoped_release release;
-              return Client::Status(options);
-            }();
-            return StatusDict(Unwrap(std::move(status)));
-          },
-          FAR_PYTHON_CLIENT_OPTIONS,
-          "The daemon's status (far-client status --json) as a dict; GIL released.");
+      .def_static("status", &Status, FAR_PYTHON_CLIENT_OPTIONS,
+                  "The daemon's status (far-client status --json) as a dict; GIL released.");
 
-  // For tests (tests/python): the address set_vertices would read `vertices` from, to show that
-  // the array's own memory is what the C++ side sees.
-  m.def(
-      "_vector3_span_address",
-      [](const py::handle& vertices) {
-        return reinterpret_cast<std::uintptr_t>(Vector3Span(vertices, "vertices").data());
-      },
-      py::arg("vertices"));
+  m.def("_vector3_span_address", &Vector3SpanAddress, py::arg("vertices"));
 }
