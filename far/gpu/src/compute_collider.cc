@@ -111,6 +111,16 @@ struct ComputeCollider::Impl {
   size_t capacity = kFirstCapacity;
   std::vector<Eigen::Vector3d> staging;  // the vertices of one upload
   std::vector<size_t> moved;             // slots whose vertices this step uploaded
+  // The refit's work for one set of moved slots, on the GPU already (kRangesBinding,
+  // kRefitListBinding): a scene whose same objects move every step (deforming leaves, cloth)
+  // builds and uploads it once, until the set or the layout changes.
+  struct RefitPlan {
+    std::vector<size_t> moved;  // empty: no plan
+    uint32_t triangles = 0;     // of the moved slots
+    uint32_t ranges = 0;
+    std::vector<size_t> begin, end;  // level d's nodes: list[begin[d], end[d])
+  };
+  RefitPlan refit_plan;
   // Uniform locations, looked up once.
   GLint boxes_count = -1, boxes_ranges = -1, refit_count = -1, refit_first = -1;
   // GL_TIME_ELAPSED queries: uploads, boxes and refit; the traversal.
@@ -122,6 +132,8 @@ struct ComputeCollider::Impl {
   // The boxes of the moved objects' triangles, then their hierarchies level by level, deepest
   // first (the other objects' boxes stay as computed before); returns the bytes uploaded.
   int64_t RefitMoved();
+  // Builds and uploads refit_plan for `moved`; returns the bytes uploaded.
+  int64_t PlanRefit();
   // The primitive PCS from the traversal's bits, by slot.
   void ReadPcs(ComputeAnswer& answer);
   // The crossing and undecided pairs the traversal wrote (counts from its counters).
@@ -282,6 +294,7 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
   uploaded += upload(internal::kNodesBinding, node_data.data(), node_data.size() * 16);
   uploaded += upload(internal::kOrderBinding, order.data(), order.size() * sizeof(uint32_t));
   layout = std::move(next);
+  refit_plan = {};
   total_vertices = static_cast<uint32_t>(vertices);
   total_triangles = static_cast<uint32_t>(triangles);
   total_nodes = static_cast<uint32_t>(nodes);
@@ -320,26 +333,28 @@ int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> obj
   return uploaded;
 }
 
-int64_t ComputeCollider::Impl::RefitMoved() {
-  if (moved.empty()) return 0;
+int64_t ComputeCollider::Impl::PlanRefit() {
+  RefitPlan plan;
+  plan.moved = moved;
   std::vector<std::array<uint32_t, 2>> ranges;  // (first triangle, triangles before)
-  uint32_t triangles = 0;
   size_t levels = 0;
   for (size_t s : moved) {
-    ranges.push_back({layout[s].triangle_base, triangles});
-    triangles += layout[s].triangles;
+    ranges.push_back({layout[s].triangle_base, plan.triangles});
+    plan.triangles += layout[s].triangles;
     levels = std::max(levels, layout[s].levels.size());
   }
+  plan.ranges = static_cast<uint32_t>(ranges.size());
   // The nodes, deepest level first: level d is list[begin[d], end[d]).
   std::vector<uint32_t> list;
-  std::vector<size_t> begin(levels), end(levels);
+  plan.begin.resize(levels);
+  plan.end.resize(levels);
   for (size_t d = levels; d-- > 0;) {
-    begin[d] = list.size();
+    plan.begin[d] = list.size();
     for (size_t s : moved) {
       if (d < layout[s].levels.size())
         list.insert(list.end(), layout[s].levels[d].begin(), layout[s].levels[d].end());
     }
-    end[d] = list.size();
+    plan.end[d] = list.size();
   }
   Buffer& range_buffer = buffer(internal::kRangesBinding);
   Buffer& list_buffer = buffer(internal::kRefitListBinding);
@@ -348,23 +363,33 @@ int64_t ComputeCollider::Impl::RefitMoved() {
   glNamedBufferSubData(range_buffer.id, 0, static_cast<GLsizeiptr>(ranges.size() * 8),
                        ranges.data());
   glNamedBufferSubData(list_buffer.id, 0, static_cast<GLsizeiptr>(list.size() * 4), list.data());
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kRangesBinding, range_buffer.id);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kRefitListBinding, list_buffer.id);
+  refit_plan = std::move(plan);
+  return static_cast<int64_t>(ranges.size() * 8 + list.size() * 4);
+}
 
+int64_t ComputeCollider::Impl::RefitMoved() {
+  if (moved.empty()) return 0;
+  const int64_t uploaded = refit_plan.moved == moved ? 0 : PlanRefit();
+  const RefitPlan& plan = refit_plan;
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kRangesBinding,
+                   buffer(internal::kRangesBinding).id);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kRefitListBinding,
+                   buffer(internal::kRefitListBinding).id);
   glUseProgram(boxes_program);
-  glProgramUniform1ui(boxes_program, boxes_count, triangles);
-  glProgramUniform1ui(boxes_program, boxes_ranges, static_cast<GLuint>(ranges.size()));
-  glDispatchCompute(Groups(triangles), 1, 1);
+  glProgramUniform1ui(boxes_program, boxes_count, plan.triangles);
+  glProgramUniform1ui(boxes_program, boxes_ranges, plan.ranges);
+  glDispatchCompute(Groups(plan.triangles), 1, 1);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   glUseProgram(refit_program);
-  for (size_t d = levels; d-- > 0;) {
-    if (end[d] == begin[d]) continue;
-    glProgramUniform1ui(refit_program, refit_first, static_cast<GLuint>(begin[d]));
-    glProgramUniform1ui(refit_program, refit_count, static_cast<GLuint>(end[d] - begin[d]));
-    glDispatchCompute(Groups(end[d] - begin[d]), 1, 1);
+  for (size_t d = plan.begin.size(); d-- > 0;) {
+    if (plan.end[d] == plan.begin[d]) continue;
+    glProgramUniform1ui(refit_program, refit_first, static_cast<GLuint>(plan.begin[d]));
+    glProgramUniform1ui(refit_program, refit_count,
+                        static_cast<GLuint>(plan.end[d] - plan.begin[d]));
+    glDispatchCompute(Groups(plan.end[d] - plan.begin[d]), 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
-  return static_cast<int64_t>(ranges.size() * 8 + list.size() * 4);
+  return uploaded;
 }
 
 void ComputeCollider::Impl::ReadPcs(ComputeAnswer& answer) {
