@@ -100,7 +100,9 @@ Result<std::optional<nlohmann::json>> ReadEntries(const std::string& path) {
   if (!file) return FileError(ErrorCode::kIoError, path, "cannot be read");
   const nlohmann::json json =
       nlohmann::json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
-  if (!json.is_object() || json.value("format", std::string()) != kFormat ||
+  // (nlohmann's value() would throw on a "format" that is not a string: checked by hand.)
+  const auto format = json.is_object() ? json.find("format") : json.end();
+  if (format == json.end() || !format->is_string() || format->get<std::string>() != kFormat ||
       !json.contains("costs") || !json["costs"].is_object())
     return FileError(ErrorCode::kParseError, path,
                      "not a far GPU cost cache (format \"" + std::string(kFormat) + "\")");

@@ -111,6 +111,9 @@ TEST_F(GpuCostCacheTest, AFileThatIsNotACacheIsAnErrorAndIsReplacedWhenWritten) 
       {"{\"format\": \"far-gpu-costs/1\", \"costs\": ", ErrorCode::kParseError},
       {"[1, 2, 3]", ErrorCode::kParseError},
       {"{\"format\": \"far-gpu-costs/2\", \"costs\": {}}", ErrorCode::kParseError},
+      {"{\"format\": 1, \"costs\": {}}", ErrorCode::kParseError},
+      {"{\"format\": \"far-gpu-costs/1\"}", ErrorCode::kParseError},
+      {"\"far-gpu-costs/1\"", ErrorCode::kParseError},
       {"{\"format\": \"far-gpu-costs/1\", \"costs\": []}", ErrorCode::kParseError},
       {std::string(3 << 20, ' ') + "{}", ErrorCode::kIoError},
   };
