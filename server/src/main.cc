@@ -48,6 +48,13 @@ struct CommandLine {
   CommandLine() {
     app.set_version_flag("--version", std::string("far-daemon ") + far::kVersion);
     app.add_option("--config", config_path, "JSON config file (docs/daemon.md); flags override it");
+    AddWhereFlags();
+    AddLimitFlags();
+    AddRunFlags();
+  }
+
+  // Where the daemon is: its name and socket, its GPU, its LCM URL.
+  void AddWhereFlags() {
     Add("--name", &DaemonConfig::name,
         "this daemon's name: its socket <dir>/<name>.sock and LCM channel prefix; clients "
         "choose a daemon by name (far-client --daemon)");
@@ -77,6 +84,10 @@ struct CommandLine {
     app.add_option("--gl-platform", gl_platform,
                    "auto (default: a GPU, else Mesa's software renderer), device (a GPU only: "
                    "fails without one) or surfaceless");
+  }
+
+  // What sessions and steps may ask for.
+  void AddLimitFlags() {
     Add("--max-sessions", &DaemonConfig::max_sessions,
         "sessions of all users together, shared fairly by them");
     Add("--max-triangles", &DaemonConfig::max_triangles_per_session, "triangles per session");
@@ -107,6 +118,10 @@ struct CommandLine {
     Add("--status-after-ms", &DaemonConfig::status_after_ms,
         "a step's statuses (queued, started, stage) are sent once it is this old; quicker steps "
         "get their reply alone (0: every status)");
+  }
+
+  // How it runs: threads, cores, the gpu method's batching and cost, logs and metrics.
+  void AddRunFlags() {
     Add("--threads", &DaemonConfig::exact_threads, "CPU threads for exact tests (0: all)");
     Add("--gpu-batch", &DaemonConfig::gpu_batch,
         "the gpu method's steps of all sessions go to the GPU together, from one thread and "
