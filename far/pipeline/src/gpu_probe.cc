@@ -116,6 +116,7 @@ std::optional<GpuCost> ProbeGpuCost() {
 }
 
 bool AdoptGpuCost(const GpuCost& cost) {
+  const auto gl = LockGl();  // as ProbeGpuCost: the renderer is read from the context
   const std::string renderer = CurrentGlRenderer();
   if (renderer.empty()) return false;
   std::lock_guard lock(cost_mutex);
