@@ -6,7 +6,8 @@
 # Usage: bench/study/ab_step_profile.sh SCENE RUNS THREADS IDLE_MS BINARY...
 #   e.g. cp build/release/bench/study/far-step-profile /tmp/old  (then rebuild the change)
 #        bench/study/ab_step_profile.sh scaling-5000 8 2 6 /tmp/old build/release/bench/study/far-step-profile
-# FAR_STEP_PROFILE_ARGS adds flags to every run (e.g. '--distance-fraction 0.001').
+# FAR_STEP_PROFILE_ARGS adds flags to every run (e.g. '--distance-fraction 0.001');
+# FAR_STEP_PROFILE_METHOD is the method (default bvh; gpu runs on the GL context).
 set -euo pipefail
 if [[ $# -lt 5 ]]; then
   sed -n '2,8p' "$0" >&2
@@ -19,7 +20,7 @@ declare -A step_times # "binary step" -> that step's times
 for _ in $(seq "$runs"); do
   for binary in "$@"; do
     # shellcheck disable=SC2086 # FAR_STEP_PROFILE_ARGS is a list of flags
-    output=$("$binary" --scene "$scene" --method bvh --threads "$threads" --steps 4 \
+    output=$("$binary" --scene "$scene" --method "${FAR_STEP_PROFILE_METHOD:-bvh}" --threads "$threads" --steps 4 \
       --idle-ms "$idle_ms" ${FAR_STEP_PROFILE_ARGS:-} | awk -F, 'NR > 1 && $1 >= 1 { print $1, $2 }')
     while read -r step ms; do
       times[$binary]="${times[$binary]:-} $ms"

@@ -1,8 +1,11 @@
 // far-step-profile: the time of every step of one far-study scene with one CPU method, in
-// process (no GL), with the counts a hierarchy change moves (triangle pairs at leaves, exact
-// tests). For profiling a kernel change with `perf record`, and for comparing two builds of it
-// step by step on the same scene; far-study is the interleaved study of record.
+// process (no GL), or with the gpu method (GL), with the counts a hierarchy change moves
+// (triangle pairs at leaves, exact tests). For profiling a kernel change with `perf record`,
+// and for comparing two builds of it step by step on the same scene; far-study is the
+// interleaved study of record. For gpu, stages_ms also has the CPU's part of its GPU stage:
+// gl_prepare (issuing the uploads and kernels) and gl_passes (waiting, reading back).
 //   far-step-profile --scene breaking --method bvh --steps 4
+//   far-step-profile --scene paper-leaves --method gpu --steps 40
 //   perf record -g far-step-profile --scene breaking --steps 4 --repeat 50 --repeat-from 3
 //   far-step-profile --scene breaking --repeat 50 --repeat-from 3 --cold   (first-run caches)
 //   far-step-profile --scene scaling-5000 --distance-fraction 0.001  (the distance pass)
@@ -42,7 +45,7 @@ int main(int argc, char** argv) {
                  "a far-study scene, built as far-study builds it: soup, bunnies, leaves, "
                  "paper-leaves, breaking, paper-bunnies, scaling-<triangles>")
       ->capture_default_str();
-  app.add_option("--method", method_name, "a CPU method: bvh, aabb, fcl, exact")
+  app.add_option("--method", method_name, "a CPU method (bvh, aabb, fcl, exact) or gpu")
       ->capture_default_str();
   app.add_option("--steps", scene_options.steps, "measured steps (far-study's --steps)")
       ->capture_default_str();
@@ -75,10 +78,11 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   const auto method = far::ParseMethod(method_name);
+  const bool gpu = method && *method == far::Method::kGpu;
   const bool cpu = method && (*method == far::Method::kBvh || *method == far::Method::kAabb ||
                               *method == far::Method::kFcl || *method == far::Method::kExact);
-  if (!cpu) {
-    std::fprintf(stderr, "far-step-profile: --method must be bvh, aabb, fcl or exact\n");
+  if (!cpu && !gpu) {
+    std::fprintf(stderr, "far-step-profile: --method must be bvh, aabb, fcl, exact or gpu\n");
     return 2;
   }
   auto study_scene = far_study::MakeStudyScene(scene_name, scene_options);
@@ -89,7 +93,7 @@ int main(int argc, char** argv) {
   const far::Scene& scene = study_scene->scene;
 
   far::PipelineOptions options;
-  options.use_gl = false;
+  options.use_gl = gpu;
   options.num_threads = threads;
   auto pipeline = far::Pipeline::Create(options);
   if (!pipeline.ok()) {
@@ -145,6 +149,12 @@ int main(int argc, char** argv) {
       std::snprintf(ms_text, sizeof ms_text, "%.3f", stage.ms);
       stages +=
           (stages.empty() ? "" : " ") + std::string(far::ToString(stage.stage)) + "=" + ms_text;
+    }
+    if (gpu) {
+      char gl_text[64];
+      std::snprintf(gl_text, sizeof gl_text, " gl_prepare=%.3f gl_passes=%.3f",
+                    result->stats.gl_prepare_ms, result->stats.gl_passes_ms);
+      stages += gl_text;
     }
     const far::DescentCounters& descent = result->stats.descent;
     std::printf("%zu,%.3f,%.3f,%zu,%zu,%lld,%lld,%lld,%lld,%lld,%lld,%lld,%lld,%s\n", s, ms,

@@ -5,11 +5,13 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdlib>
 #include <limits>
 #include <optional>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <utility>
 
 #include "compute_shaders.h"
@@ -400,35 +402,35 @@ void ComputeCollider::Impl::ReadPcs(ComputeAnswer& answer) {
   }
   answer.pcs.resize(layout.size());
   for (size_t s = 0; s < layout.size(); ++s) {
-    const uint32_t base = layout[s].triangle_base;
-    for (uint32_t t = 0; t < layout[s].triangles; ++t) {
-      const uint32_t global = base + t;
-      const uint32_t word = bits[global >> 5];
-      if (word == 0) {  // skip the rest of an empty word
-        t += 31 - (global & 31);
-        continue;
-      }
-      if ((word >> (global & 31)) & 1u) answer.pcs[s].push_back(t);
+    // The slot's triangles are bits [base, end) of the words: visit the set ones only.
+    const uint32_t base = layout[s].triangle_base, end = base + layout[s].triangles;
+    if (base == end) continue;
+    const uint32_t first = base >> 5, last = (end - 1) >> 5;
+    for (uint32_t w = first; w <= last; ++w) {
+      uint32_t word = bits[w];
+      if (w == first) word &= ~0u << (base & 31);                      // before the slot
+      if (w == last && (end & 31) != 0) word &= ~(~0u << (end & 31));  // after it
+      for (; word != 0; word &= word - 1)
+        answer.pcs[s].push_back(w * 32 + static_cast<uint32_t>(std::countr_zero(word)) - base);
     }
   }
 }
 
 void ComputeCollider::Impl::ReadPairs(uint32_t num_crossing, uint32_t num_undecided,
                                       ComputeAnswer& answer) {
-  std::vector<std::array<uint32_t, 4>> entries(std::max(num_crossing, num_undecided));
-  const auto read = [&](internal::ComputeBinding binding, uint32_t count) {
-    if (count > 0) {
-      glGetNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(count) * 16,
-                              entries.data());
-    }
+  const auto read = [&](internal::ComputeBinding binding, uint32_t count, void* to) {
+    if (count > 0)
+      glGetNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(count) * 16, to);
   };
-  read(internal::kCrossingBinding, num_crossing);
-  answer.crossing.reserve(num_crossing);
-  for (uint32_t i = 0; i < num_crossing; ++i) {
-    const auto& e = entries[i];
-    answer.crossing.push_back({SlotAt(e[0]), e[1], SlotAt(e[2]), e[3]});
-  }
-  read(internal::kUndecidedBinding, num_undecided);
+  // A crossing entry is a SlotContact as the kernel writes it: read straight into the answer.
+  static_assert(sizeof(SlotContact) == 16 && std::is_standard_layout_v<SlotContact> &&
+                offsetof(SlotContact, triangle_a) == 4 && offsetof(SlotContact, object_b) == 8 &&
+                offsetof(SlotContact, triangle_b) == 12);
+  answer.crossing.resize(num_crossing);
+  read(internal::kCrossingBinding, num_crossing, answer.crossing.data());
+  // An undecided entry carries the proven-apart flag in its partner's slot.
+  std::vector<std::array<uint32_t, 4>> entries(num_undecided);
+  read(internal::kUndecidedBinding, num_undecided, entries.data());
   answer.undecided.reserve(num_undecided);
   answer.proven_apart.reserve(num_undecided);
   for (uint32_t i = 0; i < num_undecided; ++i) {

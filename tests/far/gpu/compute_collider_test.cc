@@ -4,6 +4,7 @@
 // force on meshes with hierarchies.
 #include "far/gpu/compute_collider.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -100,7 +101,8 @@ Vector3d RandomPoint(std::mt19937_64& rng, double scale) {
 }
 
 // Runs the collider on `objects` (meshes[i]'s views) and checks that every intersecting triangle
-// pair of `pairs` is kept (crossing or undecided) and none twice; returns how many intersect.
+// pair of `pairs` is kept (crossing or undecided) and none twice, and that the PCS is the
+// triangles of the kept pairs, by slot; returns how many intersect.
 int ExpectEveryIntersectingPairKept(ComputeCollider& collider,
                                     std::span<const ComputeObject> objects,
                                     const std::vector<Mesh>& meshes,
@@ -112,9 +114,22 @@ int ExpectEveryIntersectingPairKept(ComputeCollider& collider,
   EXPECT_TRUE(answer.ok()) << ToString(answer.error());
   if (!answer.ok()) return 0;
   std::set<SlotContact> found;
+  std::vector<std::vector<uint32_t>> pcs(objects.size());
   for (const auto* list : {&answer->crossing, &answer->undecided}) {
-    for (const SlotContact& c : *list) EXPECT_TRUE(found.insert(c).second) << where << ": twice";
+    for (const SlotContact& c : *list) {
+      EXPECT_TRUE(found.insert(c).second) << where << ": twice";
+      pcs[Index(c.object_a)].push_back(c.triangle_a);
+      pcs[Index(c.object_b)].push_back(c.triangle_b);
+    }
   }
+  // The slots' triangles share the GPU's words of PCS bits (objects of 1 to 300 triangles):
+  // no slot may get another's.
+  for (auto& triangles : pcs) {
+    std::sort(triangles.begin(), triangles.end());
+    triangles.erase(std::unique(triangles.begin(), triangles.end()), triangles.end());
+  }
+  answer->pcs.resize(objects.size());
+  EXPECT_EQ(answer->pcs, pcs) << where << ": the PCS is not the kept pairs' triangles";
   int intersecting = 0;
   for (const SlotPair& pair : pairs) {
     const Mesh& a = meshes[Index(pair.object_a)];

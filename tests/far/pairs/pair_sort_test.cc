@@ -29,9 +29,10 @@ TEST(PairSortTest, ContactsComeOutInPairOrder) {
     size_t n;
     uint64_t objects, triangles;
   };
-  // Sizes on both sides of the comparison-sort cutoff; small ids (few passes), ids with their
-  // top bits set (all sixteen passes), and fields that never vary (skipped passes). Slots are
-  // small in practice; the sort is right for any uint32_t.
+  // Sizes on both sides of the comparison-sort cutoff; small ids (the four fields packed in one
+  // key: few passes), fields that fill exactly 64 bits (still packed) and one bit more (sorted
+  // field by field), ids with their top bits set, and fields that never vary (no pass). Slots
+  // are small in practice; the sort is right for any uint32_t.
   const Case cases[] = {{0, 4, 10},
                         {1, 4, 10},
                         {5, 4, 10},
@@ -41,6 +42,9 @@ TEST(PairSortTest, ContactsComeOutInPairOrder) {
                         {1500, 13, 100000},
                         {5000, 3, 300},
                         {5000, 1, 1},
+                        {3000, 1ull << 16, 1ull << 16},
+                        {3000, 1ull << 16, 1ull << 17},
+                        {40000, 151, 23104},
                         {4096, 1ull << 32, 1ull << 32},
                         {3000, 70000, 1ull << 32}};
   uint32_t seed = 1;

@@ -9,7 +9,9 @@
 // 21-30 us in far-step-profile --scene scaling-5000 --idle-ms 6 (4-9 us back to back). A least
 // significant digit radix sort has almost no data-dependent branches: 2-4x faster after the
 // same idle gap, and as fast back to back (far_pairs_benchmark BM_SortContacts; bench/RESULTS.md,
-// "bvh: the serial parts of a small step").
+// "bvh: the serial parts of a small step"). It sorts each pair packed into one 64-bit key
+// (the four fields in the bits they use), in as few passes as the key's bits need, and sorts
+// field by field only when the fields need more than 64 bits.
 //
 // far::internal: visible to tests, not part of the API.
 
