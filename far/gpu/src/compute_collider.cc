@@ -16,6 +16,7 @@
 
 #include "compute_shaders.h"
 #include "gl_program.h"
+#include "gl_timer.h"
 #include <epoxy/gl.h>
 
 #include "far/gpu/gl_lock.h"
@@ -149,7 +150,7 @@ struct ComputeCollider::Impl {
     std::vector<std::array<uint32_t, 4>> work;
     std::vector<uint32_t> work_start;
     uint64_t items = 0;
-    Clock::time_point submit_start;
+    Clock::time_point submit_start, traverse_start;  // when the timer queries began
     int64_t uploaded = 0;
     double cpu_submit_ms = 0;
   };
@@ -460,6 +461,7 @@ void ComputeCollider::Impl::DispatchTraversal() {
   glProgramUniform1ui(kernel.program, kernel.capacity, static_cast<GLuint>(capacity));
   glProgramUniform1f(kernel.program, kernel.slack, FloatAtLeast(query.slack));
   if (query.distance) glProgramUniform1d(kernel.program, kernel.max_distance, query.max_distance);
+  pending->traverse_start = Clock::now();
   glBeginQuery(GL_TIME_ELAPSED, traverse_query);
   glDispatchCompute(Groups(pending->items), 1, 1);
   glEndQuery(GL_TIME_ELAPSED);
@@ -501,9 +503,8 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
   ReadPairs(counters[internal::kCrossingCount], counters[internal::kUndecidedCount], answer);
   ReadPcs(answer);
   if (auto ok = CheckGl("gpu method: reading the pairs back"); !ok) return ok.error();
-  GLuint64 refit_ns = 0, traverse_ns = 0;
-  glGetQueryObjectui64v(refit_query, GL_QUERY_RESULT, &refit_ns);
-  glGetQueryObjectui64v(traverse_query, GL_QUERY_RESULT, &traverse_ns);
+  const GLuint64 refit_ns = internal::ElapsedNsOrZero(refit_query, pending->submit_start);
+  const GLuint64 traverse_ns = internal::ElapsedNsOrZero(traverse_query, pending->traverse_start);
   answer.gpu_refit_ms = 1e-6 * static_cast<double>(refit_ns);
   answer.gpu_traverse_ms = 1e-6 * static_cast<double>(traverse_ns);
   answer.cpu_wait_ms += MsSince(read_start);

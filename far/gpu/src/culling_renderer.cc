@@ -8,6 +8,7 @@
 
 #include "draw_pacer.h"
 #include "gl_program.h"
+#include "gl_timer.h"
 #include "piece_buffers.h"
 #include "view_pass.h"
 #include <epoxy/egl.h>
@@ -225,12 +226,15 @@ Result<ViewResult> CullingRenderer::RenderView(const AxisView& view, QueryMechan
   // The GPU's time of the passes, without the pauses: the timer stops for each.
   GLuint64 gpu_ns = 0;
   bool timing = false;  // the timer query runs (during the passes)
+  Clock::time_point timer_began;
+  const auto begin_timer = [&] {
+    timer_began = Clock::now();
+    glBeginQuery(GL_TIME_ELAPSED, gl.timer_query);
+  };
   const auto read_timer = [&] {
     if (!timing) return;
     glEndQuery(GL_TIME_ELAPSED);
-    GLuint64 ns = 0;
-    glGetQueryObjectui64v(gl.timer_query, GL_QUERY_RESULT, &ns);
-    gpu_ns += ns;
+    gpu_ns += ElapsedNsOrZero(gl.timer_query, timer_began);
   };
   double paused_ms = 0;
   const BetweenBatches pause = [&] {
@@ -238,7 +242,7 @@ Result<ViewResult> CullingRenderer::RenderView(const AxisView& view, QueryMechan
     const Clock::time_point start = Clock::now();
     const StopReason stop = between ? between() : StopReason::kNone;
     paused_ms += ms_since(start);
-    if (timing) glBeginQuery(GL_TIME_ELAPSED, gl.timer_query);
+    if (timing) begin_timer();
     return stop;
   };
   DrawPacer pacer(gl.batch_costs, pause, batch_ms_);
@@ -256,7 +260,7 @@ Result<ViewResult> CullingRenderer::RenderView(const AxisView& view, QueryMechan
   const Clock::time_point passes_start = Clock::now();
   paused_ms = 0;
   timing = true;
-  glBeginQuery(GL_TIME_ELAPSED, gl.timer_query);
+  begin_timer();
   ViewPass pass(view, *gl.pieces, *gl.programs, pacer, counters);
   std::optional<std::vector<uint8_t>> stays = mechanism == QueryMechanism::kIdBuffer
                                                   ? CullWithIdBuffer(pass, *gl.targets)
