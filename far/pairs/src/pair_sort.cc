@@ -53,7 +53,8 @@ struct PackedLayout {
   }
   uint64_t Pack(const SlotContact& p) const {
     uint64_t key = 0;
-    for (int k = 0; k < kFields; ++k) key |= uint64_t{Field(p, k)} << shift[k];
+    // A field above 64 bits of the others is always 0 (no shift of 64: undefined).
+    for (int k = 0; k < kFields; ++k) key |= shift[k] < 64 ? uint64_t{Field(p, k)} << shift[k] : 0;
     return key;
   }
   SlotContact Unpack(uint64_t key) const {

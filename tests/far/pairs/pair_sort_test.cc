@@ -30,9 +30,10 @@ TEST(PairSortTest, ContactsComeOutInPairOrder) {
     uint64_t objects, triangles;
   };
   // Sizes on both sides of the comparison-sort cutoff; small ids (the four fields packed in one
-  // key: few passes), fields that fill exactly 64 bits (still packed) and one bit more (sorted
-  // field by field), ids with their top bits set, and fields that never vary (no pass). Slots
-  // are small in practice; the sort is right for any uint32_t.
+  // key: few passes), fields that fill exactly 64 bits (still packed, also with the slots'
+  // fields always 0) and one bit more (sorted field by field), ids with their top bits set, and
+  // fields that never vary (no pass). Slots are small in practice; the sort is right for any
+  // uint32_t.
   const Case cases[] = {{0, 4, 10},
                         {1, 4, 10},
                         {5, 4, 10},
@@ -44,6 +45,7 @@ TEST(PairSortTest, ContactsComeOutInPairOrder) {
                         {5000, 1, 1},
                         {3000, 1ull << 16, 1ull << 16},
                         {3000, 1ull << 16, 1ull << 17},
+                        {3000, 1, 1ull << 32},
                         {40000, 151, 23104},
                         {4096, 1ull << 32, 1ull << 32},
                         {3000, 70000, 1ull << 32}};
