@@ -217,7 +217,8 @@ void CullingRenderer::RemoveSlot(uint32_t slot) { impl_->pieces->RemoveSlot(slot
 
 Result<ViewResult> CullingRenderer::RenderView(const AxisView& view, QueryMechanism mechanism,
                                                RenderCounters* counters,
-                                               const BetweenBatches& between) {
+                                               const BetweenBatches& between,
+                                               const PauseWanted& wanted) {
   using Clock = std::chrono::steady_clock;
   const auto ms_since = [](Clock::time_point start) {
     return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
@@ -245,7 +246,7 @@ Result<ViewResult> CullingRenderer::RenderView(const AxisView& view, QueryMechan
     if (timing) begin_timer();
     return stop;
   };
-  DrawPacer pacer(gl.batch_costs, pause, batch_ms_);
+  DrawPacer pacer(gl.batch_costs, pause, batch_ms_, wanted);
   // The pieces' uploads (in parts, with pauses), the view's data and draw commands.
   const Clock::time_point prepare_start = Clock::now();
   for (PieceSet set : view.sets) {

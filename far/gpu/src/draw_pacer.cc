@@ -24,12 +24,13 @@ void BatchCosts::Record(PieceSet set, FragmentRole role, uint64_t instances, dou
 uint64_t DrawPacer::Budget(PieceSet set, FragmentRole role) const {
   const double per_instance = costs_.ms_per_instance(set, role);
   if (batch_ms_ <= 0) return 1;
-  if (per_instance < 0) return kFirstBatch;
+  const uint64_t last = last_batch_[static_cast<size_t>(set)][static_cast<size_t>(role)];
+  // Not measured yet (no pause has been wanted): a few at first, then growing.
+  if (per_instance < 0) return last == 0 ? kFirstBatch : kGrowth * last;
   const uint64_t by_cost =
       per_instance == 0
           ? UINT32_MAX
           : static_cast<uint64_t>(std::clamp(batch_ms_ / per_instance, 1.0, double{UINT32_MAX}));
-  const uint64_t last = last_batch_[static_cast<size_t>(set)][static_cast<size_t>(role)];
   return last == 0 ? by_cost : std::min(by_cost, kGrowth * last);
 }
 
@@ -89,6 +90,9 @@ bool DrawPacer::AfterBatch(PieceSet set, FragmentRole role, uint64_t instances,
     unfinished_ms_ += predicted;
     return true;
   }
+  // Nothing to pause for (the step cannot stop, no thread waits for the GL lock): the work
+  // goes on unfinished, as one long batch.
+  if (!PauseWantedNow()) return true;
   glFinish();
   // The batch's GL work (with what was left unfinished before it: counted with it).
   costs_.Record(set, role, instances, MsSince(start));
@@ -96,7 +100,7 @@ bool DrawPacer::AfterBatch(PieceSet set, FragmentRole role, uint64_t instances,
 }
 
 bool DrawPacer::MaybePause() {
-  if (MsSince(since_pause_) < batch_ms_) return false;
+  if (MsSince(since_pause_) < batch_ms_ || !PauseWantedNow()) return false;
   glFinish();
   Pause();
   return true;

@@ -56,10 +56,13 @@ class DrawPacer {
   /// should not meet a long run of dear ones at full size.
   static constexpr uint64_t kGrowth = 4;
 
-  /// Both aliased: must outlive *this. `between` may be empty (no pauses but the measuring).
-  /// `batch_ms` <= 0: one instance per batch, each followed by a pause (for tests).
-  DrawPacer(BatchCosts& costs, const BetweenBatches& between, double batch_ms = kDefaultBatchMs)
-      : costs_(costs), between_(between), batch_ms_(batch_ms) {}
+  /// All aliased: must outlive *this. `between` may be empty (no pauses but the measuring).
+  /// `batch_ms` <= 0: one instance per batch, each followed by a pause (for tests). `wanted`
+  /// may be empty (every batch boundary pauses as above); else a boundary pauses only when it
+  /// returns true, and until the cost is measured each batch draws kGrowth times the last.
+  DrawPacer(BatchCosts& costs, const BetweenBatches& between, double batch_ms = kDefaultBatchMs,
+            const PauseWanted& wanted = {})
+      : costs_(costs), between_(between), batch_ms_(batch_ms), wanted_(wanted) {}
 
   /// Draws the view's commands of `set` (PieceBuffers::PrepareViewDraws) with `role`'s program
   /// bound, in batches. False when the view must stop (stopped() says why).
@@ -86,9 +89,13 @@ class DrawPacer {
   // Finishes the GL work, then the hook. False: stop.
   bool Pause();
 
+  // Whether a pause is wanted now.
+  bool PauseWantedNow() const { return !wanted_ || wanted_(); }
+
   BatchCosts& costs_;
   const BetweenBatches& between_;
   double batch_ms_;
+  const PauseWanted& wanted_;
   StopReason stopped_ = StopReason::kNone;
   int pauses_ = 0;
   Clock::time_point since_pause_ = Clock::now();

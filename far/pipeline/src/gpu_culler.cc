@@ -298,7 +298,12 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
         if (gl.contended()) gl.Yield();
         return control.Check();
       };
-      return entry.renderer->RenderView(view, request.mechanism, &counters, between);
+      // In process with no deadline and no other thread's GL work, nothing needs a pause.
+      const bool can_stop = control.cancel != nullptr ||
+                            control.deadline != StepControl::Clock::time_point::max() ||
+                            control.slow_after != StepControl::Clock::time_point::max();
+      const PauseWanted wanted = [&] { return can_stop || gl.contended(); };
+      return entry.renderer->RenderView(view, request.mechanism, &counters, between, wanted);
     }();
     if (!stays.ok()) return stays.error();
     if (stays->stopped != StopReason::kNone) return StopError(stays->stopped, stage, control);
@@ -306,6 +311,7 @@ Result<void> GpuCuller::CullLevel(RendererEntry& entry, const StepRequest& reque
     stats.primitives_rendered += live;
     stats.draws += counters.draws;
     stats.queries += counters.queries;
+    stats.gl_pauses += counters.pauses;
     stats.bytes_uploaded += counters.bytes_uploaded;
     stats.gl_prepare_ms += counters.prepare_ms;
     stats.gl_passes_ms += counters.passes_ms;

@@ -1,7 +1,8 @@
 // Deadlines on the GL path (label gpu; llvmpipe in CI): a view that would run for seconds stops
 // within a batch of its step's deadline, and so does the CPU setup of a large scene's GPU step
 // (its GPU geometry, hierarchies and pieces); a step stopped half-way leaves the pipeline
-// answering right; views drawn in many small batches give the same PCS as views drawn whole.
+// answering right; views drawn in many small batches give the same PCS as views drawn whole;
+// a view pauses between its batches only when something needs the pause.
 #include <chrono>
 #include <string>
 #include <vector>
@@ -207,6 +208,28 @@ TEST(GlBatchTest, ViewsDrawnInSmallBatchesGiveTheSamePcs) {
       ASSERT_TRUE(whole->RemoveObject(id).ok());
       ASSERT_TRUE(batched->RemoveObject(id).ok());
     }
+  }
+}
+
+// A pause finishes the GL work (glFinish): a quarter of a long view's time on llvmpipe. In
+// process, a step that cannot stop, with no other thread waiting for the GL lock, makes none; a
+// step with a deadline (even an hour away) pauses as before. Both give the same PCS.
+TEST(GlBatchTest, AViewPausesOnlyWhenTheStepCanStopOrAnotherThreadWaits) {
+  auto pipeline = MakePipeline();
+  ASSERT_NE(pipeline, nullptr);
+  Load(*pipeline, RandomSoup(77, 6, 400, 2.0, 0.9));
+  StepRequest request = Far(QueryMechanism::kIdBuffer, 2048);
+  request.output = Output::kPrimitivePcs;
+  for (QueryMechanism mechanism : {QueryMechanism::kIdBuffer, QueryMechanism::kOcclusionQuery}) {
+    request.mechanism = mechanism;
+    const auto free_running = pipeline->Step(request);
+    const Timed under_deadline = StepWithDeadline(*pipeline, request, 1h);
+    ASSERT_TRUE(free_running.ok()) << ToString(free_running.error());
+    ASSERT_TRUE(under_deadline.result.ok()) << ToString(under_deadline.result.error());
+    const std::string what(ToString(mechanism));
+    EXPECT_EQ(free_running->stats.gl_pauses, 0) << what;
+    EXPECT_GT(under_deadline.result->stats.gl_pauses, 0) << what << ": the views should be long";
+    EXPECT_EQ(free_running->pcs_primitives, under_deadline.result->pcs_primitives) << what;
   }
 }
 

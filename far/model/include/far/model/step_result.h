@@ -92,6 +92,9 @@ struct StepStats {
   int64_t primitives_rendered = 0;  ///< object and sub-object primitives drawn, all views
   int64_t draws = 0;
   int64_t queries = 0;
+  /// Pauses between batches of the GL views' draws, a glFinish each (src/draw_pacer.h): made
+  /// only while the step can stop or another thread waits for the GL lock.
+  int64_t gl_pauses = 0;
   int64_t bytes_uploaded = 0;  ///< to the GPU this step
   /// The GPU methods' culling views, all of them: CPU time preparing them (uploads, draw
   /// commands), CPU time in their passes (issuing the GL calls, waiting for and reading back
