@@ -211,7 +211,7 @@ TEST(GlBatchTest, ViewsDrawnInSmallBatchesGiveTheSamePcs) {
   }
 }
 
-// A pause finishes the GL work (glFinish): a quarter of a long view's time on llvmpipe. In
+// A pause finishes the GL work (glFinish): a fifth of a long view's time on llvmpipe. In
 // process, a step that cannot stop, with no other thread waiting for the GL lock, makes none; a
 // step with a deadline (even an hour away) pauses as before. Both give the same PCS.
 TEST(GlBatchTest, AViewPausesOnlyWhenTheStepCanStopOrAnotherThreadWaits) {

@@ -110,7 +110,8 @@ using BetweenBatches = std::function<StopReason()>;
 
 /// Whether a pause between two batches would do anything now: the step can stop (a deadline, a
 /// cancel flag), or another thread waits for the GL lock. A pause finishes the GL work drawn so
-/// far, which costs a long view a quarter of its time on llvmpipe when nothing needs it.
+/// far, which cost paper-leaves' ID-buffer view about a fifth of its time on llvmpipe when
+/// nothing needed it (bench/RESULTS.md, "GL views pause only when something needs it").
 using PauseWanted = std::function<bool()>;
 
 /// One view's answer: per primitive, 1 if it is not fully visible against the other groups
