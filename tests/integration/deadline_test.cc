@@ -115,7 +115,8 @@ double LightClientWorstMs(const std::string& name, const StepRequest& request, d
 }
 
 TEST_F(DeadlineTest, LightSessionsBesideAHeavyGlSessionWaitForItLittle) {
-  ASSERT_NE(StartDaemon({"--step-deadline-ms", "6000"}), nullptr);
+  // (--status-after-ms 0: the test waits for the heavy step's primitive_cull status)
+  ASSERT_NE(StartDaemon({"--step-deadline-ms", "6000", "--status-after-ms", "0"}), nullptr);
   auto heavy = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "heavy");
   ASSERT_TRUE(heavy.ok()) << far::ToString(heavy.error());
   UploadFillHeavyScene(**heavy);

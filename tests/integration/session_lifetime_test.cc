@@ -122,7 +122,9 @@ INSTANTIATE_TEST_SUITE_P(Modes, KilledClientTest,
                          });
 
 TEST_F(SessionLifetimeTest, AClientThatLeavesMidStepHasItsStepCancelledAndItsSessionFreed) {
-  DaemonProcess* daemon = StartDaemon();
+  // Statuses at once: the test waits for the exact stage's (status_after_ms would skip a stage
+  // that starts within 5 ms of the request).
+  DaemonProcess* daemon = StartDaemon({"--status-after-ms", "0"});
   ASSERT_NE(daemon, nullptr);
   auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "impatient");
   ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
@@ -158,7 +160,7 @@ TEST_F(SessionLifetimeTest, ALeavingClientsSegmentMemoryGoesAtOnceWhileItsStepRu
   // frees the segment's memory the moment the connection closes, and unmaps the emptied segment
   // when the step has ended. The test keeps a descriptor of the segment, as a hoarder would: it
   // must hold nothing either.
-  DaemonProcess* daemon = StartDaemon();
+  DaemonProcess* daemon = StartDaemon({"--status-after-ms", "0"});  // it waits for a status
   ASSERT_NE(daemon, nullptr);
   auto raw = RawSession::Open(CurrentSocketPath(), TestLcmUrl(), "leaving-mid-view");
   ASSERT_TRUE(raw.ok()) << far::ToString(raw.error());
