@@ -40,7 +40,9 @@ struct BatchScene {
   BatchScene(uint64_t seed, int num_objects, int triangles, double slack, bool distance) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
-    const auto point = [&](double scale) { return Vector3d(u(rng), u(rng), u(rng)) * scale; };
+    const auto point = [&](double scale) -> Vector3d {
+      return Vector3d(u(rng), u(rng), u(rng)) * scale;
+    };
     meshes.resize(num_objects);
     nodes.resize(num_objects);
     orders.resize(num_objects);
