@@ -15,18 +15,19 @@
 #include "far/gpu/compute_batcher.h"
 #include "far/gpu/compute_collider.h"
 #include "far/model/contact_pair.h"
+#include "far/pairs/triangle_bvh.h"
 
 namespace far::internal {
 
 /// The gpu method's GPU stage on the pipeline's side: each object's hierarchy topology, built
 /// once on the CPU from its vertices when it first takes part (a deformable object's is then
-/// only refit, on the GPU), and what changed since the last step, handed to far::
-/// ComputeCollider. Its first step holds the collider to the exact predicates on this driver
-/// (SelfCheckComputeCollider, once per renderer and process): a driver that fails it gets
-/// kUnavailable for every gpu step (auto then runs bvh). With a far::ComputeBatcher the
-/// collider lives on the batcher's thread and context, and each step goes to the GPU in a batch
-/// with other pipelines' steps; without one, on the pipeline's own context. Owned by the GL
-/// thread (far::GlContext's contract).
+/// refit, on the GPU, and rebuilt when refitting has made it loose), and what changed since the
+/// last step, handed to far::ComputeCollider. Its first step holds the collider to the exact
+/// predicates on this driver (SelfCheckComputeCollider, once per renderer and process): a driver
+/// that fails it gets kUnavailable for every gpu step (auto then runs bvh). With a
+/// far::ComputeBatcher the collider lives on the batcher's thread and context, and each step goes
+/// to the GPU in a batch with other pipelines' steps; without one, on the pipeline's own context.
+/// Owned by the GL thread (far::GlContext's contract).
 class ComputeStage {
  public:
   /// `batcher`: null, or where the collider lives (must outlive this stage).
@@ -45,6 +46,9 @@ class ComputeStage {
                                std::optional<double> distance, const StepControl& control,
                                StopReason* stopped);
 
+  /// How many deformable objects' topologies the last Filter rebuilt (they had grown loose).
+  int topologies_rebuilt() const { return topologies_rebuilt_; }
+
   /// Forgets a removed object (its slot may hold another one next).
   void RemoveSlot(ObjectSlot slot);
 
@@ -57,9 +61,17 @@ class ComputeStage {
     uint64_t geometry_stamp = 0;
     Eigen::Matrix<double, 3, 4> X_WM = Eigen::Matrix<double, 3, 4>::Zero();
     uint64_t world_key = 0;
+    // A deformable object's hierarchy on the CPU, refit now and then to tell when its topology
+    // has grown loose (RebuildLooseTopologies); empty for the others.
+    bool deformable = false;
+    TriangleBvh shape;
+    uint64_t shape_stamp = 0;  // the geometry_stamp last counted
+    uint32_t deformations = 0;
   };
   StopReason BuildTopologies(std::span<const CachedObject* const> objects,
                              const StepControl& control);
+  StopReason RebuildLooseTopologies(std::span<const CachedObject* const> objects,
+                                    const StepControl& control);
 
   // Makes the collider (here or on the batcher's thread) and checks the driver, once.
   Result<void> MakeCollider(const StepControl& control);
@@ -73,6 +85,7 @@ class ComputeStage {
   std::optional<ComputeBatcher::ColliderId> batched_id_;
   Result<void> trusted_;  // the driver's self-check (compute_self_check.h)
   uint64_t next_key_ = 1;
+  int topologies_rebuilt_ = 0;
 };
 
 }  // namespace far::internal

@@ -380,10 +380,15 @@ Result<void> Stages::FilterOnGpu() {
   state_.stats.bytes_uploaded += state_.computed.bytes_uploaded;
   state_.stats.pairs_considered = state_.computed.box_pairs;
   const ComputeAnswer& answer = state_.computed;
-  state_.stats.gpu_filter = {answer.box_pairs,       answer.float_decided,
-                             answer.double_decided,  static_cast<int64_t>(answer.undecided.size()),
-                             answer.distance_culled, answer.runs,
-                             answer.gpu_refit_ms,    answer.gpu_traverse_ms};
+  state_.stats.gpu_filter = {answer.box_pairs,
+                             answer.float_decided,
+                             answer.double_decided,
+                             static_cast<int64_t>(answer.undecided.size()),
+                             answer.distance_culled,
+                             answer.runs,
+                             world_.compute->topologies_rebuilt(),
+                             answer.gpu_refit_ms,
+                             answer.gpu_traverse_ms};
   // As the raster methods report their views: CPU issuing, CPU waiting and reading, GPU time.
   state_.stats.gl_prepare_ms += answer.cpu_submit_ms;
   state_.stats.gl_passes_ms += answer.cpu_wait_ms;

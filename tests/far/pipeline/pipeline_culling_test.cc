@@ -3,6 +3,7 @@
 // where FAR does not, and the answer does not depend on where the scene is.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <set>
 #include <sstream>
@@ -437,6 +438,75 @@ TEST_F(PipelineCullingTest, OnlyWhatChangedIsRecomputed) {
   EXPECT_EQ(pipeline_->SetPose(objects[0].id, moved).error().code, ErrorCode::kInvalidArgument);
   EXPECT_EQ(pipeline_->SetVertices(objects[1].id, vertices).error().code,
             ErrorCode::kInvalidArgument);
+}
+
+// A cloth folded like an accordion in 8 layers, then unfolded flat: the gpu method's topology,
+// built for the folded shape, groups triangles of all 8 layers, which lie across the whole cloth
+// once flat, so its refit boxes grow loose. It is rebuilt once within 64 changes of the vertices
+// (the check's period), and every step's contacts are exact's, before and after. (What the
+// rebuild saves is the GPU stage's time, printed, not asserted: timings are for the studies.)
+TEST_F(PipelineCullingTest, GpuRebuildsADeformableTopologyThatHasGrownLoose) {
+  constexpr int kSide = 40;
+  std::vector<Eigen::Vector3d> flat;
+  for (int i = 0; i < kSide; ++i) {
+    for (int j = 0; j < kSide; ++j) flat.emplace_back(i / (kSide - 1.0), j / (kSide - 1.0), 0.0);
+  }
+  std::vector<Eigen::Vector3d> folded = flat;
+  for (Eigen::Vector3d& p : folded) {
+    const double layer = std::min(std::floor(8 * p.x()), 7.0), along = 8 * p.x() - layer;
+    p.x() = (std::fmod(layer, 2.0) == 0 ? along : 1 - along) / 8;
+    p.z() = 1e-3 * layer;
+  }
+  std::vector<SceneObject> objects(2);
+  objects[0].id = 1;
+  objects[0].motion = Motion::kDeformable;
+  objects[0].mesh.p_MV = folded;
+  for (int i = 0; i + 1 < kSide; ++i) {
+    for (int j = 0; j + 1 < kSide; ++j) {
+      const uint32_t v = static_cast<uint32_t>(i * kSide + j);
+      objects[0].mesh.triangles.push_back({v, v + kSide, v + 1});
+      objects[0].mesh.triangles.push_back({v + 1, v + kSide, v + kSide + 1});
+    }
+  }
+  objects[1].id = 2;
+  objects[1].mesh = testing::SphereMesh(Eigen::Vector3d(0.5, 0.5, 0.0), 0.2, 12, 24);
+  Load(objects);
+  StepRequest gpu;
+  gpu.method = Method::kGpu;
+  StepRequest exact;
+  exact.method = Method::kExact;
+  (void)Run(gpu);  // builds the topology for the folded shape
+
+  int rebuilt_at = -1;
+  double gpu_stage_ms[2] = {0, 0};  // summed: before the rebuild, after it
+  int steps[2] = {0, 0};
+  for (int change = 1; change <= 70; ++change) {
+    std::vector<Eigen::Vector3d> vertices = flat;
+    for (auto& p : vertices) p.z() = 1e-6 * change;  // new vertices every step
+    ASSERT_TRUE(pipeline_->SetVertices(1, vertices).ok());
+    const StepResult result = Run(gpu);
+    const GpuFilterCounters& filter = result.stats.gpu_filter;
+    if (filter.topologies_rebuilt > 0) {
+      EXPECT_EQ(rebuilt_at, -1) << "the flat cloth's topology is tight: rebuilt once";
+      EXPECT_EQ(filter.topologies_rebuilt, 1);
+      rebuilt_at = change;
+    }
+    const int after = rebuilt_at == -1 ? 0 : 1;  // the rebuilding step traverses the new one
+    for (const StageStats& stage : result.stats.stages) {
+      if (stage.stage == Stage::kPrimitiveCull) gpu_stage_ms[after] += stage.ms;
+    }
+    ++steps[after];
+    if (change == 1 || change == rebuilt_at || change == 70) {
+      const StepResult truth = Run(exact);
+      ASSERT_GT(truth.contacts.size(), 0u);
+      EXPECT_EQ(result.contacts, truth.contacts) << "change " << change;
+    }
+  }
+  ASSERT_NE(rebuilt_at, -1) << "a loose topology was never rebuilt";
+  EXPECT_LE(rebuilt_at, 64);
+  std::printf("rebuilt at change %d; the GPU stage took %.2f ms a step before, %.2f after\n",
+              rebuilt_at, gpu_stage_ms[0] / std::max(steps[0], 1),
+              gpu_stage_ms[1] / std::max(steps[1], 1));
 }
 
 TEST_F(PipelineCullingTest, StagesPastTheDeepestOutputDoNotRun) {
