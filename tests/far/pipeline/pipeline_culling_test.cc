@@ -442,7 +442,7 @@ TEST_F(PipelineCullingTest, OnlyWhatChangedIsRecomputed) {
 
 // A cloth folded like an accordion in 8 layers, then unfolded flat: the gpu method's topology,
 // built for the folded shape, groups triangles of all 8 layers, which lie across the whole cloth
-// once flat, so its refit boxes grow loose. It is rebuilt once within 64 changes of the vertices
+// once flat, so its refit boxes grow loose. It is rebuilt once within 128 changes of the vertices
 // (the check's period), and every step's contacts are exact's, before and after. (What the
 // rebuild saves is the GPU stage's time, printed, not asserted: timings are for the studies.)
 TEST_F(PipelineCullingTest, GpuRebuildsADeformableTopologyThatHasGrownLoose) {
@@ -480,7 +480,7 @@ TEST_F(PipelineCullingTest, GpuRebuildsADeformableTopologyThatHasGrownLoose) {
   int rebuilt_at = -1;
   double gpu_stage_ms[2] = {0, 0};  // summed: before the rebuild, after it
   int steps[2] = {0, 0};
-  for (int change = 1; change <= 70; ++change) {
+  for (int change = 1; change <= 134; ++change) {
     std::vector<Eigen::Vector3d> vertices = flat;
     for (auto& p : vertices) p.z() = 1e-6 * change;  // new vertices every step
     ASSERT_TRUE(pipeline_->SetVertices(1, vertices).ok());
@@ -496,14 +496,14 @@ TEST_F(PipelineCullingTest, GpuRebuildsADeformableTopologyThatHasGrownLoose) {
       if (stage.stage == Stage::kPrimitiveCull) gpu_stage_ms[after] += stage.ms;
     }
     ++steps[after];
-    if (change == 1 || change == rebuilt_at || change == 70) {
+    if (change == 1 || change == rebuilt_at || change == 134) {
       const StepResult truth = Run(exact);
       ASSERT_GT(truth.contacts.size(), 0u);
       EXPECT_EQ(result.contacts, truth.contacts) << "change " << change;
     }
   }
   ASSERT_NE(rebuilt_at, -1) << "a loose topology was never rebuilt";
-  EXPECT_LE(rebuilt_at, 64);
+  EXPECT_LE(rebuilt_at, 128);
   std::printf("rebuilt at change %d; the GPU stage took %.2f ms a step before, %.2f after\n",
               rebuilt_at, gpu_stage_ms[0] / std::max(steps[0], 1),
               gpu_stage_ms[1] / std::max(steps[1], 1));
