@@ -104,9 +104,18 @@ void SceneCache::RefreshWorld() {
     CachedObject& object = *slot;
     object.p_WV.resize(object.mesh.p_MV.size());
     object.box_W.setEmpty();
-    for (size_t v = 0; v < object.p_WV.size(); ++v) {
-      object.p_WV[v] = FlushTinyCoordinates(object.X_WM * object.mesh.p_MV[v]);
-      object.box_W.extend(object.p_WV[v]);
+    // Deformable objects usually keep the identity pose, which maps each vertex to itself
+    // exactly (1 x + 0 y + 0 z + 0 is x, the flush makes -0 +0 either way): no products.
+    if (object.X_WM.matrix() == Eigen::Matrix4d::Identity()) {
+      for (size_t v = 0; v < object.p_WV.size(); ++v) {
+        object.p_WV[v] = FlushTinyCoordinates(object.mesh.p_MV[v]);
+        object.box_W.extend(object.p_WV[v]);
+      }
+    } else {
+      for (size_t v = 0; v < object.p_WV.size(); ++v) {
+        object.p_WV[v] = FlushTinyCoordinates(object.X_WM * object.mesh.p_MV[v]);
+        object.box_W.extend(object.p_WV[v]);
+      }
     }
     object.world_dirty = false;
     counters_.world_updates++;

@@ -89,5 +89,34 @@ TEST(WorldCoordinatesTest, TinyWorldCoordinatesAreZeroForEveryMethod) {
   }
 }
 
+// The same at the identity pose, which the pipeline maps without products: a deformable
+// triangle whose corner lies at x = -2^-400 in its own frame touches the plane x = 0 (the corner
+// is flushed to 0), and one 2^-200 away does not.
+size_t ContactsAtIdentity(Method method, double corner_x) {
+  auto pipeline = CpuPipeline();
+  if (pipeline == nullptr) return SIZE_MAX;
+  EXPECT_TRUE(pipeline
+                  ->AddObject(1, Mesh{{{0, 0, -1}, {0, 2, -1}, {0, 1, 1}}, {{0, 1, 2}}},
+                              Motion::kStatic, {})
+                  .ok());
+  EXPECT_TRUE(pipeline
+                  ->AddObject(2, Mesh{{{corner_x, 1, 0}, {-1, 1, 0}, {-1, 1, 1}}, {{0, 1, 2}}},
+                              Motion::kDeformable, {})
+                  .ok());
+  StepRequest request;
+  request.method = method;
+  auto result = pipeline->Step(request);
+  EXPECT_TRUE(result.ok()) << ToString(result.error());
+  return result.ok() ? result->contacts.size() : SIZE_MAX;
+}
+
+TEST(WorldCoordinatesTest, TinyCoordinatesAreZeroAtTheIdentityPoseToo) {
+  for (Method method : {Method::kExact, Method::kBvh, Method::kAabb, Method::kAuto}) {
+    SCOPED_TRACE(static_cast<int>(method));
+    EXPECT_EQ(ContactsAtIdentity(method, -0x1p-400), 1u);
+    EXPECT_EQ(ContactsAtIdentity(method, -0x1p-200), 0u);
+  }
+}
+
 }  // namespace
 }  // namespace far
