@@ -55,30 +55,33 @@ TEST(WorldCoordinatesTest, FlushTinyCoordinatesKeepsEverythingElse) {
   EXPECT_EQ(FlushTinyCoordinates({1, -3e12, 1e-70}), Eigen::Vector3d(1, -3e12, 1e-70));
 }
 
-// A static triangle in the plane x = 0, and a rigid one whose corner (0, 1, 0) lies on it in its
-// own frame. Turned about z by 2^-400, that corner's world x is -2^-400: below
-// kTinyWorldCoordinate, so 0, and the triangles touch; moved 2^-200 away along -x (not tiny),
-// they are apart. Every CPU method gives the same answer, the hierarchy's included (its descent
-// runs on the unflushed meshes, and its margin covers the flush).
-size_t Contacts(Method method, double shift_x) {
+// The contacts of a static triangle in the plane x = 0 with `other` (posed by X_WO).
+size_t ContactsWithThePlane(Method method, const Mesh& other, Motion motion, const Pose& X_WO) {
   auto pipeline = CpuPipeline();
   if (pipeline == nullptr) return SIZE_MAX;
   EXPECT_TRUE(pipeline
                   ->AddObject(1, Mesh{{{0, 0, -1}, {0, 2, -1}, {0, 1, 1}}, {{0, 1, 2}}},
                               Motion::kStatic, {})
                   .ok());
-  Pose turned;
-  turned.rotation = Eigen::Quaterniond(1, 0, 0, 0x1p-401);  // unit: 1 + 2^-802 rounds to 1
-  turned.translation = Eigen::Vector3d(shift_x, 0, 0);
-  EXPECT_TRUE(pipeline
-                  ->AddObject(2, Mesh{{{0, 1, 0}, {-1, 1, 0}, {-1, 1, 1}}, {{0, 1, 2}}},
-                              Motion::kRigid, turned)
-                  .ok());
+  EXPECT_TRUE(pipeline->AddObject(2, other, motion, X_WO).ok());
   StepRequest request;
   request.method = method;
   auto result = pipeline->Step(request);
   EXPECT_TRUE(result.ok()) << ToString(result.error());
   return result.ok() ? result->contacts.size() : SIZE_MAX;
+}
+
+// A static triangle in the plane x = 0, and a rigid one whose corner (0, 1, 0) lies on it in its
+// own frame. Turned about z by 2^-400, that corner's world x is -2^-400: below
+// kTinyWorldCoordinate, so 0, and the triangles touch; moved 2^-200 away along -x (not tiny),
+// they are apart. Every CPU method gives the same answer, the hierarchy's included (its descent
+// runs on the unflushed meshes, and its margin covers the flush).
+size_t Contacts(Method method, double shift_x) {
+  Pose turned;
+  turned.rotation = Eigen::Quaterniond(1, 0, 0, 0x1p-401);  // unit: 1 + 2^-802 rounds to 1
+  turned.translation = Eigen::Vector3d(shift_x, 0, 0);
+  return ContactsWithThePlane(method, Mesh{{{0, 1, 0}, {-1, 1, 0}, {-1, 1, 1}}, {{0, 1, 2}}},
+                              Motion::kRigid, turned);
 }
 
 TEST(WorldCoordinatesTest, TinyWorldCoordinatesAreZeroForEveryMethod) {
@@ -93,21 +96,8 @@ TEST(WorldCoordinatesTest, TinyWorldCoordinatesAreZeroForEveryMethod) {
 // triangle whose corner lies at x = -2^-400 in its own frame touches the plane x = 0 (the corner
 // is flushed to 0), and one 2^-200 away does not.
 size_t ContactsAtIdentity(Method method, double corner_x) {
-  auto pipeline = CpuPipeline();
-  if (pipeline == nullptr) return SIZE_MAX;
-  EXPECT_TRUE(pipeline
-                  ->AddObject(1, Mesh{{{0, 0, -1}, {0, 2, -1}, {0, 1, 1}}, {{0, 1, 2}}},
-                              Motion::kStatic, {})
-                  .ok());
-  EXPECT_TRUE(pipeline
-                  ->AddObject(2, Mesh{{{corner_x, 1, 0}, {-1, 1, 0}, {-1, 1, 1}}, {{0, 1, 2}}},
-                              Motion::kDeformable, {})
-                  .ok());
-  StepRequest request;
-  request.method = method;
-  auto result = pipeline->Step(request);
-  EXPECT_TRUE(result.ok()) << ToString(result.error());
-  return result.ok() ? result->contacts.size() : SIZE_MAX;
+  return ContactsWithThePlane(method, Mesh{{{corner_x, 1, 0}, {-1, 1, 0}, {-1, 1, 1}}, {{0, 1, 2}}},
+                              Motion::kDeformable, {});
 }
 
 TEST(WorldCoordinatesTest, TinyCoordinatesAreZeroAtTheIdentityPoseToo) {
