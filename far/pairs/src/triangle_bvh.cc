@@ -270,7 +270,9 @@ bool TriangleBvh::Refit(std::span<const Eigen::Vector3d> p_MV,
     Build(p_MV, triangles, stopper);
     return true;
   }
-  slabs_.clear();
+  // Their memory too (40 bytes a triangle): a deformable object refits from now on, and the
+  // gpu method keeps a refit copy of each deformable object's hierarchy only for its boxes.
+  std::vector<Slab>().swap(slabs_);
   return false;
 }
 
