@@ -66,11 +66,7 @@ StopReason ComputeStage::BuildTopologies(std::span<const CachedObject* const> ob
       if (!bvh.Build(object.mesh.p_MV, object.mesh.triangles, &stopper)) return;
       SlotState state;
       TakeTopology(bvh, state.nodes, state.order);
-      if (object.motion == Motion::kDeformable) {
-        state.deformable = true;
-        state.shape = std::move(bvh);
-        state.shape_stamp = object.geometry_stamp;
-      }
+      if (object.motion == Motion::kDeformable) state.shape = std::move(bvh);
       built[i] = std::move(state);
     }
   });
@@ -91,10 +87,11 @@ StopReason ComputeStage::RebuildLooseTopologies(std::span<const CachedObject* co
                                                 const StepControl& control) {
   std::vector<size_t> due;
   for (size_t s = 0; s < objects.size(); ++s) {
-    if (objects[s] == nullptr || !slots_[s] || !slots_[s]->deformable) continue;
+    if (objects[s] == nullptr || objects[s]->motion != Motion::kDeformable || !slots_[s]) continue;
+    // geometry_stamp is the last step's until Filter hands the new vertices over (a step
+    // stopped before that counts its change twice: its check comes a step early).
     SlotState& state = *slots_[s];
-    if (state.shape_stamp == objects[s]->geometry_stamp) continue;
-    state.shape_stamp = objects[s]->geometry_stamp;
+    if (state.geometry_stamp == objects[s]->geometry_stamp) continue;
     if ((++state.deformations + s) % kLooseCheckEvery == 0) due.push_back(s);
   }
   if (due.empty()) return StopReason::kNone;

@@ -62,10 +62,9 @@ class ComputeStage {
     Eigen::Matrix<double, 3, 4> X_WM = Eigen::Matrix<double, 3, 4>::Zero();
     uint64_t world_key = 0;
     // A deformable object's hierarchy on the CPU, refit now and then to tell when its topology
-    // has grown loose (RebuildLooseTopologies); empty for the others.
-    bool deformable = false;
+    // has grown loose (RebuildLooseTopologies); empty for the others. `deformations` counts
+    // the steps whose geometry_stamp was new.
     TriangleBvh shape;
-    uint64_t shape_stamp = 0;  // the geometry_stamp last counted
     uint32_t deformations = 0;
   };
   StopReason BuildTopologies(std::span<const CachedObject* const> objects,

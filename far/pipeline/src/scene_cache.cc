@@ -104,18 +104,19 @@ void SceneCache::RefreshWorld() {
     CachedObject& object = *slot;
     object.p_WV.resize(object.mesh.p_MV.size());
     object.box_W.setEmpty();
+    const auto place = [&object](auto to_world) {
+      for (size_t v = 0; v < object.p_WV.size(); ++v) {
+        object.p_WV[v] = FlushTinyCoordinates(to_world(object.mesh.p_MV[v]));
+        object.box_W.extend(object.p_WV[v]);
+      }
+    };
     // Deformable objects usually keep the identity pose, which maps each vertex to itself
     // exactly (1 x + 0 y + 0 z + 0 is x, the flush makes -0 +0 either way): no products.
     if (object.X_WM.matrix() == Eigen::Matrix4d::Identity()) {
-      for (size_t v = 0; v < object.p_WV.size(); ++v) {
-        object.p_WV[v] = FlushTinyCoordinates(object.mesh.p_MV[v]);
-        object.box_W.extend(object.p_WV[v]);
-      }
+      place([](const Eigen::Vector3d& p_MV) { return p_MV; });
     } else {
-      for (size_t v = 0; v < object.p_WV.size(); ++v) {
-        object.p_WV[v] = FlushTinyCoordinates(object.X_WM * object.mesh.p_MV[v]);
-        object.box_W.extend(object.p_WV[v]);
-      }
+      place(
+          [&object](const Eigen::Vector3d& p_MV) -> Eigen::Vector3d { return object.X_WM * p_MV; });
     }
     object.world_dirty = false;
     counters_.world_updates++;
