@@ -34,6 +34,8 @@ static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double), "world vertices upl
 // or crossing triangle pairs than the most is refused (the bvh method answers it).
 constexpr size_t kFirstCapacity = size_t{1} << 16;
 constexpr size_t kMostCapacity = size_t{1} << 25;
+// Object pairs at first (8 bytes each; grown as the output buffers are, to kMostCapacity).
+constexpr size_t kFirstPairCapacity = size_t{1} << 12;
 
 using Clock = std::chrono::steady_clock;
 
@@ -63,6 +65,12 @@ GLuint Groups(size_t invocations) {
   const size_t groups =
       (invocations + internal::kComputeGroupSize - 1) / internal::kComputeGroupSize;
   return static_cast<GLuint>(std::clamp<size_t>(groups, 1, 65535));
+}
+
+// Whether an object has a pair box, not empty and without NaN: the others pair with nothing.
+bool PairsAtAll(const ComputeObject& object) {
+  const Eigen::AlignedBox3d& box = object.pair_box;
+  return !object.p_WV.empty() && !box.isEmpty() && !box.min().hasNaN() && !box.max().hasNaN();
 }
 
 // The least float >= x (x >= 0 and finite).
@@ -107,17 +115,18 @@ Result<GLuint> CompileCompute(const std::string& source, const char* what) {
 }  // namespace
 
 struct ComputeCollider::Impl {
-  GLuint boxes_program = 0, refit_program = 0;
+  GLuint boxes_program = 0, refit_program = 0, pairs_program = 0, work_program = 0;
   // The traversal: [0] for contact queries, [1] for distance queries (TraverseSource).
   struct TraverseKernel {
     GLuint program = 0;
-    GLint count = -1, pairs = -1, capacity = -1, slack = -1, max_distance = -1;
+    GLint capacity = -1, slack = -1, max_distance = -1;
   };
   std::array<TraverseKernel, 2> traverse;
   std::array<Buffer, internal::kNumBindings> buffers;
   std::vector<SlotLayout> layout;
   uint32_t total_vertices = 0, total_triangles = 0, total_nodes = 0;
   size_t capacity = kFirstCapacity;
+  size_t pair_capacity = kFirstPairCapacity;
   std::vector<Eigen::Vector3d> staging;  // the vertices of one upload
   std::vector<size_t> moved;             // slots whose vertices this step uploaded
   // The refit's work for one set of moved slots, on the GPU already (kRangesBinding,
@@ -132,12 +141,15 @@ struct ComputeCollider::Impl {
   RefitPlan refit_plan;
   // Uniform locations, looked up once.
   GLint boxes_count = -1, boxes_ranges = -1, refit_count = -1, refit_first = -1;
+  GLint pairs_slots = -1, pairs_capacity = -1, work_capacity = -1;
   // GL_TIME_ELAPSED queries: uploads, boxes and refit; the traversal.
   GLuint refit_query = 0, traverse_query = 0;
 
   Buffer& buffer(internal::ComputeBinding binding) { return buffers[binding]; }
   Result<int64_t> EnsureLayout(std::span<const ComputeObject> objects);
   int64_t UploadVertices(std::span<const ComputeObject> objects);
+  // Each slot's pair box (lo, hi; +inf, -inf when it pairs with nothing); returns the bytes.
+  int64_t UploadPairBoxes(std::span<const ComputeObject> objects);
   // The boxes of the moved objects' triangles, then their hierarchies level by level, deepest
   // first (the other objects' boxes stay as computed before); returns the bytes uploaded.
   int64_t RefitMoved();
@@ -147,30 +159,28 @@ struct ComputeCollider::Impl {
   void ReadPcs(ComputeAnswer& answer);
   // The crossing and undecided pairs the traversal wrote (counts from its counters).
   void ReadPairs(uint32_t num_crossing, uint32_t num_undecided, ComputeAnswer& answer);
+  // The object pairs the pairs kernel found, sorted.
+  void ReadObjectPairs(uint32_t count, ComputeAnswer& answer);
 
-  // A step between Submit and Finish: its query, and the work Prepare made of it.
+  // A step between Submit and Finish: its query.
   struct Pending {
     ComputeQuery query;
-    // Per object pair: (driver's slot, partner's slot, driver is object_a, 0); work_start[p]
-    // is the first invocation of pair p, items the invocations of all.
-    std::vector<std::array<uint32_t, 4>> work;
-    std::vector<uint32_t> work_start;
-    uint64_t items = 0;
+    bool gl_work = false;  // at least two slots have a pair box: the kernels run
     Clock::time_point submit_start, traverse_start;  // when the timer queries began
     int64_t uploaded = 0;
     double cpu_submit_ms = 0;
   };
   std::optional<Pending> pending;
 
-  // The CPU's part of a step: which triangles descend which hierarchy (no GL call).
-  Result<void> Prepare(const ComputeQuery& query);
-  // Uploads, boxes, refit and the traversal's dispatch.
+  // Takes the query and tells whether it has GL work (no GL call).
+  void Prepare(const ComputeQuery& query);
+  // Uploads, boxes, refit, and the object pairs and traversal's dispatches.
   Result<void> SubmitGl();
-  // Binds this collider's buffers, clears the counters and bits, and dispatches the traversal
-  // with the output buffers at `capacity`.
-  void DispatchTraversal();
-  // Waits for the traversal (again, with larger output buffers, when they overflowed) and
-  // reads the answer back.
+  // Binds this collider's buffers, clears the counters and bits, and dispatches the object
+  // pairs, their work and the traversal, with the buffers at `pair_capacity` and `capacity`.
+  void DispatchPairsAndTraversal();
+  // Waits for the kernels (again, with larger buffers, when some overflowed) and reads the
+  // answer back.
   Result<ComputeAnswer> Collect();
 };
 
@@ -225,6 +235,15 @@ Result<std::vector<std::vector<uint32_t>>> AppendNodes(const ComputeObject& obje
     levels[depth[k]].push_back(node_base + static_cast<uint32_t>(k));
   }
   return levels;
+}
+
+// Per slot, for the object pairs' work: first triangle, triangles, root node, nodes.
+std::vector<std::array<uint32_t, 4>> SlotTable(std::span<const SlotLayout> layout) {
+  std::vector<std::array<uint32_t, 4>> slots;
+  slots.reserve(layout.size());
+  for (const SlotLayout& at : layout)
+    slots.push_back({at.triangle_base, at.triangles, at.node_base, at.nodes});
+  return slots;
 }
 
 }  // namespace
@@ -285,7 +304,6 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
     }
     for (uint32_t t : object.order) order.push_back(at.triangle_base + t);
   }
-  using internal::ComputeBinding;
   buffer(internal::kPositionsBinding).Reserve(3 * vertices * sizeof(double));
   buffer(internal::kTrianglesBinding).Reserve(triangle_vertices.size() * sizeof(uint32_t));
   buffer(internal::kTriBoxesBinding).Reserve(2 * triangles * 4 * sizeof(float));
@@ -293,7 +311,7 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
   buffer(internal::kOrderBinding).Reserve(order.size() * sizeof(uint32_t));
   buffer(internal::kNodeBoxesBinding).Reserve(2 * nodes * 4 * sizeof(float));
   buffer(internal::kPcsBitsBinding).Reserve((triangles + 31) / 32 * sizeof(uint32_t));
-  const auto upload = [&](ComputeBinding binding, const void* data, size_t bytes) {
+  const auto upload = [&](internal::ComputeBinding binding, const void* data, size_t bytes) {
     if (bytes > 0)
       glNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(bytes), data);
     return static_cast<int64_t>(bytes);
@@ -302,6 +320,9 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
                             triangle_vertices.size() * sizeof(uint32_t));
   uploaded += upload(internal::kNodesBinding, node_data.data(), node_data.size() * 16);
   uploaded += upload(internal::kOrderBinding, order.data(), order.size() * sizeof(uint32_t));
+  const std::vector<std::array<uint32_t, 4>> slots = SlotTable(next);
+  buffer(internal::kSlotsBinding).Reserve(slots.size() * 16);
+  uploaded += upload(internal::kSlotsBinding, slots.data(), slots.size() * 16);
   layout = std::move(next);
   refit_plan = {};
   total_vertices = static_cast<uint32_t>(vertices);
@@ -340,6 +361,24 @@ int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> obj
   }
   flush();
   return uploaded;
+}
+
+int64_t ComputeCollider::Impl::UploadPairBoxes(std::span<const ComputeObject> objects) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<std::array<double, 6>> boxes(objects.size(), {kInf, kInf, kInf, -kInf, -kInf, -kInf});
+  for (size_t s = 0; s < objects.size(); ++s) {
+    const Eigen::AlignedBox3d& box = objects[s].pair_box;
+    if (!PairsAtAll(objects[s])) continue;
+    boxes[s] = {box.min().x(), box.min().y(), box.min().z(),
+                box.max().x(), box.max().y(), box.max().z()};
+  }
+  const size_t bytes = boxes.size() * sizeof(boxes[0]);
+  buffer(internal::kPairBoxesBinding).Reserve(bytes);
+  if (bytes > 0) {
+    glNamedBufferSubData(buffer(internal::kPairBoxesBinding).id, 0, static_cast<GLsizeiptr>(bytes),
+                         boxes.data());
+  }
+  return static_cast<int64_t>(bytes);
 }
 
 int64_t ComputeCollider::Impl::PlanRefit() {
@@ -447,8 +486,23 @@ void ComputeCollider::Impl::ReadPairs(uint32_t num_crossing, uint32_t num_undeci
   }
 }
 
-void ComputeCollider::Impl::DispatchTraversal() {
+void ComputeCollider::Impl::ReadObjectPairs(uint32_t count, ComputeAnswer& answer) {
+  std::vector<std::array<uint32_t, 2>> pairs(count);
+  if (count > 0) {
+    glGetNamedBufferSubData(buffer(internal::kObjectPairsBinding).id, 0,
+                            static_cast<GLsizeiptr>(count) * 8, pairs.data());
+  }
+  answer.object_pairs.reserve(count);
+  for (const auto& [a, b] : pairs) answer.object_pairs.push_back({SlotAt(a), SlotAt(b)});
+  std::sort(answer.object_pairs.begin(), answer.object_pairs.end());
+}
+
+void ComputeCollider::Impl::DispatchPairsAndTraversal() {
   const ComputeQuery& query = pending->query;
+  buffer(internal::kObjectPairsBinding).Reserve(pair_capacity * 8);
+  buffer(internal::kWorkBinding).Reserve(pair_capacity * 32);
+  buffer(internal::kWorkStartBinding).Reserve((pair_capacity + 1) * sizeof(uint32_t));
+  buffer(internal::kDispatchBinding).Reserve(internal::kNumDispatchWords * sizeof(uint32_t));
   buffer(internal::kCrossingBinding).Reserve(capacity * 16);
   buffer(internal::kUndecidedBinding).Reserve(capacity * 16);
   const uint32_t zero = 0;
@@ -460,16 +514,28 @@ void ComputeCollider::Impl::DispatchTraversal() {
   for (size_t binding = 0; binding < buffers.size(); ++binding) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding), buffers[binding].id);
   }
+  pending->traverse_start = Clock::now();
+  glBeginQuery(GL_TIME_ELAPSED, traverse_query);
+  // The object pairs: (slot i, slot j) with j from x and i from y.
+  const auto slots = static_cast<GLuint>(layout.size());
+  glUseProgram(pairs_program);
+  glProgramUniform1ui(pairs_program, pairs_slots, slots);
+  glProgramUniform1ui(pairs_program, pairs_capacity, static_cast<GLuint>(pair_capacity));
+  glDispatchCompute(Groups(slots), std::clamp<GLuint>(slots, 1, 65535), 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  // Their work and the traversal's dispatch, which the traversal then reads as commands.
+  glUseProgram(work_program);
+  glProgramUniform1ui(work_program, work_capacity, static_cast<GLuint>(pair_capacity));
+  glDispatchCompute(1, 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
   const TraverseKernel& kernel = traverse[query.distance ? 1 : 0];
   glUseProgram(kernel.program);
-  glProgramUniform1ui(kernel.program, kernel.count, static_cast<GLuint>(pending->items));
-  glProgramUniform1ui(kernel.program, kernel.pairs, static_cast<GLuint>(pending->work.size()));
   glProgramUniform1ui(kernel.program, kernel.capacity, static_cast<GLuint>(capacity));
   glProgramUniform1f(kernel.program, kernel.slack, FloatAtLeast(query.slack));
   if (query.distance) glProgramUniform1d(kernel.program, kernel.max_distance, query.max_distance);
-  pending->traverse_start = Clock::now();
-  glBeginQuery(GL_TIME_ELAPSED, traverse_query);
-  glDispatchCompute(Groups(pending->items), 1, 1);
+  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, buffer(internal::kDispatchBinding).id);
+  glDispatchComputeIndirect(0);
+  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
   glEndQuery(GL_TIME_ELAPSED);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   glUseProgram(0);
@@ -492,6 +558,25 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
           ErrorCode::kInternal,
           "gpu method: a traversal ran out of stack (a hierarchy deeper than checked)");
     }
+    // Too many object pairs: their work and the traversal saw only the first pair_capacity.
+    const size_t object_pairs = counters[internal::kObjectPairCount];
+    if (object_pairs > pair_capacity) {
+      if (object_pairs > kMostCapacity) {
+        return MakeError(ErrorCode::kLimitExceeded, "gpu method: " + std::to_string(object_pairs) +
+                                                        " object pairs, over its limit " +
+                                                        std::to_string(kMostCapacity) +
+                                                        "; 'bvh' answers this scene");
+      }
+      pair_capacity = std::bit_ceil(object_pairs);
+      ++answer.runs;
+      DispatchPairsAndTraversal();
+      continue;
+    }
+    if (counters[internal::kWorkOverflow] != 0) {
+      return MakeError(ErrorCode::kUnavailable,
+                       "gpu method: over 2^32 triangles to descend in one step; 'bvh' answers "
+                       "this scene");
+    }
     const size_t most =
         std::max(counters[internal::kCrossingCount], counters[internal::kUndecidedCount]);
     if (most <= capacity) break;
@@ -503,9 +588,10 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
     }
     capacity = std::bit_ceil(most);
     ++answer.runs;
-    DispatchTraversal();
+    DispatchPairsAndTraversal();
   }
   const auto read_start = Clock::now();
+  ReadObjectPairs(counters[internal::kObjectPairCount], answer);
   ReadPairs(counters[internal::kCrossingCount], counters[internal::kUndecidedCount], answer);
   ReadPcs(answer);
   if (auto ok = CheckGl("gpu method: reading the pairs back"); !ok) return ok.error();
@@ -528,8 +614,9 @@ ComputeCollider::~ComputeCollider() {
   for (Buffer& b : impl_->buffers) glDeleteBuffers(1, &b.id);
   glDeleteQueries(1, &impl_->refit_query);
   glDeleteQueries(1, &impl_->traverse_query);
-  for (GLuint program : {impl_->boxes_program, impl_->refit_program, impl_->traverse[0].program,
-                         impl_->traverse[1].program})
+  for (GLuint program :
+       {impl_->boxes_program, impl_->refit_program, impl_->pairs_program, impl_->work_program,
+        impl_->traverse[0].program, impl_->traverse[1].program})
     glDeleteProgram(program);
 }
 
@@ -544,14 +631,18 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   auto refit = CompileCompute(internal::RefitSource(), "refit");
   if (!refit) return refit.error();
   impl->refit_program = *refit;
+  auto pairs = CompileCompute(internal::ObjectPairsSource(), "object pairs");
+  if (!pairs) return pairs.error();
+  impl->pairs_program = *pairs;
+  auto work = CompileCompute(internal::PairWorkSource(), "object pairs' work");
+  if (!work) return work.error();
+  impl->work_program = *work;
   for (bool distance : {false, true}) {
     auto traverse = CompileCompute(internal::TraverseSource(distance),
                                    distance ? "distance traversal" : "traversal");
     if (!traverse) return traverse.error();
     Impl::TraverseKernel& kernel = impl->traverse[distance ? 1 : 0];
     kernel.program = *traverse;
-    kernel.count = glGetUniformLocation(kernel.program, "u_count");
-    kernel.pairs = glGetUniformLocation(kernel.program, "u_pairs");
     kernel.capacity = glGetUniformLocation(kernel.program, "u_capacity");
     kernel.slack = glGetUniformLocation(kernel.program, "u_slack");
     kernel.max_distance = glGetUniformLocation(kernel.program, "u_max_distance");
@@ -560,6 +651,9 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   impl->boxes_ranges = glGetUniformLocation(impl->boxes_program, "u_ranges");
   impl->refit_count = glGetUniformLocation(impl->refit_program, "u_count");
   impl->refit_first = glGetUniformLocation(impl->refit_program, "u_first");
+  impl->pairs_slots = glGetUniformLocation(impl->pairs_program, "u_slots");
+  impl->pairs_capacity = glGetUniformLocation(impl->pairs_program, "u_pair_capacity");
+  impl->work_capacity = glGetUniformLocation(impl->work_program, "u_pair_capacity");
   for (Buffer& b : impl->buffers) glCreateBuffers(1, &b.id);
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->refit_query);
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->traverse_query);
@@ -568,31 +662,14 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   return std::unique_ptr<ComputeCollider>(new ComputeCollider(std::move(impl)));
 }
 
-Result<void> ComputeCollider::Impl::Prepare(const ComputeQuery& query) {
-  // The work: for each object pair, the triangles of the smaller object (the driver) descend
-  // the larger one's hierarchy.
+void ComputeCollider::Impl::Prepare(const ComputeQuery& query) {
   Pending next;
   next.query = query;
-  next.work_start = {0};
-  for (const SlotPair& pair : query.object_pairs) {
-    const ComputeObject& a = query.objects[Index(pair.object_a)];
-    const ComputeObject& b = query.objects[Index(pair.object_b)];
-    if (a.nodes.empty() || b.nodes.empty()) continue;
-    const bool a_drives = a.triangles.size() <= b.triangles.size();
-    const ObjectSlot driver = a_drives ? pair.object_a : pair.object_b;
-    const ObjectSlot other = a_drives ? pair.object_b : pair.object_a;
-    next.work.push_back({static_cast<uint32_t>(Index(driver)), static_cast<uint32_t>(Index(other)),
-                         a_drives ? 1u : 0u, 0u});
-    next.items += (a_drives ? a : b).triangles.size();
-    if (next.items >= std::numeric_limits<uint32_t>::max()) {
-      return MakeError(ErrorCode::kUnavailable,
-                       "gpu method: over 2^32 triangles to descend in one step; 'bvh' answers "
-                       "this scene");
-    }
-    next.work_start.push_back(static_cast<uint32_t>(next.items));
-  }
+  // Fewer than two objects with a pair box have no pair: no GL work, not even the lock.
+  size_t pairing = 0;
+  for (const ComputeObject& object : query.objects) pairing += PairsAtAll(object) ? 1 : 0;
+  next.gl_work = pairing >= 2;
   pending = std::move(next);
-  return {};
 }
 
 Result<void> ComputeCollider::Impl::SubmitGl() {
@@ -605,27 +682,7 @@ Result<void> ComputeCollider::Impl::SubmitGl() {
     return laid_out.error();
   }
   int64_t uploaded = *laid_out + UploadVertices(step.query.objects);
-
-  // Per pair: (driver's first triangle, partner's first triangle, partner's root, 0) and
-  // (driver's slot, partner's slot, driver is object_a, 0).
-  std::vector<std::array<uint32_t, 4>> work_data;
-  work_data.reserve(2 * step.work.size());
-  for (const auto& w : step.work) {
-    const SlotLayout& driver = layout[w[0]];
-    const SlotLayout& other = layout[w[1]];
-    work_data.push_back({driver.triangle_base, other.triangle_base, other.node_base, 0});
-    work_data.push_back(w);
-  }
-  Buffer& work_buffer = buffer(internal::kWorkBinding);
-  Buffer& start_buffer = buffer(internal::kWorkStartBinding);
-  work_buffer.Reserve(work_data.size() * 16);
-  start_buffer.Reserve(step.work_start.size() * sizeof(uint32_t));
-  glNamedBufferSubData(work_buffer.id, 0, static_cast<GLsizeiptr>(work_data.size() * 16),
-                       work_data.data());
-  glNamedBufferSubData(start_buffer.id, 0,
-                       static_cast<GLsizeiptr>(step.work_start.size() * sizeof(uint32_t)),
-                       step.work_start.data());
-  uploaded += static_cast<int64_t>(work_data.size() * 16 + step.work_start.size() * 4);
+  uploaded += UploadPairBoxes(step.query.objects);
   for (size_t binding = 0; binding < buffers.size(); ++binding) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(binding), buffers[binding].id);
   }
@@ -633,16 +690,15 @@ Result<void> ComputeCollider::Impl::SubmitGl() {
   glEndQuery(GL_TIME_ELAPSED);
   glUseProgram(0);
   if (auto ok = CheckGl("gpu method: boxes and refit"); !ok) return ok.error();
-  DispatchTraversal();
+  DispatchPairsAndTraversal();
   step.uploaded = uploaded;
   step.cpu_submit_ms = MsSince(step.submit_start);
   return {};
 }
 
 Result<void> ComputeCollider::Submit(const ComputeQuery& query) {
-  impl_->pending.reset();
-  if (auto ok = impl_->Prepare(query); !ok) return ok;
-  if (impl_->pending->work.empty()) return {};
+  impl_->Prepare(query);
+  if (!impl_->pending->gl_work) return {};
   if (auto ok = impl_->SubmitGl(); !ok) {
     impl_->pending.reset();
     return ok;
@@ -653,14 +709,14 @@ Result<void> ComputeCollider::Submit(const ComputeQuery& query) {
 Result<ComputeAnswer> ComputeCollider::Finish() {
   if (!impl_->pending)
     return MakeError(ErrorCode::kInternal, "gpu method: Finish without a step submitted");
-  Result<ComputeAnswer> answer = impl_->pending->work.empty() ? ComputeAnswer{} : impl_->Collect();
+  Result<ComputeAnswer> answer = impl_->pending->gl_work ? impl_->Collect() : ComputeAnswer{};
   impl_->pending.reset();
   return answer;
 }
 
 Result<ComputeAnswer> ComputeCollider::Run(const ComputeQuery& query) {
-  if (auto ok = impl_->Prepare(query); !ok) return ok.error();
-  if (impl_->pending->work.empty()) {  // no GL work: not even the lock
+  impl_->Prepare(query);
+  if (!impl_->pending->gl_work) {  // no GL work: not even the lock
     impl_->pending.reset();
     return ComputeAnswer{};
   }

@@ -1,35 +1,57 @@
 #include "compute_shaders.h"
 
+#include <initializer_list>
 #include <string>
 
 namespace far::internal {
 namespace {
 
-// Buffers and helpers every kernel shares. Bindings: compute_shaders.h.
-constexpr const char* kCommon = R"(#version 450
-layout(local_size_x = 64) in;
+// The shader storage blocks, by binding (compute_shaders.h). Each kernel declares only those
+// it uses: llvmpipe links at most 16 in a program.
+constexpr const char* kBlocks[kNumBindings] = {
+    "readonly buffer Positions { double pos[]; };",
+    "readonly buffer Triangles { uint tri_vertex[]; };",
+    "buffer TriBoxes { vec4 tri_box[]; };",
+    "readonly buffer Nodes { uvec4 node[]; };",
+    "readonly buffer Order { uint order[]; };",
+    "buffer NodeBoxes { vec4 node_box[]; };",
+    "buffer Work { uvec4 work[]; };",
+    "buffer WorkStart { uint work_start[]; };",
+    "buffer Counters { uint counters[]; };",
+    "writeonly buffer Crossing { uvec4 crossing[]; };",
+    "writeonly buffer Undecided { uvec4 undecided[]; };",
+    "readonly buffer Ranges { uvec2 ranges[]; };",
+    "readonly buffer RefitList { uint refit_list[]; };",
+    "buffer PcsBits { uint pcs_bits[]; };",
+    "readonly buffer PairBoxes { double pair_box[]; };",
+    "readonly buffer Slots { uvec4 slot_info[]; };",
+    "buffer ObjectPairs { uvec2 object_pair[]; };",
+    "buffer Dispatch { uint dispatch[]; };",
+};
 
-layout(std430, binding = 0) readonly buffer Positions { double pos[]; };
-layout(std430, binding = 1) readonly buffer Triangles { uint tri_vertex[]; };
-layout(std430, binding = 2) buffer TriBoxes { vec4 tri_box[]; };
-layout(std430, binding = 3) readonly buffer Nodes { uvec4 node[]; };
-layout(std430, binding = 4) readonly buffer Order { uint order[]; };
-layout(std430, binding = 5) buffer NodeBoxes { vec4 node_box[]; };
-layout(std430, binding = 6) readonly buffer Work { uvec4 work[]; };
-layout(std430, binding = 7) readonly buffer WorkStart { uint work_start[]; };
-layout(std430, binding = 8) buffer Counters { uint counters[]; };
-layout(std430, binding = 9) writeonly buffer Crossing { uvec4 crossing[]; };
-layout(std430, binding = 10) writeonly buffer Undecided { uvec4 undecided[]; };
-layout(std430, binding = 11) readonly buffer Ranges { uvec2 ranges[]; };
-layout(std430, binding = 12) readonly buffer RefitList { uint refit_list[]; };
-layout(std430, binding = 13) buffer PcsBits { uint pcs_bits[]; };
-
-uniform uint u_count;  // invocations with work: triangles, nodes or driver triangles
+// What every kernel shares.
+constexpr const char* kCommon = R"(
+uniform uint u_count;  // invocations with work: triangles or nodes
 
 uint Stride() { return gl_NumWorkGroups.x * 64u; }
+)";
 
+constexpr const char* kVertex = R"(
 dvec3 Vertex(uint v) { return dvec3(pos[3u * v], pos[3u * v + 1u], pos[3u * v + 2u]); }
 )";
+
+// A kernel's source: the version, the work group, `blocks`, the shared helpers, then `body`.
+std::string Kernel(std::initializer_list<ComputeBinding> blocks, const std::string& body) {
+  std::string text = "#version 450\nlayout(local_size_x = 64) in;\n";
+  bool positions = false;
+  for (ComputeBinding binding : blocks) {
+    text += "layout(std430, binding = " + std::to_string(binding) + ") " + kBlocks[binding] + "\n";
+    positions = positions || binding == kPositionsBinding;
+  }
+  text += kCommon;
+  if (positions) text += kVertex;
+  return text + body;
+}
 
 constexpr const char* kTriangleBoxes = R"(
 // A float <= x: x rounded, and one float step down when the rounding went up. The comparison is
@@ -68,6 +90,89 @@ void main() {
     dvec3 hi = max(max(a, b), c);
     tri_box[2u * t] = vec4(FloatBelow(lo.x), FloatBelow(lo.y), FloatBelow(lo.z), 0.0);
     tri_box[2u * t + 1u] = vec4(FloatAbove(hi.x), FloatAbove(hi.y), FloatAbove(hi.z), 0.0);
+  }
+}
+)";
+
+// The object pairs, as far's SweepAndPrune finds them: two slots whose boxes, grown by half the
+// margin each on the CPU (kPairBoxesBinding: lo xyz, hi xyz; a slot that pairs with nothing
+// has lo = +inf, hi = -inf), overlap closed on every axis. Only comparisons of the same doubles:
+// the same pairs on any device. Slot j from the x dimension, slot i from y; i < j.
+constexpr const char* kObjectPairs = R"(
+uniform uint u_slots;
+uniform uint u_pair_capacity;
+
+bool BoxesMeet(uint i, uint j) {
+  for (uint k = 0u; k < 3u; ++k) {
+    if (pair_box[6u * i + k] > pair_box[6u * j + 3u + k]) return false;
+    if (pair_box[6u * j + k] > pair_box[6u * i + 3u + k]) return false;
+  }
+  return true;
+}
+
+void main() {
+  for (uint i = gl_WorkGroupID.y; i < u_slots; i += gl_NumWorkGroups.y) {
+    for (uint j = gl_GlobalInvocationID.x; j < u_slots; j += Stride()) {
+      if (j <= i || !BoxesMeet(i, j)) continue;
+      uint k = atomicAdd(counters[7], 1u);
+      if (k < u_pair_capacity) object_pair[k] = uvec2(i, j);  // else: grown and run again
+    }
+  }
+}
+)";
+
+// The traversal's work, in one work group: per object pair p, work[2p] and work[2p + 1] (see
+// kTraverse) and work_start[p], the driver triangles of the pairs before p (a pair with an
+// object without hierarchy has none), then the traversal's indirect dispatch. Sums saturate at
+// 2^32 - 1, which means too much work (counters[8]: the host refuses the step).
+constexpr const char* kPairWork = R"(
+uniform uint u_pair_capacity;
+shared uint g_sums[64];
+
+uint AddSaturated(uint a, uint b) { return a + b < a ? 0xffffffffu : a + b; }
+
+// The work of pair p; returns its driver triangles.
+uint WriteWork(uint p) {
+  uvec2 ij = object_pair[p];
+  uvec4 a = slot_info[ij.x];
+  uvec4 b = slot_info[ij.y];
+  bool a_drives = a.y <= b.y;
+  uvec4 driver = a_drives ? a : b;
+  uvec4 other = a_drives ? b : a;
+  work[2u * p] = uvec4(driver.x, other.x, other.z, 0u);
+  work[2u * p + 1u] = a_drives ? uvec4(ij.x, ij.y, 1u, 0u) : uvec4(ij.y, ij.x, 0u, 0u);
+  return a.w == 0u || b.w == 0u ? 0u : driver.y;
+}
+
+void main() {
+  uint pairs = min(counters[7], u_pair_capacity);
+  uint lane = gl_LocalInvocationIndex;
+  uint total = 0u;
+  for (uint first = 0u; first < pairs; first += 64u) {
+    uint p = first + lane;
+    uint items = p < pairs ? WriteWork(p) : 0u;
+    // An inclusive scan of the 64 lanes' items (Hillis and Steele).
+    g_sums[lane] = items;
+    barrier();
+    for (uint step = 1u; step < 64u; step *= 2u) {
+      uint add = lane >= step ? g_sums[lane - step] : 0u;
+      barrier();
+      g_sums[lane] = AddSaturated(g_sums[lane], add);
+      barrier();
+    }
+    if (p < pairs) work_start[p] = AddSaturated(total, g_sums[lane] - items);
+    total = AddSaturated(total, g_sums[63]);
+    barrier();  // every lane has read g_sums before the next chunk writes it
+  }
+  if (lane == 0u) {
+    bool overflow = total == 0xffffffffu;
+    if (overflow) counters[8] = 1u;
+    work_start[pairs] = total;
+    dispatch[0] = overflow ? 0u : min(total / 64u + (total % 64u == 0u ? 0u : 1u), 65535u);
+    dispatch[1] = 1u;
+    dispatch[2] = 1u;
+    dispatch[3] = total;
+    dispatch[4] = pairs;
   }
 }
 )";
@@ -118,7 +223,6 @@ void main() {
 // Double: |error| <= 8 2^-53 P + 2^-970 (Shewchuk's orient3d bound, (7 + 56 eps) eps, rounded
 // up, plus what flushing subnormal results to zero may lose). docs/culling.md has the argument.
 constexpr const char* kTraverse = R"(
-uniform uint u_pairs;
 uniform float u_slack;    // triangle boxes within this on every axis meet (0: share a point)
 uniform uint u_capacity;  // entries of each output buffer
 // FAR_DISTANCE (defined before this, 0 or 1: two programs): a distance query, where every pair
@@ -329,10 +433,12 @@ shared uint g_stacks[64 * 64];
 
 void main() {
   uint base = gl_LocalInvocationIndex * 64u;
-  for (uint item = gl_GlobalInvocationID.x; item < u_count; item += Stride()) {
+  uint count = dispatch[3];  // driver triangles, and the object pairs, from kPairWork
+  uint pairs = dispatch[4];
+  for (uint item = gl_GlobalInvocationID.x; item < count; item += Stride()) {
     // The object pair: the last p with work_start[p] <= item.
     uint lo = 0u;
-    uint hi = u_pairs;
+    uint hi = pairs;
     while (hi - lo > 1u) {
       uint mid = (lo + hi) / 2u;
       if (work_start[mid] <= item) lo = mid;
@@ -430,13 +536,33 @@ std::string Classify(const std::string& name, const std::string& side) {
 
 }  // namespace
 
-std::string TriangleBoxesSource() { return std::string(kCommon) + kTriangleBoxes; }
+std::string TriangleBoxesSource() {
+  return Kernel({kPositionsBinding, kTrianglesBinding, kTriBoxesBinding, kRangesBinding},
+                kTriangleBoxes);
+}
 
-std::string RefitSource() { return std::string(kCommon) + kRefit; }
+std::string RefitSource() {
+  return Kernel(
+      {kTriBoxesBinding, kNodesBinding, kOrderBinding, kNodeBoxesBinding, kRefitListBinding},
+      kRefit);
+}
+
+std::string ObjectPairsSource() {
+  return Kernel({kPairBoxesBinding, kCountersBinding, kObjectPairsBinding}, kObjectPairs);
+}
+
+std::string PairWorkSource() {
+  return Kernel({kObjectPairsBinding, kSlotsBinding, kWorkBinding, kWorkStartBinding,
+                 kCountersBinding, kDispatchBinding},
+                kPairWork);
+}
 
 std::string TraverseSource(bool distance) {
   std::string text =
-      std::string(kCommon) + "#define FAR_DISTANCE " + (distance ? "1" : "0") + "\n" + kTraverse;
+      Kernel({kPositionsBinding, kTrianglesBinding, kTriBoxesBinding, kNodesBinding, kOrderBinding,
+              kNodeBoxesBinding, kWorkBinding, kWorkStartBinding, kCountersBinding,
+              kCrossingBinding, kUndecidedBinding, kPcsBitsBinding, kDispatchBinding},
+             std::string("#define FAR_DISTANCE ") + (distance ? "1" : "0") + "\n" + kTraverse);
   ReplaceAll(text, "$CLASSIFY_FLOAT", Classify("ClassifyFloat", "SideFloat"));
   ReplaceAll(text, "$CLASSIFY_DOUBLE", Classify("ClassifyDouble", "SideDouble"));
   return text;

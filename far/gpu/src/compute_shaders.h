@@ -9,35 +9,50 @@
 
 namespace far::internal {
 
-/// Shader storage bindings shared by the three kernels.
+/// Shader storage bindings shared by the kernels.
 enum ComputeBinding : int {
-  kPositionsBinding = 0,   // double[3 * vertices]: world vertices, every object one after another
-  kTrianglesBinding = 1,   // uint[3 * triangles]: global vertex indices
-  kTriBoxesBinding = 2,    // vec4[2 * triangles]: lo, hi (float, rounded outward)
-  kNodesBinding = 3,       // uvec4[nodes]: first child, leaf count, order range [lo, hi)
-  kOrderBinding = 4,       // uint[triangles]: global triangle ids in leaf order
-  kNodeBoxesBinding = 5,   // vec4[2 * nodes]: lo, hi
-  kWorkBinding = 6,        // uvec4[2 * pairs]: per object pair, see kTraverseSource
-  kWorkStartBinding = 7,   // uint[pairs + 1]: prefix sums of the driver triangles
-  kCountersBinding = 8,    // uint[kNumCounters]
-  kCrossingBinding = 9,    // uvec4[capacity]: certified intersecting pairs
-  kUndecidedBinding = 10,  // uvec4[capacity]: pairs for the CPU's exact predicates
-  kRangesBinding = 11,     // uvec2[ranges]: the moved objects' triangles (first, before)
-  kRefitListBinding = 12,  // uint[]: the moved objects' nodes, level by level, deepest first
-  kPcsBitsBinding = 13,    // uint[]: a bit per global triangle, set when a kept pair holds it
-  kNumBindings = 14,
+  kPositionsBinding = 0,     // double[3 * vertices]: world vertices, every object one after another
+  kTrianglesBinding = 1,     // uint[3 * triangles]: global vertex indices
+  kTriBoxesBinding = 2,      // vec4[2 * triangles]: lo, hi (float, rounded outward)
+  kNodesBinding = 3,         // uvec4[nodes]: first child, leaf count, order range [lo, hi)
+  kOrderBinding = 4,         // uint[triangles]: global triangle ids in leaf order
+  kNodeBoxesBinding = 5,     // vec4[2 * nodes]: lo, hi
+  kWorkBinding = 6,          // uvec4[2 * pairs]: per object pair, see kTraverseSource
+  kWorkStartBinding = 7,     // uint[pairs + 1]: prefix sums of the driver triangles
+  kCountersBinding = 8,      // uint[kNumCounters]
+  kCrossingBinding = 9,      // uvec4[capacity]: certified intersecting pairs
+  kUndecidedBinding = 10,    // uvec4[capacity]: pairs for the CPU's exact predicates
+  kRangesBinding = 11,       // uvec2[ranges]: the moved objects' triangles (first, before)
+  kRefitListBinding = 12,    // uint[]: the moved objects' nodes, level by level, deepest first
+  kPcsBitsBinding = 13,      // uint[]: a bit per global triangle, set when a kept pair holds it
+  kPairBoxesBinding = 14,    // double[6 * slots]: each slot's box as sweep-and-prune grows it
+  kSlotsBinding = 15,        // uvec4[slots]: first triangle, triangles, root node, nodes
+  kObjectPairsBinding = 16,  // uvec2[pair capacity]: the object pairs found (slot < slot)
+  kDispatchBinding = 17,     // uint[kNumDispatchWords]: the traversal's indirect dispatch
+  kNumBindings = 18,
 };
 
-/// The counters the traversal writes (kCountersBinding).
+/// The counters the kernels write (kCountersBinding).
 enum ComputeCounter : int {
-  kCrossingCount = 0,   // certified intersecting pairs written (may exceed the capacity)
-  kUndecidedCount = 1,  // pairs for the CPU written (may exceed the capacity)
-  kBoxPairs = 2,        // triangle pairs whose boxes met (within the slack)
-  kFloatDecided = 3,    // of those, decided by the float filter
-  kDoubleDecided = 4,   // decided by the fp64 filter
-  kStackOverflow = 5,   // nonzero: a traversal ran out of stack (never expected: depth checked)
-  kDistanceCulled = 6,  // a distance query's pairs proven farther than the CPU would accept
-  kNumCounters = 7,
+  kCrossingCount = 0,    // certified intersecting pairs written (may exceed the capacity)
+  kUndecidedCount = 1,   // pairs for the CPU written (may exceed the capacity)
+  kBoxPairs = 2,         // triangle pairs whose boxes met (within the slack)
+  kFloatDecided = 3,     // of those, decided by the float filter
+  kDoubleDecided = 4,    // decided by the fp64 filter
+  kStackOverflow = 5,    // nonzero: a traversal ran out of stack (never expected: depth checked)
+  kDistanceCulled = 6,   // a distance query's pairs proven farther than the CPU would accept
+  kObjectPairCount = 7,  // object pairs found (may exceed the pair capacity)
+  kWorkOverflow = 8,     // nonzero: 2^32 or more driver triangles to descend
+  kNumCounters = 9,
+};
+
+/// The words of kDispatchBinding: the traversal's work groups (x, y, z, as
+/// glDispatchComputeIndirect reads them), then its driver triangles and object pairs.
+enum DispatchWord : int {
+  kGroupsX = 0,
+  kTraverseItems = 3,
+  kTraversePairs = 4,
+  kNumDispatchWords = 5,
 };
 
 /// Threads per work group of every kernel.
@@ -45,6 +60,11 @@ inline constexpr int kComputeGroupSize = 64;
 /// Entries of a traversal's stack: hierarchies deeper than this minus one are refused.
 inline constexpr int kTraversalStack = 64;
 
+/// One (slot, slot) per invocation: the object pairs whose boxes (kPairBoxesBinding) meet.
+std::string ObjectPairsSource();
+/// One work group: each object pair's traversal work (its driver, the smaller object, whose
+/// triangles descend the other's hierarchy), their prefix sums and the traversal's dispatch.
+std::string PairWorkSource();
 /// One triangle of a moved object per invocation: its world box from its double corners,
 /// rounded outward to float.
 std::string TriangleBoxesSource();

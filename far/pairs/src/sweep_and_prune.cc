@@ -68,7 +68,8 @@ bool SweepAndPrune::EndpointOrder(const Endpoint& a, const Endpoint& b) {
 // Refreshes every object's grown interval. An object whose box was empty has no pairs and its
 // endpoints sit at +inf in an order that says nothing about overlap, so one that turns non-empty
 // is looked at afresh, like a new one.
-SweepAndPrune::Refreshed SweepAndPrune::RefreshSlots(std::span<const SlotBox> boxes, double half) {
+SweepAndPrune::Refreshed SweepAndPrune::RefreshSlots(std::span<const SlotBox> boxes,
+                                                     double margin) {
   const double inf = std::numeric_limits<double>::infinity();
   Refreshed refreshed;
   for (const SlotBox& slot_box : boxes) {
@@ -81,19 +82,28 @@ SweepAndPrune::Refreshed SweepAndPrune::RefreshSlots(std::span<const SlotBox> bo
     const bool was_empty = !added && slot.empty;
     slot.live = true;
     slot.stamp = stamp_;
-    const Eigen::Vector3d& lo = slot_box.box_W.min();
-    const Eigen::Vector3d& hi = slot_box.box_W.max();
     // An empty or non-finite box pairs with nothing; its endpoints park at +inf so that they
     // keep the lists totally ordered (a NaN would break the sort for everyone).
-    slot.empty = !(lo.allFinite() && hi.allFinite() && (lo.array() <= hi.array()).all());
+    const Eigen::AlignedBox3d grown = GrownBox(slot_box.box_W, margin);
+    slot.empty = grown.isEmpty();
     refreshed.any_empty = refreshed.any_empty || slot.empty;
     if (was_empty && !slot.empty) refreshed.revived.push_back(s);
     for (int axis = 0; axis < 3; ++axis) {
-      slot.lo[axis] = slot.empty ? inf : lo[axis] - half;
-      slot.hi[axis] = slot.empty ? inf : hi[axis] + half;
+      slot.lo[axis] = slot.empty ? inf : grown.min()[axis];
+      slot.hi[axis] = slot.empty ? inf : grown.max()[axis];
     }
   }
   return refreshed;
+}
+
+Eigen::AlignedBox3d SweepAndPrune::GrownBox(const Eigen::AlignedBox3d& box_W, double margin) {
+  const Eigen::Vector3d& lo = box_W.min();
+  const Eigen::Vector3d& hi = box_W.max();
+  if (!(lo.allFinite() && hi.allFinite() && (lo.array() <= hi.array()).all()))
+    return Eigen::AlignedBox3d();  // empty
+  // A negative or NaN margin is treated as 0 (Update's contract asks for margin >= 0).
+  const double half = margin > 0 ? margin / 2 : 0.0;
+  return Eigen::AlignedBox3d(lo.array() - half, hi.array() + half);
 }
 
 // Forgets the objects that were not in this Update, with their endpoints and pairs.
@@ -185,11 +195,9 @@ void SweepAndPrune::SweepNewPairs(const std::vector<uint8_t>& is_new) {
 
 std::vector<SlotPair> SweepAndPrune::Update(std::span<const SlotBox> boxes, double margin) {
   FAR_ASSERT(margin >= 0, "a distance");
-  // A negative or NaN margin is treated as 0 (the contract asks for margin >= 0).
-  const double half = margin > 0 ? margin / 2 : 0.0;
   ++stamp_;
   last_swaps_ = 0;
-  const Refreshed refreshed = RefreshSlots(boxes, half);
+  const Refreshed refreshed = RefreshSlots(boxes, margin);
   DropUnseen();
   bool rebuild = false;  // an axis was re-sorted: find all pairs afresh
   for (int a = 0; a < 3; ++a) rebuild = RepairAxis(a, rebuild, refreshed.added) || rebuild;

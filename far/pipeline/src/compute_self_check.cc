@@ -176,20 +176,31 @@ std::string Name(const SlotContact& c) {
          std::to_string(Index(c.object_b)) + "/" + std::to_string(c.triangle_b);
 }
 
-// Runs `pairs` of `objects` and compares with the exact predicates; "" when they agree.
-Result<std::string> Compare(ComputeCollider& collider, const std::vector<CheckObject>& objects,
-                            const std::vector<SlotPair>& pairs, uint64_t key_base) {
+// The objects' views, keyed from `key_base`, with pair boxes that make `pairs` the object
+// pairs: a point per pair (2i, 2i + 1) when `pairs` is that, else one point for all.
+std::vector<ComputeObject> Views(const std::vector<CheckObject>& objects, uint64_t key_base,
+                                 bool pairs_of_two) {
   std::vector<ComputeObject> views;
   for (size_t i = 0; i < objects.size(); ++i) {
     const CheckObject& object = objects[i];
+    const Vector3d point(pairs_of_two ? static_cast<double>(i / 2) : 0.0, 0, 0);
     views.push_back({object.mesh.p_MV, object.mesh.triangles, object.nodes, object.order,
-                     key_base + i, key_base + i});
+                     key_base + i, key_base + i, Eigen::AlignedBox3d(point, point)});
   }
+  return views;
+}
+
+// Runs `pairs` of `objects` (pairs (2i, 2i + 1), or all pairs) and compares with the exact
+// predicates; "" when they agree.
+Result<std::string> Compare(ComputeCollider& collider, const std::vector<CheckObject>& objects,
+                            const std::vector<SlotPair>& pairs, uint64_t key_base) {
+  const bool pairs_of_two = pairs.size() * 2 == objects.size();
+  const std::vector<ComputeObject> views = Views(objects, key_base, pairs_of_two);
   ComputeQuery query;
   query.objects = views;
-  query.object_pairs = pairs;
   auto answer = collider.Run(query);
   if (!answer) return answer.error();
+  if (answer->object_pairs != pairs) return std::string("other object pairs than their boxes'");
   std::set<SlotContact> crossing, kept;
   for (const SlotContact& c : answer->crossing) {
     if (!crossing.insert(c).second || !kept.insert(c).second) return "pair " + Name(c) + " twice";
@@ -227,21 +238,50 @@ Result<std::string> Compare(ComputeCollider& collider, const std::vector<CheckOb
   return std::string();
 }
 
+// 300 one-triangle objects whose pair boxes have small integer corners (many touch on a face,
+// an edge or a corner; every 20th is empty): the object pairs must be the boxes' overlapping
+// pairs, closed, as sweep-and-prune finds them. "" when they are.
+Result<std::string> ComparePairs(ComputeCollider& collider, uint64_t key_base) {
+  std::mt19937_64 rng(11);
+  const Mesh triangle = OneTriangle({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+  const std::vector<ComputeNode> leaf = {{0, 1}};
+  const std::vector<uint32_t> order = {0};
+  std::vector<ComputeObject> views;
+  for (uint64_t i = 0; i < 300; ++i) {
+    Eigen::AlignedBox3d box;  // empty
+    if (i % 20 != 7) {
+      const Vector3d lo(static_cast<double>(rng() % 12), static_cast<double>(rng() % 12),
+                        static_cast<double>(rng() % 12));
+      box = Eigen::AlignedBox3d(lo, lo + Vector3d::Constant(static_cast<double>(rng() % 3)));
+    }
+    views.push_back(
+        {triangle.p_MV, triangle.triangles, leaf, order, key_base + i, key_base + i, box});
+  }
+  std::vector<SlotPair> expected;
+  for (size_t a = 0; a < views.size(); ++a) {
+    for (size_t b = a + 1; b < views.size(); ++b) {
+      if (!views[a].pair_box.isEmpty() && views[a].pair_box.intersects(views[b].pair_box))
+        expected.push_back({SlotAt(a), SlotAt(b)});
+    }
+  }
+  ComputeQuery query;
+  query.objects = views;
+  auto answer = collider.Run(query);
+  if (!answer) return answer.error();
+  if (answer->object_pairs == expected) return std::string();
+  return std::to_string(answer->object_pairs.size()) + " object pairs where the boxes make " +
+         std::to_string(expected.size());
+}
+
 // Runs DistanceCases' pairs as a distance query; "" when every pair the CPU's distance test
 // accepts came back.
 Result<std::string> CompareDistance(ComputeCollider& collider,
                                     const std::vector<CheckObject>& objects, uint64_t key_base) {
-  std::vector<ComputeObject> views;
+  const std::vector<ComputeObject> views = Views(objects, key_base, true);
   std::vector<SlotPair> pairs;
-  for (size_t i = 0; i < objects.size(); ++i) {
-    const CheckObject& object = objects[i];
-    views.push_back({object.mesh.p_MV, object.mesh.triangles, object.nodes, object.order,
-                     key_base + i, key_base + i});
-    if (i % 2 == 1) pairs.push_back({SlotAt(i - 1), SlotAt(i)});
-  }
+  for (size_t i = 1; i < objects.size(); i += 2) pairs.push_back({SlotAt(i - 1), SlotAt(i)});
   ComputeQuery query;
   query.objects = views;
-  query.object_pairs = pairs;
   query.slack = 1.0;  // every pair's boxes meet: the cut alone decides what is dropped
   query.distance = true;
   query.max_distance = kCheckDistance;
@@ -291,6 +331,9 @@ Result<void> SelfCheckComputeCollider(ComputeCollider& collider) {
   auto distance = CompareDistance(collider, DistanceCases(), kKeys + (2 << 20));
   if (!distance) return distance.error();
   if (!distance->empty()) return disagree("the distance cut", *distance);
+  auto object_pairs = ComparePairs(collider, kKeys + (3 << 20));
+  if (!object_pairs) return object_pairs.error();
+  if (!object_pairs->empty()) return disagree("the object pairs", *object_pairs);
   return {};
 }
 

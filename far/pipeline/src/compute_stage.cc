@@ -8,6 +8,7 @@
 #include "compute_self_check.h"
 
 #include "far/gpu/culling_renderer.h"
+#include "far/pairs/sweep_and_prune.h"
 #include "far/pairs/triangle_bvh.h"
 
 namespace far::internal {
@@ -123,7 +124,7 @@ StopReason ComputeStage::RebuildLooseTopologies(std::span<const CachedObject* co
 }
 
 Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> objects,
-                                           std::span<const SlotPair> object_pairs, double slack,
+                                           double object_margin, double slack,
                                            std::optional<double> distance,
                                            const StepControl& control, StopReason* stopped) {
   topologies_rebuilt_ = 0;
@@ -144,12 +145,16 @@ Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> 
       state.X_WM = X_WM;
       state.world_key = next_key_++;
     }
-    views[s] = {object.p_WV, object.mesh.triangles, state.nodes,
-                state.order, state.topology_key,    state.world_key};
+    views[s] = {object.p_WV,
+                object.mesh.triangles,
+                state.nodes,
+                state.order,
+                state.topology_key,
+                state.world_key,
+                SweepAndPrune::GrownBox(object.box_W, object_margin)};
   }
   ComputeQuery query;
   query.objects = views;
-  query.object_pairs = object_pairs;
   query.slack = slack;
   query.distance = distance.has_value();
   if (distance) query.max_distance = *distance;

@@ -36,15 +36,15 @@ class ComputeStage {
   ComputeStage(const ComputeStage&) = delete;
   ComputeStage& operator=(const ComputeStage&) = delete;
 
-  /// Filters the triangle pairs of `object_pairs` on the GPU (ComputeCollider::Run): `objects`
-  /// by slot (null: free), world vertices up to date; `slack` as ComputeQuery's. `distance`: a
-  /// distance query's D (ComputeQuery::distance and max_distance); none: a contact query.
+  /// Finds the object pairs on the GPU, as sweep-and-prune at `object_margin` would, and
+  /// filters their triangle pairs (ComputeCollider::Run): `objects` by slot (null: free), world
+  /// vertices and boxes up to date; `slack` as ComputeQuery's. `distance`: a distance query's D
+  /// (ComputeQuery::distance and max_distance); none: a contact query.
   /// The topologies built for new objects are setup (`control`'s on_setup_begin/end); their
   /// builds poll `control` (stopped: returns the stop's reason in `*stopped`, no answer).
-  Result<ComputeAnswer> Filter(std::span<const CachedObject* const> objects,
-                               std::span<const SlotPair> object_pairs, double slack,
-                               std::optional<double> distance, const StepControl& control,
-                               StopReason* stopped);
+  Result<ComputeAnswer> Filter(std::span<const CachedObject* const> objects, double object_margin,
+                               double slack, std::optional<double> distance,
+                               const StepControl& control, StopReason* stopped);
 
   /// How many deformable objects' topologies the last Filter rebuilt (they had grown loose).
   int topologies_rebuilt() const { return topologies_rebuilt_; }

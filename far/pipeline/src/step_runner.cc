@@ -362,21 +362,26 @@ Result<void> Stages::DescendHierarchiesStage() {
   return {};
 }
 
-// The gpu method after sweep-and-prune: the GPU descends each pair's hierarchies and filters
-// the triangle pairs (compute_stage.h); the primitive PCS is the triangles of the pairs it
-// did not prove apart (a distance query: of every pair within the slack).
+// The gpu method's GPU stage: the GPU finds the object pairs (the pairs sweep-and-prune finds
+// for the other methods), descends each pair's hierarchies and filters the triangle pairs
+// (compute_stage.h); the primitive PCS is the triangles of the pairs it did not prove apart
+// (a distance query: of every pair within the slack).
 Result<void> Stages::FilterOnGpu() {
   const StepRequest& request = state_.request;
   const bool distance = request.distance.has_value() && (request.output == Output::kDistancePairs ||
                                                          request.output == Output::kPrimitivePcs);
   StopReason stopped = StopReason::kNone;
   auto computed = world_.compute->Filter(
-      state_.objects, state_.answer.object_pairs, distance ? state_.cull_margin : 0.0,
+      state_.objects, state_.cull_margin, distance ? state_.cull_margin : 0.0,
       distance ? request.distance : std::nullopt, state_.control, &stopped);
   if (stopped != StopReason::kNone)
     return StopError(stopped, Stage::kPrimitiveCull, state_.control);
   if (!computed) return computed.error();
   state_.computed = std::move(*computed);
+  // The object pairs, found on the GPU as sweep-and-prune finds them for the other methods.
+  state_.answer.object_pairs = std::move(state_.computed.object_pairs);
+  state_.stats.object_pairs = static_cast<int64_t>(state_.answer.object_pairs.size());
+  state_.answer.pcs_objects = SlotsInPairs(state_.answer.object_pairs);
   state_.stats.bytes_uploaded += state_.computed.bytes_uploaded;
   state_.stats.pairs_considered = state_.computed.box_pairs;
   const ComputeAnswer& answer = state_.computed;
@@ -472,15 +477,17 @@ Result<void> Stages::RunStages(StageTimer& timer) {
   } else if (ok) {
     ok = stage(Stage::kObjectCull, [&] { return CullObjects(); });
     const bool pairs = request.output != Output::kObjectPcs || IsCpuCulling(request.method);
-    if (ok && pairs) {
+    const bool primitives =
+        request.output != Output::kObjectPcs && request.output != Output::kObjectPairs;
+    // The gpu method finds its object pairs on the GPU, in its primitive_cull stage.
+    const bool gpu_pairs = primitives && request.method == Method::kGpu;
+    if (ok && pairs && !gpu_pairs) {
       ok = stage(Stage::kSweepAndPrune, [&]() -> Result<void> {
         PairObjects();
         return {};
       });
     }
-    const bool primitives =
-        request.output != Output::kObjectPcs && request.output != Output::kObjectPairs;
-    if (ok && pairs && primitives && request.method == Method::kGpu) {
+    if (ok && pairs && gpu_pairs) {
       ok = stage(Stage::kPrimitiveCull, [&] { return FilterOnGpu(); });
       if (ok && WantsExact(request.output))
         ok = stage(Stage::kExact, [&] { return DecideUndecided(); });

@@ -33,7 +33,6 @@ struct BatchScene {
   std::vector<std::vector<ComputeNode>> nodes;
   std::vector<std::vector<uint32_t>> orders;
   std::vector<ComputeObject> objects;
-  std::vector<SlotPair> pairs;
   ComputeQuery query;
 
   // Every object's topology and world keys are its own (from the seed).
@@ -60,21 +59,21 @@ struct BatchScene {
     }
     for (int o = 0; o < num_objects; ++o) {
       const uint64_t key = 1000 * seed + static_cast<uint64_t>(o) + 1;
-      objects.push_back({meshes[o].p_MV, meshes[o].triangles, nodes[o], orders[o], key, key});
-    }
-    for (int a = 0; a < num_objects; ++a) {
-      for (int b = a + 1; b < num_objects; ++b) pairs.push_back({SlotAt(a), SlotAt(b)});
+      // One pair box for all: every two objects are a pair.
+      objects.push_back({meshes[o].p_MV, meshes[o].triangles, nodes[o], orders[o], key, key,
+                         Eigen::AlignedBox3d(Vector3d::Zero(), Vector3d::Zero())});
     }
     query.objects = objects;
-    query.object_pairs = pairs;
     query.slack = slack;
     query.distance = distance;
   }
 };
 
 // An answer in a form that compares whole: the pairs sorted (the GPU appends in any order).
-using Canonical = std::tuple<std::vector<SlotContact>, std::vector<std::pair<SlotContact, uint8_t>>,
-                             std::vector<std::vector<uint32_t>>, int64_t>;
+using Canonical =
+    std::tuple<std::vector<SlotPair>, std::vector<SlotContact>,
+               std::vector<std::pair<SlotContact, uint8_t>>, std::vector<std::vector<uint32_t>>,
+               int64_t>;
 
 Canonical CanonicalOf(const ComputeAnswer& answer) {
   std::vector<SlotContact> crossing = answer.crossing;
@@ -83,7 +82,7 @@ Canonical CanonicalOf(const ComputeAnswer& answer) {
   for (size_t i = 0; i < answer.undecided.size(); ++i)
     undecided.push_back({answer.undecided[i], answer.proven_apart[i]});
   std::sort(undecided.begin(), undecided.end());
-  return {crossing, undecided, answer.pcs, answer.box_pairs};
+  return {answer.object_pairs, crossing, undecided, answer.pcs, answer.box_pairs};
 }
 
 // Scenes for one batch; the last one has more undecided pairs (a distance query with a slack
@@ -114,7 +113,7 @@ TEST(ComputeBatcherTest, StepsInOneBatchAnswerAsEachColliderAlone) {
       ASSERT_TRUE(answer.ok()) << ToString(answer.error());
       alone.push_back(CanonicalOf(*answer));
     }
-    ASSERT_GT(std::get<1>(alone.back()).size(), size_t{1} << 16)
+    ASSERT_GT(std::get<2>(alone.back()).size(), size_t{1} << 16)
         << "the last scene should overflow the first output buffers";
   }
   auto batcher = ComputeBatcher::Create();

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
 #include <set>
@@ -18,6 +19,7 @@
 
 #include "far/geometry/triangle_tests.h"
 #include "far/gpu/gl_context.h"
+#include "far/pairs/sweep_and_prune.h"
 #include "far/pairs/triangle_bvh.h"
 
 namespace far {
@@ -40,10 +42,14 @@ struct TriangleObjects {
     for (size_t i = 0; i + 1 < vertices.size(); i += 2) pairs.push_back({SlotAt(i), SlotAt(i + 1)});
     return pairs;
   }
+  // Pair boxes that make the pairs (2i, 2i + 1) the object pairs: a point at x = i each.
   std::span<const ComputeObject> Views(uint64_t world_key) {
     objects.clear();
-    for (size_t i = 0; i < vertices.size(); ++i)
-      objects.push_back({vertices[i], triangle, leaf, order, i + 1, world_key});
+    for (size_t i = 0; i < vertices.size(); ++i) {
+      const Vector3d point(static_cast<double>(i / 2), 0, 0);
+      objects.push_back({vertices[i], triangle, leaf, order, i + 1, world_key,
+                         Eigen::AlignedBox3d(point, point)});
+    }
     return objects;
   }
 };
@@ -69,10 +75,10 @@ class ComputeColliderTest : public ::testing::Test {
     const std::vector<SlotPair> pairs = triangles.Pairs();
     ComputeQuery query;
     query.objects = triangles.Views(++world_key_);
-    query.object_pairs = pairs;
     auto answer = collider_->Run(query);
     EXPECT_TRUE(answer.ok()) << ToString(answer.error());
     if (!answer.ok()) return {};
+    EXPECT_EQ(answer->object_pairs, pairs);
     std::set<size_t> crossing, undecided;
     for (const SlotContact& c : answer->crossing) crossing.insert(Index(c.object_a) / 2);
     for (const SlotContact& c : answer->undecided) undecided.insert(Index(c.object_a) / 2);
@@ -100,19 +106,39 @@ Vector3d RandomPoint(std::mt19937_64& rng, double scale) {
   return {u(rng), u(rng), u(rng)};
 }
 
-// Runs the collider on `objects` (meshes[i]'s views) and checks that every intersecting triangle
-// pair of `pairs` is kept (crossing or undecided) and none twice, and that the PCS is the
-// triangles of the kept pairs, by slot; returns how many intersect.
+// The objects whose pair boxes meet (closed), by brute force.
+std::vector<SlotPair> PairsOfBoxes(std::span<const ComputeObject> objects) {
+  std::vector<SlotPair> pairs;
+  for (size_t a = 0; a < objects.size(); ++a) {
+    for (size_t b = a + 1; b < objects.size(); ++b) {
+      if (!objects[a].pair_box.isEmpty() && objects[a].pair_box.intersects(objects[b].pair_box))
+        pairs.push_back({SlotAt(a), SlotAt(b)});
+    }
+  }
+  return pairs;
+}
+
+// The box of a mesh's vertices.
+Eigen::AlignedBox3d BoxOf(const Mesh& mesh) {
+  Eigen::AlignedBox3d box;
+  for (const Vector3d& p : mesh.p_MV) box.extend(p);
+  return box;
+}
+
+// Runs the collider on `objects` (meshes[i]'s views, their pair boxes the meshes' boxes) and
+// checks that the object pairs are the boxes' and that every intersecting triangle pair is kept
+// (crossing or undecided) and none twice, and that the PCS is the triangles of the kept pairs,
+// by slot; returns how many intersect.
 int ExpectEveryIntersectingPairKept(ComputeCollider& collider,
                                     std::span<const ComputeObject> objects,
-                                    const std::vector<Mesh>& meshes,
-                                    const std::vector<SlotPair>& pairs, const std::string& where) {
+                                    const std::vector<Mesh>& meshes, const std::string& where) {
   ComputeQuery query;
   query.objects = objects;
-  query.object_pairs = pairs;
   auto answer = collider.Run(query);
   EXPECT_TRUE(answer.ok()) << ToString(answer.error());
   if (!answer.ok()) return 0;
+  const std::vector<SlotPair> pairs = PairsOfBoxes(objects);
+  EXPECT_EQ(answer->object_pairs, pairs) << where;
   std::set<SlotContact> found;
   std::vector<std::vector<uint32_t>> pcs(objects.size());
   for (const auto* list : {&answer->crossing, &answer->undecided}) {
@@ -285,7 +311,6 @@ TEST_F(ComputeColliderTest, ADistanceQueryDropsOnlyPairsTheCpuWouldReject) {
     const std::vector<SlotPair> pairs = triangles.Pairs();
     ComputeQuery query;
     query.objects = triangles.Views(++world_key_);
-    query.object_pairs = pairs;
     query.slack = 1.0;  // wide: every pair the CPU accepts has boxes within it
     query.distance = true;
     query.max_distance = D;
@@ -345,13 +370,10 @@ TEST_F(ComputeColliderTest, TraversalFindsEveryIntersectingPairOfMeshes) {
                     nodes[o],
                     orders[o],
                     static_cast<uint64_t>(100 * scene + o + 1),
-                    ++world_key_};
+                    ++world_key_,
+                    BoxOf(meshes[o])};
     }
-    std::vector<SlotPair> pairs;
-    for (int a = 0; a < num_objects; ++a) {
-      for (int b = a + 1; b < num_objects; ++b) pairs.push_back({SlotAt(a), SlotAt(b)});
-    }
-    expected += ExpectEveryIntersectingPairKept(*collider_, objects, meshes, pairs,
+    expected += ExpectEveryIntersectingPairKept(*collider_, objects, meshes,
                                                 "scene " + std::to_string(scene));
   }
   EXPECT_GT(expected, 200) << "the scenes should have many intersecting pairs to find";
@@ -380,10 +402,6 @@ TEST_F(ComputeColliderTest, ObjectsThatDidNotMoveKeepTheirBoxes) {
     for (const auto& node : bvh.nodes()) nodes[o].push_back({node.first, node.count});
     orders[o] = bvh.order();
   }
-  const std::vector<SlotPair> pairs = {{SlotAt(0), SlotAt(1)},
-                                       {SlotAt(0), SlotAt(2)},
-                                       {SlotAt(1), SlotAt(3)},
-                                       {SlotAt(2), SlotAt(3)}};
   int found_total = 0;
   // Object 0 never moves; the others move on the steps that name them (vertices shifted and
   // jittered).
@@ -398,13 +416,67 @@ TEST_F(ComputeColliderTest, ObjectsThatDidNotMoveKeepTheirBoxes) {
     if (step == 0) world[0] = 1;
     std::vector<ComputeObject> objects(kObjects);
     for (int o = 0; o < kObjects; ++o) {
-      objects[o] = {meshes[o].p_MV, meshes[o].triangles,          nodes[o],
-                    orders[o],      static_cast<uint64_t>(o + 1), world[o]};
+      objects[o] = {meshes[o].p_MV,  meshes[o].triangles,          nodes[o],
+                    orders[o],       static_cast<uint64_t>(o + 1), world[o],
+                    BoxOf(meshes[o])};
     }
-    found_total += ExpectEveryIntersectingPairKept(*collider_, objects, meshes, pairs,
+    found_total += ExpectEveryIntersectingPairKept(*collider_, objects, meshes,
                                                    "step " + std::to_string(step));
   }
   EXPECT_GT(found_total, 50);
+}
+
+// The object pairs are sweep-and-prune's for the same boxes and margin: boxes with small integer
+// corners (many touch on a face, an edge or a corner), some empty or not finite, some objects
+// without triangles (paired, never descended), at margins 0 and 1; 2,000 objects make over
+// 4,096 pairs, so the pair buffer grows and the kernels run again.
+TEST_F(ComputeColliderTest, ObjectPairsAreThoseSweepAndPruneFinds) {
+  std::mt19937_64 rng(31);
+  const std::vector<Vector3d> vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  const std::vector<TriangleIndices> triangle = {{0, 1, 2}};
+  const std::vector<ComputeNode> leaf = {{0, 1}};
+  const std::vector<uint32_t> order = {0};
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const int num_objects : {3, 70, 2000}) {
+    for (const double margin : {0.0, 1.0}) {
+      std::vector<SlotBox> boxes;
+      std::vector<ComputeObject> objects;
+      for (int o = 0; o < num_objects; ++o) {
+        const double extent = num_objects < 100 ? 4 : 24;
+        const Vector3d lo(static_cast<double>(rng() % 40), static_cast<double>(rng() % 40),
+                          static_cast<double>(rng() % 40));
+        Eigen::AlignedBox3d box(
+            lo, lo + Vector3d::Constant(static_cast<double>(rng() % 5) * extent / 4));
+        if (o % 31 == 5) box = Eigen::AlignedBox3d();  // empty
+        if (o % 37 == 6) box.max().y() = nan;
+        boxes.push_back({SlotAt(o), box});
+        const bool no_triangles = o % 29 == 3;
+        objects.push_back({vertices, no_triangles ? std::span<const TriangleIndices>() : triangle,
+                           no_triangles ? std::span<const ComputeNode>() : leaf,
+                           no_triangles ? std::span<const uint32_t>() : order,
+                           static_cast<uint64_t>(o + 1), ++world_key_,
+                           SweepAndPrune::GrownBox(box, margin)});
+      }
+      const std::vector<SlotPair> expected = SweepAndPrune().Update(boxes, margin);
+      ComputeQuery query;
+      query.objects = objects;
+      auto collider = ComputeCollider::Create();  // its buffers as small as at first
+      ASSERT_TRUE(collider.ok()) << ToString(collider.error());
+      auto answer = (*collider)->Run(query);
+      ASSERT_TRUE(answer.ok()) << ToString(answer.error());
+      EXPECT_EQ(answer->object_pairs, expected) << num_objects << " objects, margin " << margin;
+      // Every descended pair is one triangle against one: the same triangle, crossing itself
+      // (coplanar: undecided), except for the objects without triangles.
+      size_t descended = 0;
+      for (const SlotPair& pair : expected)
+        descended += Index(pair.object_a) % 29 != 3 && Index(pair.object_b) % 29 != 3 ? 1 : 0;
+      EXPECT_EQ(static_cast<size_t>(answer->box_pairs), descended);
+      if (num_objects == 2000) {
+        EXPECT_GT(expected.size(), size_t{4096});
+        EXPECT_GT(answer->runs, 1) << "the pair buffer should have grown";
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "far/base/result.h"
 #include "far/model/contact_pair.h"
@@ -34,12 +35,16 @@ struct ComputeObject {
   uint64_t topology_key = 0;
   /// Changes whenever p_WV changes.
   uint64_t world_key = 0;
+  /// The object's world box as sweep-and-prune grows it (SweepAndPrune::GrownBox): two objects
+  /// whose pair boxes overlap, closed, on every axis are an object pair. Empty or not finite:
+  /// the object pairs with nothing.
+  Eigen::AlignedBox3d pair_box;
 };
 
-/// What a GPU step is asked: the triangle pairs of the object pairs whose boxes meet.
+/// What a GPU step is asked: the object pairs whose pair boxes meet, and the triangle pairs of
+/// those whose boxes meet.
 struct ComputeQuery {
   std::span<const ComputeObject> objects;  ///< by slot
-  std::span<const SlotPair> object_pairs;  ///< object_a < object_b, slots of `objects`
   /// Triangle boxes within this of each other on every axis meet (0: they share a point).
   double slack = 0;
   /// A distance query: every pair whose boxes meet is kept (for the CPU's distance), not only
@@ -51,8 +56,11 @@ struct ComputeQuery {
   double max_distance = std::numeric_limits<double>::infinity();
 };
 
-/// The GPU step's answer, unsorted.
+/// The GPU step's answer: object pairs sorted, triangle pairs unsorted.
 struct ComputeAnswer {
+  /// The object pairs (object_a < object_b), sorted: those SweepAndPrune::Update reports for
+  /// the same boxes.
+  std::vector<SlotPair> object_pairs;
   /// Pairs the filters proved to intersect (exactly the exact predicates' answer for them).
   std::vector<SlotContact> crossing;
   /// Pairs left to the CPU's exact predicates: not proven apart or crossing (a contact query),
@@ -79,8 +87,9 @@ struct ComputeAnswer {
 
 /// The GPU-resident part of the `gpu` method, in compute shaders of the current OpenGL 4.5
 /// context: each step uploads the world vertices of the objects that moved (and, when the set
-/// of objects changed, their triangles and hierarchy topologies), computes every triangle's
-/// box, refits every hierarchy, descends each object pair's hierarchies and classifies the
+/// of objects changed, their triangles and hierarchy topologies) and every object's box,
+/// computes every triangle's box, refits every hierarchy, finds the object pairs, descends each
+/// object pair's hierarchies and classifies the
 /// triangle pairs whose boxes meet with a float filter and then an fp64 filter, both with
 /// proven error bounds (docs/culling.md). The pairs are compacted on the GPU and read back
 /// once. Never drops a pair the exact predicates would accept.

@@ -31,6 +31,11 @@ class SweepAndPrune {
   /// that moved: the answer is the same. @pre margin >= 0.
   std::vector<SlotPair> Update(std::span<const SlotBox> boxes, double margin = 0.0);
 
+  /// The box Update tests for `box_W` at `margin`: each side moved out by margin / 2, rounded
+  /// as Update rounds it; two objects are a pair when theirs overlap, closed, on every axis.
+  /// An empty or non-finite box gives an empty one: it pairs with nothing.
+  static Eigen::AlignedBox3d GrownBox(const Eigen::AlignedBox3d& box_W, double margin);
+
   /// Number of endpoint swaps the last Update performed (0 when nothing moved).
   size_t last_swaps() const { return last_swaps_; }
 
@@ -55,7 +60,7 @@ class SweepAndPrune {
     std::vector<uint32_t> revived;  // slots whose box turned non-empty
     bool any_empty = false;
   };
-  Refreshed RefreshSlots(std::span<const SlotBox> boxes, double half);
+  Refreshed RefreshSlots(std::span<const SlotBox> boxes, double margin);
   void DropUnseen();
   bool RepairAxis(int axis, bool rebuild, std::span<const uint32_t> added);
   void SweepNewPairs(const std::vector<uint8_t>& is_new);
