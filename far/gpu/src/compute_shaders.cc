@@ -97,7 +97,10 @@ void main() {
 // The object pairs, as far's SweepAndPrune finds them: two slots whose boxes, grown by half the
 // margin each on the CPU (kPairBoxesBinding: lo xyz, hi xyz; a slot that pairs with nothing
 // has lo = +inf, hi = -inf), overlap closed on every axis. Only comparisons of the same doubles:
-// the same pairs on any device. Slot j from the x dimension, slot i from y; i < j.
+// the same pairs on any device. Slot j from the x dimension, slot i from y; i < j. All
+// n (n - 1) / 2 pairs are tested: on llvmpipe a step of 1,000 objects took 25 ms and one of
+// 10,000 took 1.9 s (the CPU's incremental sweep-and-prune: 0.08 and 1.7 ms); tiles of 64 x 64
+// pairs with the boxes in shared memory were 1.2-1.5x slower there.
 constexpr const char* kObjectPairs = R"(
 uniform uint u_slots;
 uniform uint u_pair_capacity;
