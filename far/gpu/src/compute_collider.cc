@@ -34,8 +34,10 @@ static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double), "world vertices upl
 // or crossing triangle pairs than the most is refused (the bvh method answers it).
 constexpr size_t kFirstCapacity = size_t{1} << 16;
 constexpr size_t kMostCapacity = size_t{1} << 25;
-// Object pairs at first (8 bytes each; grown as the output buffers are, to kMostCapacity).
+// Object pairs at first and at most (40 bytes each with their work): a step with more is
+// refused (the bvh method answers it).
 constexpr size_t kFirstPairCapacity = size_t{1} << 12;
+constexpr size_t kMostPairCapacity = size_t{1} << 22;
 
 using Clock = std::chrono::steady_clock;
 
@@ -127,6 +129,7 @@ struct ComputeCollider::Impl {
   uint32_t total_vertices = 0, total_triangles = 0, total_nodes = 0;
   size_t capacity = kFirstCapacity;
   size_t pair_capacity = kFirstPairCapacity;
+  size_t num_pair_boxes = 0;             // uploaded by UploadPairBoxes
   std::vector<Eigen::Vector3d> staging;  // the vertices of one upload
   std::vector<size_t> moved;             // slots whose vertices this step uploaded
   // The refit's work for one set of moved slots, on the GPU already (kRangesBinding,
@@ -141,14 +144,14 @@ struct ComputeCollider::Impl {
   RefitPlan refit_plan;
   // Uniform locations, looked up once.
   GLint boxes_count = -1, boxes_ranges = -1, refit_count = -1, refit_first = -1;
-  GLint pairs_slots = -1, pairs_capacity = -1, work_capacity = -1;
+  GLint pairs_boxes = -1, pairs_capacity = -1, work_capacity = -1;
   // GL_TIME_ELAPSED queries: uploads, boxes and refit; the traversal.
   GLuint refit_query = 0, traverse_query = 0;
 
   Buffer& buffer(internal::ComputeBinding binding) { return buffers[binding]; }
   Result<int64_t> EnsureLayout(std::span<const ComputeObject> objects);
   int64_t UploadVertices(std::span<const ComputeObject> objects);
-  // Each slot's pair box (lo, hi; +inf, -inf when it pairs with nothing); returns the bytes.
+  // The pair boxes of the objects that pair at all, sorted by low x; returns the bytes.
   int64_t UploadPairBoxes(std::span<const ComputeObject> objects);
   // The boxes of the moved objects' triangles, then their hierarchies level by level, deepest
   // first (the other objects' boxes stay as computed before); returns the bytes uploaded.
@@ -364,14 +367,16 @@ int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> obj
 }
 
 int64_t ComputeCollider::Impl::UploadPairBoxes(std::span<const ComputeObject> objects) {
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  std::vector<std::array<double, 6>> boxes(objects.size(), {kInf, kInf, kInf, -kInf, -kInf, -kInf});
+  // The boxes of the objects that pair at all, by low x: the kernel sweeps them in this order.
+  std::vector<std::array<double, 8>> boxes;
   for (size_t s = 0; s < objects.size(); ++s) {
-    const Eigen::AlignedBox3d& box = objects[s].pair_box;
     if (!PairsAtAll(objects[s])) continue;
-    boxes[s] = {box.min().x(), box.min().y(), box.min().z(),
-                box.max().x(), box.max().y(), box.max().z()};
+    const Eigen::Vector3d& lo = objects[s].pair_box.min();
+    const Eigen::Vector3d& hi = objects[s].pair_box.max();
+    boxes.push_back({lo.x(), lo.y(), lo.z(), static_cast<double>(s), hi.x(), hi.y(), hi.z(), 0.0});
   }
+  std::sort(boxes.begin(), boxes.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
+  num_pair_boxes = boxes.size();
   const size_t bytes = boxes.size() * sizeof(boxes[0]);
   buffer(internal::kPairBoxesBinding).Reserve(bytes);
   if (bytes > 0) {
@@ -516,12 +521,11 @@ void ComputeCollider::Impl::DispatchPairsAndTraversal() {
   }
   pending->traverse_start = Clock::now();
   glBeginQuery(GL_TIME_ELAPSED, traverse_query);
-  // The object pairs: (slot i, slot j) with j from x and i from y.
-  const auto slots = static_cast<GLuint>(layout.size());
+  // The object pairs: a box per invocation sweeps the boxes after it.
   glUseProgram(pairs_program);
-  glProgramUniform1ui(pairs_program, pairs_slots, slots);
+  glProgramUniform1ui(pairs_program, pairs_boxes, static_cast<GLuint>(num_pair_boxes));
   glProgramUniform1ui(pairs_program, pairs_capacity, static_cast<GLuint>(pair_capacity));
-  glDispatchCompute(Groups(slots), std::clamp<GLuint>(slots, 1, 65535), 1);
+  glDispatchCompute(Groups(num_pair_boxes), 1, 1);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   // Their work and the traversal's dispatch, which the traversal then reads as commands.
   glUseProgram(work_program);
@@ -561,10 +565,10 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
     // Too many object pairs: their work and the traversal saw only the first pair_capacity.
     const size_t object_pairs = counters[internal::kObjectPairCount];
     if (object_pairs > pair_capacity) {
-      if (object_pairs > kMostCapacity) {
+      if (object_pairs > kMostPairCapacity) {
         return MakeError(ErrorCode::kLimitExceeded, "gpu method: " + std::to_string(object_pairs) +
                                                         " object pairs, over its limit " +
-                                                        std::to_string(kMostCapacity) +
+                                                        std::to_string(kMostPairCapacity) +
                                                         "; 'bvh' answers this scene");
       }
       pair_capacity = std::bit_ceil(object_pairs);
@@ -651,7 +655,7 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   impl->boxes_ranges = glGetUniformLocation(impl->boxes_program, "u_ranges");
   impl->refit_count = glGetUniformLocation(impl->refit_program, "u_count");
   impl->refit_first = glGetUniformLocation(impl->refit_program, "u_first");
-  impl->pairs_slots = glGetUniformLocation(impl->pairs_program, "u_slots");
+  impl->pairs_boxes = glGetUniformLocation(impl->pairs_program, "u_boxes");
   impl->pairs_capacity = glGetUniformLocation(impl->pairs_program, "u_pair_capacity");
   impl->work_capacity = glGetUniformLocation(impl->work_program, "u_pair_capacity");
   for (Buffer& b : impl->buffers) glCreateBuffers(1, &b.id);

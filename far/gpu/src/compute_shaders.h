@@ -25,7 +25,7 @@ enum ComputeBinding : int {
   kRangesBinding = 11,       // uvec2[ranges]: the moved objects' triangles (first, before)
   kRefitListBinding = 12,    // uint[]: the moved objects' nodes, level by level, deepest first
   kPcsBitsBinding = 13,      // uint[]: a bit per global triangle, set when a kept pair holds it
-  kPairBoxesBinding = 14,    // double[6 * slots]: each slot's box as sweep-and-prune grows it
+  kPairBoxesBinding = 14,    // double[8 * boxes]: pair boxes by low x (lo, slot, hi, 0)
   kSlotsBinding = 15,        // uvec4[slots]: first triangle, triangles, root node, nodes
   kObjectPairsBinding = 16,  // uvec2[pair capacity]: the object pairs found (slot < slot)
   kDispatchBinding = 17,     // uint[kNumDispatchWords]: the traversal's indirect dispatch
@@ -60,7 +60,8 @@ inline constexpr int kComputeGroupSize = 64;
 /// Entries of a traversal's stack: hierarchies deeper than this minus one are refused.
 inline constexpr int kTraversalStack = 64;
 
-/// One (slot, slot) per invocation: the object pairs whose boxes (kPairBoxesBinding) meet.
+/// One box per invocation, sweeping the boxes sorted after it: the object pairs whose boxes
+/// (kPairBoxesBinding) meet.
 std::string ObjectPairsSource();
 /// One work group: each object pair's traversal work (its driver, the smaller object, whose
 /// triangles descend the other's hierarchy), their prefix sums and the traversal's dispatch.

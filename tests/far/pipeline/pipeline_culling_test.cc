@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <random>
 #include <set>
 #include <sstream>
@@ -527,6 +528,44 @@ TEST_F(PipelineCullingTest, StagesPastTheDeepestOutputDoNotRun) {
     if (output < Output::kContacts) {
       EXPECT_TRUE(result.contacts.empty());
     }
+  }
+}
+
+// The gpu method finds its object pairs on the GPU (no sweep_and_prune stage when it runs to
+// the triangles): the very pairs, and the same object PCS, that sweep-and-prune gives bvh.
+// One-triangle objects with known boxes: 2 touches 1 on a face and 4 on a corner, 4 touches 3
+// on an edge, 3 is 0.5 beyond 2 (a pair only within a distance of 0.6), 5 is far, and 6 and 7
+// touch on an edge a million from the origin.
+TEST_F(PipelineCullingTest, GpuFindsTheObjectPairsSweepAndPruneFinds) {
+  const auto triangle_in_box = [](uint32_t id, const Eigen::Vector3d& lo) {
+    SceneObject object;
+    object.id = id;
+    object.mesh.p_MV = {lo, lo + Eigen::Vector3d(1, 1, 0), lo + Eigen::Vector3d(0, 1, 1)};
+    object.mesh.triangles = {{0, 1, 2}};
+    return object;
+  };
+  Load({triangle_in_box(1, {0, 0, 0}), triangle_in_box(2, {1, 0, 0}),
+        triangle_in_box(3, {2.5, 0, 0}), triangle_in_box(4, {2, 1, 1}),
+        triangle_in_box(5, {40, 40, 40}), triangle_in_box(6, {-1e6, 0, 0}),
+        triangle_in_box(7, {-1e6 + 1, 1, 0})});
+  for (const std::optional<double> distance : {std::optional<double>(), std::optional(0.6)}) {
+    StepRequest bvh;
+    bvh.method = Method::kBvh;
+    bvh.distance = distance;
+    if (distance) bvh.output = Output::kDistancePairs;
+    StepRequest gpu = bvh;
+    gpu.method = Method::kGpu;
+    const StepResult expected = Run(bvh);
+    const StepResult found = Run(gpu);
+    const std::string what = distance ? "within 0.6" : "contacts";
+    EXPECT_EQ(expected.object_pairs.size(), distance ? 5u : 4u) << what;
+    EXPECT_EQ(found.object_pairs, expected.object_pairs) << what;
+    EXPECT_EQ(found.pcs_objects, expected.pcs_objects) << what;
+    EXPECT_EQ(found.stats.object_pairs, expected.stats.object_pairs) << what;
+    EXPECT_EQ(found.contacts, expected.contacts) << what;
+    EXPECT_EQ(found.distance_pairs, expected.distance_pairs) << what;
+    for (const StageStats& stage : found.stats.stages)
+      EXPECT_NE(stage.stage, Stage::kSweepAndPrune) << what;
   }
 }
 

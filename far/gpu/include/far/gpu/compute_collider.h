@@ -80,7 +80,7 @@ struct ComputeAnswer {
   int runs = 1;  ///< traversals run: more than one when the output buffers had to grow
   // Where the time went (milliseconds). CPU: issuing the uploads and kernels, then waiting for
   // the GPU and reading the pairs back. GPU (timer queries): the uploads with the boxes and
-  // refit, and the (last) traversal.
+  // refit, and the (last) object pairs and traversal.
   double cpu_submit_ms = 0, cpu_wait_ms = 0;
   double gpu_refit_ms = 0, gpu_traverse_ms = 0;
 };
@@ -104,7 +104,8 @@ class ComputeCollider {
   ComputeCollider& operator=(const ComputeCollider&) = delete;
 
   /// Runs one step. Errors: kUnavailable when a hierarchy is too deep for the traversal's
-  /// stack or the work is over the kernels' 32-bit counts; kInternal for a GL error.
+  /// stack or the work is over the kernels' 32-bit counts; kLimitExceeded for more object
+  /// pairs or triangle pairs to read back than its limits; kInternal for a GL error.
   Result<ComputeAnswer> Run(const ComputeQuery& query);
 
   /// Run in two halves, for a caller that puts several colliders' steps on the GPU together

@@ -74,11 +74,11 @@ struct GpuFilterCounters {
   /// A distance query's pairs within the slack that the GPU proved farther than D (with the
   /// CPU's rounding): not sent to the CPU.
   int64_t distance_culled = 0;
-  int traversals = 0;  ///< GPU traversals run (more than 1: its output buffers grew)
+  int traversals = 0;  ///< GPU traversals run (more than 1: its buffers grew)
   /// Deformable objects whose hierarchy topology was rebuilt, refitting having made it loose.
   int topologies_rebuilt = 0;
   double gpu_refit_ms = 0;     ///< GPU time of the uploads, triangle boxes and refit
-  double gpu_traverse_ms = 0;  ///< GPU time of the traversal with the filters
+  double gpu_traverse_ms = 0;  ///< GPU time of the object pairs and the traversal
   bool operator==(const GpuFilterCounters&) const = default;
 };
 
