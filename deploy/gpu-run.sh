@@ -268,7 +268,7 @@ main() {
   # Issue 42: the gpu method held to exact on this GPU's own rasterizer and arithmetic, then
   # timed beside bvh and FAR (far-study, one interleaved run per family), then the shared case
   # through the daemon (16 clients burning CPU per step).
-  local gpu_tests='ComputeCollider*:ComputeBatcher*:PipelineCullingTest.Reliable*:PipelineCullingTest.HardCases*:PipelineCullingTest.DistanceCulling*:PipelineCullingTest.OneHuge*:PipelineCullingTest.TinyContact*:PipelineCullingTest.AutoRuns*'
+  local gpu_tests='ComputeCollider*:ComputeBatcher*:PipelineCullingTest.Reliable*:PipelineCullingTest.HardCases*:PipelineCullingTest.DistanceCulling*:PipelineCullingTest.OneHuge*:PipelineCullingTest.TinyContact*:PipelineCullingTest.AutoRuns*:PipelineCullingTest.GpuFinds*'
   local paper=(--scenes paper-leaves --methods bvh,gpu,auto,far --paper-gpu far/id-buffer/256
     --steps 8 --distance paper --reference-steps 2)
   local scaling=(--scenes scaling --scaling-sizes 50000,100000,150000,300000,600000,1000000
