@@ -149,8 +149,17 @@ struct ComputeCollider::Impl {
   GLuint refit_query = 0, traverse_query = 0;
 
   Buffer& buffer(internal::ComputeBinding binding) { return buffers[binding]; }
+  // Grows `binding`'s buffer to hold `bytes` and uploads them to its start; returns the bytes.
+  int64_t Upload(internal::ComputeBinding binding, const void* data, size_t bytes) {
+    buffer(binding).Reserve(bytes);
+    if (bytes > 0)
+      glNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(bytes), data);
+    return static_cast<int64_t>(bytes);
+  }
   Result<int64_t> EnsureLayout(std::span<const ComputeObject> objects);
   int64_t UploadVertices(std::span<const ComputeObject> objects);
+  // The slots' triangle and node ranges (kSlotsBinding); returns the bytes.
+  int64_t UploadSlots(std::span<const SlotLayout> slots);
   // The pair boxes of the objects that pair at all, sorted by low x; returns the bytes.
   int64_t UploadPairBoxes(std::span<const ComputeObject> objects);
   // The boxes of the moved objects' triangles, then their hierarchies level by level, deepest
@@ -240,15 +249,6 @@ Result<std::vector<std::vector<uint32_t>>> AppendNodes(const ComputeObject& obje
   return levels;
 }
 
-// Per slot, for the object pairs' work: first triangle, triangles, root node, nodes.
-std::vector<std::array<uint32_t, 4>> SlotTable(std::span<const SlotLayout> layout) {
-  std::vector<std::array<uint32_t, 4>> slots;
-  slots.reserve(layout.size());
-  for (const SlotLayout& at : layout)
-    slots.push_back({at.triangle_base, at.triangles, at.node_base, at.nodes});
-  return slots;
-}
-
 }  // namespace
 
 // Lays the objects out one after another and uploads their triangles and hierarchies when any
@@ -314,18 +314,11 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
   buffer(internal::kOrderBinding).Reserve(order.size() * sizeof(uint32_t));
   buffer(internal::kNodeBoxesBinding).Reserve(2 * nodes * 4 * sizeof(float));
   buffer(internal::kPcsBitsBinding).Reserve((triangles + 31) / 32 * sizeof(uint32_t));
-  const auto upload = [&](internal::ComputeBinding binding, const void* data, size_t bytes) {
-    if (bytes > 0)
-      glNamedBufferSubData(buffer(binding).id, 0, static_cast<GLsizeiptr>(bytes), data);
-    return static_cast<int64_t>(bytes);
-  };
-  int64_t uploaded = upload(internal::kTrianglesBinding, triangle_vertices.data(),
+  int64_t uploaded = Upload(internal::kTrianglesBinding, triangle_vertices.data(),
                             triangle_vertices.size() * sizeof(uint32_t));
-  uploaded += upload(internal::kNodesBinding, node_data.data(), node_data.size() * 16);
-  uploaded += upload(internal::kOrderBinding, order.data(), order.size() * sizeof(uint32_t));
-  const std::vector<std::array<uint32_t, 4>> slots = SlotTable(next);
-  buffer(internal::kSlotsBinding).Reserve(slots.size() * 16);
-  uploaded += upload(internal::kSlotsBinding, slots.data(), slots.size() * 16);
+  uploaded += Upload(internal::kNodesBinding, node_data.data(), node_data.size() * 16);
+  uploaded += Upload(internal::kOrderBinding, order.data(), order.size() * sizeof(uint32_t));
+  uploaded += UploadSlots(next);
   layout = std::move(next);
   refit_plan = {};
   total_vertices = static_cast<uint32_t>(vertices);
@@ -366,6 +359,15 @@ int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> obj
   return uploaded;
 }
 
+int64_t ComputeCollider::Impl::UploadSlots(std::span<const SlotLayout> slots) {
+  // Per slot, for the object pairs' work: first triangle, triangles, root node, nodes.
+  std::vector<std::array<uint32_t, 4>> table;
+  table.reserve(slots.size());
+  for (const SlotLayout& at : slots)
+    table.push_back({at.triangle_base, at.triangles, at.node_base, at.nodes});
+  return Upload(internal::kSlotsBinding, table.data(), table.size() * sizeof(table[0]));
+}
+
 int64_t ComputeCollider::Impl::UploadPairBoxes(std::span<const ComputeObject> objects) {
   // The boxes of the objects that pair at all, by low x: the kernel sweeps them in this order.
   std::vector<std::array<double, 8>> boxes;
@@ -377,13 +379,7 @@ int64_t ComputeCollider::Impl::UploadPairBoxes(std::span<const ComputeObject> ob
   }
   std::sort(boxes.begin(), boxes.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
   num_pair_boxes = boxes.size();
-  const size_t bytes = boxes.size() * sizeof(boxes[0]);
-  buffer(internal::kPairBoxesBinding).Reserve(bytes);
-  if (bytes > 0) {
-    glNamedBufferSubData(buffer(internal::kPairBoxesBinding).id, 0, static_cast<GLsizeiptr>(bytes),
-                         boxes.data());
-  }
-  return static_cast<int64_t>(bytes);
+  return Upload(internal::kPairBoxesBinding, boxes.data(), boxes.size() * sizeof(boxes[0]));
 }
 
 int64_t ComputeCollider::Impl::PlanRefit() {
