@@ -301,6 +301,10 @@ int SideDouble(dvec3 a, dvec3 b, dvec3 c, dvec3 d) {
   if (-det > bound) return -1;
   return 0;
 }
+// x[k] by constant indices: NVIDIA's compiler (driver 580.159) lost double precision in dvec3
+// arrays indexed by a variable in a loop (see Visit), so no kernel indexes them by a variable.
+dvec3 Corner(dvec3 x[3], int k) { return k == 0 ? x[0] : (k == 1 ? x[1] : x[2]); }
+
 $CLASSIFY_FLOAT
 $CLASSIFY_DOUBLE
 
@@ -398,12 +402,19 @@ void Append(bool to_crossing, uvec4 entry) {
 // (the CPU then computes only the distance).
 void Visit(uint driver_tri, uint other_tri, uvec4 w0, uvec4 w1) {
   ++g_box_pairs;
+  // Each corner by a constant index, not in a loop: NVIDIA's compiler (driver 580.159, on an
+  // H200) kept dvec3 array elements filled in a loop over an int at float precision, and the
+  // filters then certified wrong signs (the self-check and the hair-off-a-plane tests failed).
+  uint ds = 3u * driver_tri;
+  uint os = 3u * other_tri;
   dvec3 s[3];
   dvec3 t[3];
-  for (int k = 0; k < 3; ++k) {
-    s[k] = Vertex(tri_vertex[3u * driver_tri + uint(k)]);
-    t[k] = Vertex(tri_vertex[3u * other_tri + uint(k)]);
-  }
+  s[0] = Vertex(tri_vertex[ds]);
+  s[1] = Vertex(tri_vertex[ds + 1u]);
+  s[2] = Vertex(tri_vertex[ds + 2u]);
+  t[0] = Vertex(tri_vertex[os]);
+  t[1] = Vertex(tri_vertex[os + 1u]);
+  t[2] = Vertex(tri_vertex[os + 2u]);
   int c = ClassifyFloat(s, t);
   if (c != kUndecided) {
     ++g_float_decided;
@@ -509,12 +520,12 @@ int $NAME(dvec3 s[3], dvec3 t[3]) {
   int it = tau0 != tau1 && tau0 != tau2 ? 0 : (tau1 != tau0 && tau1 != tau2 ? 1 : 2);
   int eps_s = is == 0 ? sig0 : (is == 1 ? sig1 : sig2);
   int eps_t = it == 0 ? tau0 : (it == 1 ? tau1 : tau2);
-  dvec3 v = s[is];
-  dvec3 w1 = s[(is + 1) % 3];
-  dvec3 w2 = s[(is + 2) % 3];
-  dvec3 u = t[it];
-  dvec3 z1 = t[(it + 1) % 3];
-  dvec3 z2 = t[(it + 2) % 3];
+  dvec3 v = Corner(s, is);
+  dvec3 w1 = Corner(s, (is + 1) % 3);
+  dvec3 w2 = Corner(s, (is + 2) % 3);
+  dvec3 u = Corner(t, it);
+  dvec3 z1 = Corner(t, (it + 1) % 3);
+  dvec3 z2 = Corner(t, (it + 2) % 3);
   if (eps_t < 0) { dvec3 x = w1; w1 = w2; w2 = x; }
   if (eps_s < 0) { dvec3 x = z1; z1 = z2; z2 = x; }
   // They meet iff Orient3d(v, w1, u, z1) <= 0 and Orient3d(v, w2, u, z2) >= 0.
