@@ -8,7 +8,7 @@ CPU cost but the kernels, which run inside gl_prepare there). The binaries alter
 machine's drift hits them alike.
 
 Usage: bench/study/ab_step_stages.py [--runs 5] [--steps 30] [--scene paper-leaves]
-           [--method gpu] BINARY...
+           [--method gpu] [--distance-fraction F] BINARY...
   e.g. cp build/release/bench/study/far-step-profile /tmp/old  (then rebuild the change)
        bench/study/ab_step_stages.py /tmp/old build/release/bench/study/far-step-profile
 """
@@ -32,13 +32,17 @@ def main():
     parser.add_argument("--steps", type=int, default=30)
     parser.add_argument("--scene", default="paper-leaves")
     parser.add_argument("--method", default="gpu")
+    parser.add_argument("--distance-fraction", default="0",
+                        help="far-step-profile's: distance pairs too, D this fraction of the "
+                             "scene's diagonal (0: contacts only)")
     parser.add_argument("binaries", nargs="+")
     args = parser.parse_args()
     times = {b: collections.defaultdict(list) for b in args.binaries}
     for _ in range(args.runs):
         for binary in args.binaries:
             out = subprocess.run([binary, "--scene", args.scene, "--method", args.method,
-                                  "--steps", str(args.steps)],
+                                  "--steps", str(args.steps),
+                                  "--distance-fraction", args.distance_fraction],
                                  capture_output=True, text=True, check=True).stdout
             for line in out.splitlines()[2:]:  # the header, then step 0 (the one-off work)
                 fields = line.split(",", 13)

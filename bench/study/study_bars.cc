@@ -323,7 +323,7 @@ void GpuStepBar(const std::vector<SceneReport>& reports, const RunInfo& info, Ou
      << "| scene | triangles | bvh ms | gpu ms (p25-p75) | bvh / gpu | gpu missed / spurious | "
         "gpu distance: ms, missed / spurious, pairs to the CPU, cut on the GPU | where gpu's time "
         "goes (median ms) | triangle pairs: "
-        "boxes met, decided in float, in fp64, to the CPU; GPU ms: refit, traversal |\n"
+        "boxes met, decided in float, in fp64, to the CPU; GPU ms: refit, traversal, filters |\n"
      << "|---|--:|--:|--:|--:|--:|---|---|---|\n";
   bool exact = true, any_checked = false;
   std::string wrong, leaves_text = "paper-leaves not run with gpu and bvh";
@@ -353,7 +353,8 @@ void GpuStepBar(const std::vector<SceneReport>& reports, const RunInfo& info, Ou
                  : "not run")
        << " | " << StageText(*gpu) << " | " << Count(gpu->gpu_box_pairs) << ", "
        << Count(gpu->gpu_float) << ", " << Count(gpu->gpu_double) << ", " << Count(gpu->gpu_cpu)
-       << "; " << Ms(gpu->gpu_refit_ms) << ", " << Ms(gpu->gpu_traverse_ms) << " |\n";
+       << "; " << Ms(gpu->gpu_refit_ms) << ", " << Ms(gpu->gpu_traverse_ms) << ", "
+       << Ms(gpu->gpu_filter_ms) << " |\n";
     if (bvh == nullptr) continue;
     if (report.family == Family::kScaling) scaling.emplace_back(report.triangles, ratio);
     if (report.name == "paper-leaves") {

@@ -338,6 +338,7 @@ void SummarizeCounts(const std::vector<Sample>& s, Row& row) {
   row.gpu_distance_culled = filter(&far::GpuFilterCounters::distance_culled);
   row.gpu_refit_ms = filter(&far::GpuFilterCounters::gpu_refit_ms);
   row.gpu_traverse_ms = filter(&far::GpuFilterCounters::gpu_traverse_ms);
+  row.gpu_filter_ms = filter(&far::GpuFilterCounters::gpu_filter_ms);
   row.contacts = SumOf(s, [](const Sample& x) { return x.contacts; });
   row.reference_contacts = SumOf(s, [](const Sample& x) { return x.reference; });
   row.missed = SumOf(s, [](const Sample& x) { return x.missed; });

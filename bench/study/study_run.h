@@ -98,7 +98,7 @@ struct Row {
   /// gpu: medians of its filters' pairs (boxes met, float-decided, fp64-decided, to the CPU)
   /// and of the GPU time of its refit and traversal.
   double gpu_box_pairs = 0, gpu_float = 0, gpu_double = 0, gpu_cpu = 0, gpu_distance_culled = 0;
-  double gpu_refit_ms = 0, gpu_traverse_ms = 0;
+  double gpu_refit_ms = 0, gpu_traverse_ms = 0, gpu_filter_ms = 0;
   int64_t contacts = 0, reference_contacts = 0, missed = 0, false_positives = 0;
   int64_t distance_pairs = 0, distance_reference = 0, distance_missed = 0, distance_spurious = 0;
   int64_t object_pairs_total = 0, pairs_considered_total = 0;

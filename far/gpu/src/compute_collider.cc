@@ -30,8 +30,9 @@ namespace {
 
 static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double), "world vertices upload as they lie");
 
-// Output entries per buffer at first, and at most (16 bytes each): a step with more undecided
-// or crossing triangle pairs than the most is refused (the bvh method answers it).
+// Entries per buffer of triangle pairs (the candidates, the crossing and the undecided ones) at
+// first, and at most (16 bytes each): a step with more triangle pairs whose boxes meet than the
+// most is refused (the bvh method answers it).
 constexpr size_t kFirstCapacity = size_t{1} << 16;
 constexpr size_t kMostCapacity = size_t{1} << 25;
 // Object pairs at first and at most (40 bytes each with their work): a step with more is
@@ -118,16 +119,18 @@ Result<GLuint> CompileCompute(const std::string& source, const char* what) {
 
 struct ComputeCollider::Impl {
   GLuint boxes_program = 0, refit_program = 0, pairs_program = 0, work_program = 0;
-  // The traversal: [0] for contact queries, [1] for distance queries (TraverseSource).
-  struct TraverseKernel {
+  GLuint traverse_program = 0, filter_dispatch_program = 0;
+  // The filters: [0] for contact queries, [1] for distance queries (FilterSource).
+  struct FilterKernel {
     GLuint program = 0;
-    GLint capacity = -1, slack = -1, max_distance = -1;
+    GLint capacity = -1, max_distance = -1;
   };
-  std::array<TraverseKernel, 2> traverse;
+  std::array<FilterKernel, 2> filter;
   std::array<Buffer, internal::kNumBindings> buffers;
   std::vector<SlotLayout> layout;
   uint32_t total_vertices = 0, total_triangles = 0, total_nodes = 0;
-  size_t capacity = kFirstCapacity;
+  size_t capacity = kFirstCapacity;            // crossing and undecided entries
+  size_t candidate_capacity = kFirstCapacity;  // triangle pairs whose boxes meet
   size_t pair_capacity = kFirstPairCapacity;
   size_t num_pair_boxes = 0;             // uploaded by UploadPairBoxes
   std::vector<Eigen::Vector3d> staging;  // the vertices of one upload
@@ -145,8 +148,9 @@ struct ComputeCollider::Impl {
   // Uniform locations, looked up once.
   GLint boxes_count = -1, boxes_ranges = -1, refit_count = -1, refit_first = -1;
   GLint pairs_boxes = -1, pairs_capacity = -1, work_capacity = -1;
-  // GL_TIME_ELAPSED queries: uploads, boxes and refit; the traversal.
-  GLuint refit_query = 0, traverse_query = 0;
+  GLint traverse_slack = -1, traverse_capacity = -1, filter_dispatch_capacity = -1;
+  // GL_TIME_ELAPSED queries: uploads, boxes and refit; object pairs and traversal; filters.
+  GLuint refit_query = 0, traverse_query = 0, filter_query = 0;
 
   Buffer& buffer(internal::ComputeBinding binding) { return buffers[binding]; }
   // Grows `binding`'s buffer to hold `bytes` and uploads them to its start; returns the bytes.
@@ -178,7 +182,7 @@ struct ComputeCollider::Impl {
   struct Pending {
     ComputeQuery query;
     bool gl_work = false;  // at least two slots have a pair box: the kernels run
-    Clock::time_point submit_start, traverse_start;  // when the timer queries began
+    Clock::time_point submit_start, traverse_start, filter_start;  // the timer queries' begins
     int64_t uploaded = 0;
     double cpu_submit_ms = 0;
   };
@@ -189,7 +193,8 @@ struct ComputeCollider::Impl {
   // Uploads, boxes, refit, and the object pairs and traversal's dispatches.
   Result<void> SubmitGl();
   // Binds this collider's buffers, clears the counters and bits, and dispatches the object
-  // pairs, their work and the traversal, with the buffers at `pair_capacity` and `capacity`.
+  // pairs, their work, the traversal and the filters, with the buffers at `pair_capacity`,
+  // `candidate_capacity` and `capacity`.
   void DispatchPairsAndTraversal();
   // Waits for the kernels (again, with larger buffers, when some overflowed) and reads the
   // answer back.
@@ -504,6 +509,7 @@ void ComputeCollider::Impl::DispatchPairsAndTraversal() {
   buffer(internal::kWorkBinding).Reserve(pair_capacity * 32);
   buffer(internal::kWorkStartBinding).Reserve((pair_capacity + 1) * sizeof(uint32_t));
   buffer(internal::kDispatchBinding).Reserve(internal::kNumDispatchWords * sizeof(uint32_t));
+  buffer(internal::kCandidatesBinding).Reserve(candidate_capacity * 16);
   buffer(internal::kCrossingBinding).Reserve(capacity * 16);
   buffer(internal::kUndecidedBinding).Reserve(capacity * 16);
   const uint32_t zero = 0;
@@ -528,13 +534,27 @@ void ComputeCollider::Impl::DispatchPairsAndTraversal() {
   glProgramUniform1ui(work_program, work_capacity, static_cast<GLuint>(pair_capacity));
   glDispatchCompute(1, 1, 1);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
-  const TraverseKernel& kernel = traverse[query.distance ? 1 : 0];
+  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, buffer(internal::kDispatchBinding).id);
+  // The traversal appends the triangle pairs whose boxes meet...
+  glUseProgram(traverse_program);
+  glProgramUniform1f(traverse_program, traverse_slack, FloatAtLeast(query.slack));
+  glProgramUniform1ui(traverse_program, traverse_capacity, static_cast<GLuint>(candidate_capacity));
+  glDispatchComputeIndirect(internal::kGroupsX * sizeof(GLuint));
+  glEndQuery(GL_TIME_ELAPSED);
+  pending->filter_start = Clock::now();
+  glBeginQuery(GL_TIME_ELAPSED, filter_query);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  glUseProgram(filter_dispatch_program);
+  glProgramUniform1ui(filter_dispatch_program, filter_dispatch_capacity,
+                      static_cast<GLuint>(candidate_capacity));
+  glDispatchCompute(1, 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+  // ...and the filters classify them, one per invocation.
+  const FilterKernel& kernel = filter[query.distance ? 1 : 0];
   glUseProgram(kernel.program);
   glProgramUniform1ui(kernel.program, kernel.capacity, static_cast<GLuint>(capacity));
-  glProgramUniform1f(kernel.program, kernel.slack, FloatAtLeast(query.slack));
   if (query.distance) glProgramUniform1d(kernel.program, kernel.max_distance, query.max_distance);
-  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, buffer(internal::kDispatchBinding).id);
-  glDispatchComputeIndirect(0);
+  glDispatchComputeIndirect(internal::kFilterGroupsX * sizeof(GLuint));
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
   glEndQuery(GL_TIME_ELAPSED);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -577,16 +597,25 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
                        "gpu method: over 2^32 triangles to descend in one step; 'bvh' answers "
                        "this scene");
     }
+    // Too many triangle pairs whose boxes meet: the filters saw only the first
+    // candidate_capacity (the outputs hold at most as many).
+    const size_t box_pairs = counters[internal::kBoxPairs];
+    if (box_pairs > candidate_capacity) {
+      if (box_pairs > kMostCapacity) {
+        return MakeError(ErrorCode::kLimitExceeded,
+                         "gpu method: " + std::to_string(box_pairs) +
+                             " triangle pairs whose boxes meet, over its limit " +
+                             std::to_string(kMostCapacity) + "; 'bvh' answers this scene");
+      }
+      candidate_capacity = std::bit_ceil(box_pairs);
+      ++answer.runs;
+      DispatchPairsAndTraversal();
+      continue;
+    }
     const size_t most =
         std::max(counters[internal::kCrossingCount], counters[internal::kUndecidedCount]);
     if (most <= capacity) break;
-    if (most > kMostCapacity) {
-      return MakeError(ErrorCode::kLimitExceeded,
-                       "gpu method: " + std::to_string(most) +
-                           " triangle pairs to read back, over its limit " +
-                           std::to_string(kMostCapacity) + "; 'bvh' answers this scene");
-    }
-    capacity = std::bit_ceil(most);
+    capacity = std::bit_ceil(most);  // at most candidate_capacity
     ++answer.runs;
     DispatchPairsAndTraversal();
   }
@@ -597,8 +626,10 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
   if (auto ok = CheckGl("gpu method: reading the pairs back"); !ok) return ok.error();
   const GLuint64 refit_ns = internal::ElapsedNsOrZero(refit_query, pending->submit_start);
   const GLuint64 traverse_ns = internal::ElapsedNsOrZero(traverse_query, pending->traverse_start);
+  const GLuint64 filter_ns = internal::ElapsedNsOrZero(filter_query, pending->filter_start);
   answer.gpu_refit_ms = 1e-6 * static_cast<double>(refit_ns);
   answer.gpu_traverse_ms = 1e-6 * static_cast<double>(traverse_ns);
+  answer.gpu_filter_ms = 1e-6 * static_cast<double>(filter_ns);
   answer.cpu_wait_ms += MsSince(read_start);
   answer.box_pairs = counters[internal::kBoxPairs];
   answer.float_decided = counters[internal::kFloatDecided];
@@ -614,9 +645,11 @@ ComputeCollider::~ComputeCollider() {
   for (Buffer& b : impl_->buffers) glDeleteBuffers(1, &b.id);
   glDeleteQueries(1, &impl_->refit_query);
   glDeleteQueries(1, &impl_->traverse_query);
+  glDeleteQueries(1, &impl_->filter_query);
   for (GLuint program :
        {impl_->boxes_program, impl_->refit_program, impl_->pairs_program, impl_->work_program,
-        impl_->traverse[0].program, impl_->traverse[1].program})
+        impl_->traverse_program, impl_->filter_dispatch_program, impl_->filter[0].program,
+        impl_->filter[1].program})
     glDeleteProgram(program);
 }
 
@@ -637,16 +670,25 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   auto work = CompileCompute(internal::PairWorkSource(), "object pairs' work");
   if (!work) return work.error();
   impl->work_program = *work;
+  auto traverse = CompileCompute(internal::TraverseSource(), "traversal");
+  if (!traverse) return traverse.error();
+  impl->traverse_program = *traverse;
+  auto filter_dispatch = CompileCompute(internal::FilterDispatchSource(), "filters' dispatch");
+  if (!filter_dispatch) return filter_dispatch.error();
+  impl->filter_dispatch_program = *filter_dispatch;
   for (bool distance : {false, true}) {
-    auto traverse = CompileCompute(internal::TraverseSource(distance),
-                                   distance ? "distance traversal" : "traversal");
-    if (!traverse) return traverse.error();
-    Impl::TraverseKernel& kernel = impl->traverse[distance ? 1 : 0];
-    kernel.program = *traverse;
+    auto filter =
+        CompileCompute(internal::FilterSource(distance), distance ? "distance filters" : "filters");
+    if (!filter) return filter.error();
+    Impl::FilterKernel& kernel = impl->filter[distance ? 1 : 0];
+    kernel.program = *filter;
     kernel.capacity = glGetUniformLocation(kernel.program, "u_capacity");
-    kernel.slack = glGetUniformLocation(kernel.program, "u_slack");
     kernel.max_distance = glGetUniformLocation(kernel.program, "u_max_distance");
   }
+  impl->traverse_slack = glGetUniformLocation(impl->traverse_program, "u_slack");
+  impl->traverse_capacity = glGetUniformLocation(impl->traverse_program, "u_candidate_capacity");
+  impl->filter_dispatch_capacity =
+      glGetUniformLocation(impl->filter_dispatch_program, "u_candidate_capacity");
   impl->boxes_count = glGetUniformLocation(impl->boxes_program, "u_count");
   impl->boxes_ranges = glGetUniformLocation(impl->boxes_program, "u_ranges");
   impl->refit_count = glGetUniformLocation(impl->refit_program, "u_count");
@@ -657,6 +699,7 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   for (Buffer& b : impl->buffers) glCreateBuffers(1, &b.id);
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->refit_query);
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->traverse_query);
+  glCreateQueries(GL_TIME_ELAPSED, 1, &impl->filter_query);
   impl->buffer(internal::kCountersBinding).Reserve(internal::kNumCounters * sizeof(uint32_t));
   if (auto ok = CheckGl("gpu method: making its buffers"); !ok) return ok.error();
   return std::unique_ptr<ComputeCollider>(new ComputeCollider(std::move(impl)));

@@ -27,6 +27,7 @@ constexpr const char* kBlocks[kNumBindings] = {
     "readonly buffer Slots { uvec4 slot_info[]; };",
     "buffer ObjectPairs { uvec2 object_pair[]; };",
     "buffer Dispatch { uint dispatch[]; };",
+    "buffer Candidates { uvec4 candidate[]; };",
 };
 
 // What every kernel shares.
@@ -216,7 +217,103 @@ void main() {
 // The traversal. Work entry of object pair p: work[2p] = (driver's first global triangle,
 // partner's first global triangle, partner's root node, 0), work[2p + 1] = (driver's slot,
 // partner's slot, 1 when the driver is the pair's object_a, 0). Every invocation takes one
-// triangle of a driver and descends the partner's hierarchy with it.
+// triangle of a driver and descends the partner's hierarchy with it, appending each triangle
+// pair whose boxes meet to the candidates as (slot_a, triangle_a, slot_b, triangle_b),
+// triangles local to their objects. Boxes only: the filters run in their own kernel (kFilter),
+// one pair per invocation. Inside the descent an invocation's pairs were filtered one after
+// another while the rest of its SIMD group waited, and the filters' registers limited how many
+// descents a GPU core kept in flight (paper-leaves: 1.55 pairs per driver triangle on average,
+// 8 or more for a tenth of them).
+constexpr const char* kTraverse = R"(
+uniform float u_slack;  // triangle boxes within this on every axis meet (0: share a point)
+uniform uint u_candidate_capacity;  // entries of the candidates' buffer
+
+bool Apart(vec3 alo, vec3 ahi, vec3 blo, vec3 bhi) {
+  return any(greaterThan(blo - ahi, vec3(u_slack))) || any(greaterThan(alo - bhi, vec3(u_slack)));
+}
+
+// driver_tri's pairs with the triangles order[first + k] for the bits k of `hits`, appended
+// with one atomic for all of them.
+void AppendCandidates(uint driver_tri, uint first, uint hits, uvec4 w0, uvec4 w1) {
+  uint at = atomicAdd(counters[2], uint(bitCount(hits)));
+  uint a = driver_tri - w0.x;
+  for (; hits != 0u; hits &= hits - 1u, ++at) {
+    if (at >= u_candidate_capacity) return;  // counted: the host grows the buffer and runs again
+    uint b = order[first + uint(findLSB(hits))] - w0.y;
+    candidate[at] = w1.z != 0u ? uvec4(w1.x, a, w1.y, b) : uvec4(w1.y, b, w1.x, a);
+  }
+}
+
+// Each invocation's traversal stack, in shared memory: as a private array (uint stack[64]),
+// llvmpipe (Mesa 22.3) ran the descent wrong, dropping and repeating nodes, where the same
+// data descended on the CPU found every pair (ComputeColliderTest caught it).
+shared uint g_stacks[64 * 64];
+
+void main() {
+  uint base = gl_LocalInvocationIndex * 64u;
+  uint count = dispatch[3];  // driver triangles, and the object pairs, from kPairWork
+  uint pairs = dispatch[4];
+  for (uint item = gl_GlobalInvocationID.x; item < count; item += Stride()) {
+    // The object pair: the last p with work_start[p] <= item.
+    uint lo = 0u;
+    uint hi = pairs;
+    while (hi - lo > 1u) {
+      uint mid = (lo + hi) / 2u;
+      if (work_start[mid] <= item) lo = mid;
+      else hi = mid;
+    }
+    uvec4 w0 = work[2u * lo];
+    uvec4 w1 = work[2u * lo + 1u];
+    uint driver_tri = w0.x + (item - work_start[lo]);
+    vec3 tlo = tri_box[2u * driver_tri].xyz;
+    vec3 thi = tri_box[2u * driver_tri + 1u].xyz;
+    uint top = 1u;
+    g_stacks[base] = w0.z;
+    while (top > 0u) {
+      top -= 1u;
+      uint n = g_stacks[base + top];
+      if (Apart(tlo, thi, node_box[2u * n].xyz, node_box[2u * n + 1u].xyz)) continue;
+      uvec4 nd = node[n];
+      if (nd.y == 0u) {
+        if (top + 2u > 64u) {
+          atomicOr(counters[5], 1u);
+          break;
+        }
+        g_stacks[base + top] = nd.x + 1u;
+        g_stacks[base + top + 1u] = nd.x;
+        top += 2u;
+        continue;
+      }
+      // A leaf: its triangles whose boxes meet the driver's, 32 at a time.
+      for (uint first = nd.z; first < nd.w; first += 32u) {
+        uint hits = 0u;
+        for (uint k = first; k < min(nd.w, first + 32u); ++k) {
+          uint other_tri = order[k];
+          if (!Apart(tlo, thi, tri_box[2u * other_tri].xyz, tri_box[2u * other_tri + 1u].xyz))
+            hits |= 1u << (k - first);
+        }
+        if (hits != 0u) AppendCandidates(driver_tri, first, hits, w0, w1);
+      }
+    }
+  }
+}
+)";
+
+// The filters' dispatch, one invocation: a work group per 64 candidates the traversal wrote.
+constexpr const char* kFilterDispatch = R"(
+uniform uint u_candidate_capacity;
+
+void main() {
+  if (gl_GlobalInvocationID.x != 0u) return;
+  uint n = min(counters[2], u_candidate_capacity);
+  dispatch[5] = min(n / 64u + (n % 64u == 0u ? 0u : 1u), 65535u);
+  dispatch[6] = 1u;
+  dispatch[7] = 1u;
+  dispatch[8] = n;
+}
+)";
+
+// The filters, one candidate pair per invocation.
 //
 // The filters classify a triangle pair as the exact predicates would (far/geometry's
 // TrianglesIntersect, Guigue and Devillers' orientation tests) from orientation signs that their
@@ -227,8 +324,7 @@ void main() {
 // alongside, as long as every nonzero difference lies in [2^-40, 2^40] (else: not certified).
 // Double: |error| <= 8 2^-53 P + 2^-970 (Shewchuk's orient3d bound, (7 + 56 eps) eps, rounded
 // up, plus what flushing subnormal results to zero may lose). docs/culling.md has the argument.
-constexpr const char* kTraverse = R"(
-uniform float u_slack;    // triangle boxes within this on every axis meet (0: share a point)
+constexpr const char* kFilter = R"(
 uniform uint u_capacity;  // entries of each output buffer
 // FAR_DISTANCE (defined before this, 0 or 1: two programs): a distance query, where every pair
 // within the slack goes to the CPU unless proven farther than it would accept beside this D.
@@ -239,10 +335,6 @@ uniform double u_max_distance;
 const int kApart = 0;
 const int kCross = 1;
 const int kUndecided = 2;
-
-bool Apart(vec3 alo, vec3 ahi, vec3 blo, vec3 bhi) {
-  return any(greaterThan(blo - ahi, vec3(u_slack))) || any(greaterThan(alo - bhi, vec3(u_slack)));
-}
 
 // 0 or a magnitude in [2^-40, 2^40]: the float filter's products neither overflow nor leave
 // the normal range.
@@ -301,8 +393,9 @@ int SideDouble(dvec3 a, dvec3 b, dvec3 c, dvec3 d) {
   if (-det > bound) return -1;
   return 0;
 }
-// x[k] by constant indices: NVIDIA's compiler (driver 580.159) lost double precision in dvec3
-// arrays indexed by a variable in a loop (see Visit), so no kernel indexes them by a variable.
+// x[k] by constant indices. NVIDIA's compiler (driver 580.159) kept dvec3 arrays filled in a
+// loop over an int at float precision (see kFilter's main); whether reads at a variable index
+// lose precision too was not measured, so no kernel makes one.
 dvec3 Corner(dvec3 x[3], int k) { return k == 0 ? x[0] : (k == 1 ? x[1] : x[2]); }
 
 $CLASSIFY_FLOAT
@@ -384,11 +477,6 @@ bool FartherThanTheCpuAccepts(dvec3 s[3], dvec3 t[3]) {
 }
 #endif
 
-uint g_box_pairs = 0u;
-uint g_float_decided = 0u;
-uint g_double_decided = 0u;
-uint g_distance_culled = 0u;
-
 void Append(bool to_crossing, uvec4 entry) {
   uint i = atomicAdd(counters[to_crossing ? 0 : 1], 1u);
   if (i >= u_capacity) return;  // counted: the host grows the buffers and runs again
@@ -396,105 +484,66 @@ void Append(bool to_crossing, uvec4 entry) {
   else undecided[i] = entry;
 }
 
-// A triangle pair whose boxes met: classified, then appended where it belongs. Entries are
-// (slot_a, triangle_a, slot_b, triangle_b), triangles local to their objects; an undecided
-// entry of a distance query has bit 31 of slot_b set when the filters proved the two apart
-// (the CPU then computes only the distance).
-void Visit(uint driver_tri, uint other_tri, uvec4 w0, uvec4 w1) {
-  ++g_box_pairs;
-  // Each corner by a constant index, not in a loop: NVIDIA's compiler (driver 580.159, on an
-  // H200) kept dvec3 array elements filled in a loop over an int at float precision, and the
-  // filters then certified wrong signs (the self-check and the hair-off-a-plane tests failed).
-  uint ds = 3u * driver_tri;
-  uint os = 3u * other_tri;
-  dvec3 s[3];
-  dvec3 t[3];
-  s[0] = Vertex(tri_vertex[ds]);
-  s[1] = Vertex(tri_vertex[ds + 1u]);
-  s[2] = Vertex(tri_vertex[ds + 2u]);
-  t[0] = Vertex(tri_vertex[os]);
-  t[1] = Vertex(tri_vertex[os + 1u]);
-  t[2] = Vertex(tri_vertex[os + 2u]);
-  int c = ClassifyFloat(s, t);
-  if (c != kUndecided) {
-    ++g_float_decided;
-  } else {
-    c = ClassifyDouble(s, t);
-    if (c != kUndecided) ++g_double_decided;
-  }
-#if !FAR_DISTANCE
-  if (c == kApart) return;
-#endif
-  // Both triangles are in the primitive PCS: a bit each, read back instead of the CPU sorting
-  // the pairs' triangles.
-  atomicOr(pcs_bits[driver_tri >> 5], 1u << (driver_tri & 31u));
-  atomicOr(pcs_bits[other_tri >> 5], 1u << (other_tri & 31u));
-#if FAR_DISTANCE
-  if (c == kApart && FartherThanTheCpuAccepts(s, t)) {
-    ++g_distance_culled;
-    return;
-  }
-#endif
-  uint a = driver_tri - w0.x;
-  uint b = other_tri - w0.y;
-  uvec4 entry = w1.z != 0u ? uvec4(w1.x, a, w1.y, b) : uvec4(w1.y, b, w1.x, a);
-  if (c == kApart) entry.z |= 0x80000000u;
-  Append(c == kCross, entry);
-}
+// The work group's decided counts (float, fp64, distance culled), one global atomic each.
+shared uint g_counts[3];
 
-// Each invocation's traversal stack, in shared memory: as a private array (uint stack[64]),
-// llvmpipe (Mesa 22.3) ran the descent wrong, dropping and repeating nodes, where the same
-// data descended on the CPU found every pair (ComputeColliderTest caught it).
-shared uint g_stacks[64 * 64];
-
+// Each candidate (slot_a, triangle_a, slot_b, triangle_b) is classified, then appended where it
+// belongs as it is; an undecided entry of a distance query has bit 31 of slot_b set when the
+// filters proved the two apart (the CPU then computes only the distance).
 void main() {
-  uint base = gl_LocalInvocationIndex * 64u;
-  uint count = dispatch[3];  // driver triangles, and the object pairs, from kPairWork
-  uint pairs = dispatch[4];
-  for (uint item = gl_GlobalInvocationID.x; item < count; item += Stride()) {
-    // The object pair: the last p with work_start[p] <= item.
-    uint lo = 0u;
-    uint hi = pairs;
-    while (hi - lo > 1u) {
-      uint mid = (lo + hi) / 2u;
-      if (work_start[mid] <= item) lo = mid;
-      else hi = mid;
+  uint lane = gl_LocalInvocationIndex;
+  if (lane < 3u) g_counts[lane] = 0u;
+  barrier();
+  uint float_decided = 0u;
+  uint double_decided = 0u;
+  uint distance_culled = 0u;
+  uint count = dispatch[8];  // from kFilterDispatch
+  for (uint i = gl_GlobalInvocationID.x; i < count; i += Stride()) {
+    uvec4 entry = candidate[i];
+    uint ta = slot_info[entry.x].x + entry.y;
+    uint tb = slot_info[entry.z].x + entry.w;
+    // Each corner by a constant index, not in a loop: NVIDIA's compiler (driver 580.159, on an
+    // H200) kept dvec3 array elements filled in a loop over an int at float precision, and the
+    // filters then certified wrong signs (the self-check and the hair-off-a-plane tests failed).
+    dvec3 s[3];
+    dvec3 t[3];
+    s[0] = Vertex(tri_vertex[3u * ta]);
+    s[1] = Vertex(tri_vertex[3u * ta + 1u]);
+    s[2] = Vertex(tri_vertex[3u * ta + 2u]);
+    t[0] = Vertex(tri_vertex[3u * tb]);
+    t[1] = Vertex(tri_vertex[3u * tb + 1u]);
+    t[2] = Vertex(tri_vertex[3u * tb + 2u]);
+    int c = ClassifyFloat(s, t);
+    if (c != kUndecided) {
+      ++float_decided;
+    } else {
+      c = ClassifyDouble(s, t);
+      if (c != kUndecided) ++double_decided;
     }
-    uvec4 w0 = work[2u * lo];
-    uvec4 w1 = work[2u * lo + 1u];
-    uint driver_tri = w0.x + (item - work_start[lo]);
-    vec3 tlo = tri_box[2u * driver_tri].xyz;
-    vec3 thi = tri_box[2u * driver_tri + 1u].xyz;
-    uint top = 1u;
-    g_stacks[base] = w0.z;
-    while (top > 0u) {
-      top -= 1u;
-      uint n = g_stacks[base + top];
-      if (Apart(tlo, thi, node_box[2u * n].xyz, node_box[2u * n + 1u].xyz)) continue;
-      uvec4 nd = node[n];
-      if (nd.y == 0u) {
-        if (top + 2u > 64u) {
-          atomicOr(counters[5], 1u);
-          break;
-        }
-        g_stacks[base + top] = nd.x + 1u;
-        g_stacks[base + top + 1u] = nd.x;
-        top += 2u;
-        continue;
-      }
-      for (uint k = nd.z; k < nd.w; ++k) {
-        uint other_tri = order[k];
-        if (Apart(tlo, thi, tri_box[2u * other_tri].xyz, tri_box[2u * other_tri + 1u].xyz))
-          continue;
-        Visit(driver_tri, other_tri, w0, w1);
-      }
+#if !FAR_DISTANCE
+    if (c == kApart) continue;
+#endif
+    // Both triangles are in the primitive PCS: a bit each, read back instead of the CPU sorting
+    // the pairs' triangles.
+    atomicOr(pcs_bits[ta >> 5], 1u << (ta & 31u));
+    atomicOr(pcs_bits[tb >> 5], 1u << (tb & 31u));
+#if FAR_DISTANCE
+    if (c == kApart && FartherThanTheCpuAccepts(s, t)) {
+      ++distance_culled;
+      continue;
     }
+#endif
+    if (c == kApart) entry.z |= 0x80000000u;
+    Append(c == kCross, entry);
   }
-  if (g_box_pairs != 0u) {
-    atomicAdd(counters[2], g_box_pairs);
-    atomicAdd(counters[3], g_float_decided);
-    atomicAdd(counters[4], g_double_decided);
-    atomicAdd(counters[6], g_distance_culled);
+  atomicAdd(g_counts[0], float_decided);
+  atomicAdd(g_counts[1], double_decided);
+  atomicAdd(g_counts[2], distance_culled);
+  barrier();
+  if (lane == 0u && g_counts[0] + g_counts[1] + g_counts[2] != 0u) {
+    atomicAdd(counters[3], g_counts[0]);
+    atomicAdd(counters[4], g_counts[1]);
+    atomicAdd(counters[6], g_counts[2]);
   }
 }
 )";
@@ -573,12 +622,21 @@ std::string PairWorkSource() {
                 kPairWork);
 }
 
-std::string TraverseSource(bool distance) {
-  std::string text =
-      Kernel({kPositionsBinding, kTrianglesBinding, kTriBoxesBinding, kNodesBinding, kOrderBinding,
-              kNodeBoxesBinding, kWorkBinding, kWorkStartBinding, kCountersBinding,
-              kCrossingBinding, kUndecidedBinding, kPcsBitsBinding, kDispatchBinding},
-             std::string("#define FAR_DISTANCE ") + (distance ? "1" : "0") + "\n" + kTraverse);
+std::string TraverseSource() {
+  return Kernel({kTriBoxesBinding, kNodesBinding, kOrderBinding, kNodeBoxesBinding, kWorkBinding,
+                 kWorkStartBinding, kCountersBinding, kDispatchBinding, kCandidatesBinding},
+                kTraverse);
+}
+
+std::string FilterDispatchSource() {
+  return Kernel({kCountersBinding, kDispatchBinding}, kFilterDispatch);
+}
+
+std::string FilterSource(bool distance) {
+  std::string text = Kernel(
+      {kPositionsBinding, kTrianglesBinding, kSlotsBinding, kCountersBinding, kCrossingBinding,
+       kUndecidedBinding, kPcsBitsBinding, kDispatchBinding, kCandidatesBinding},
+      std::string("#define FAR_DISTANCE ") + (distance ? "1" : "0") + "\n" + kFilter);
   ReplaceAll(text, "$CLASSIFY_FLOAT", Classify("ClassifyFloat", "SideFloat"));
   ReplaceAll(text, "$CLASSIFY_DOUBLE", Classify("ClassifyDouble", "SideDouble"));
   return text;

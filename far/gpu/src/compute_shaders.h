@@ -1,8 +1,8 @@
 #pragma once
 
 // The compute shaders of the GPU-resident step (ComputeCollider, compute_collider.h): triangle
-// boxes, hierarchy refit and the traversal with the float and fp64 filters. Their error bounds
-// are argued in docs/culling.md, "The gpu method's filters"; the constants here are the ones
+// boxes, hierarchy refit, object pairs, the traversal, and the float and fp64 filters. Their error
+// bounds are argued in docs/culling.md, "The gpu method's filters"; the constants here are the ones
 // proven there.
 
 #include <string>
@@ -17,7 +17,7 @@ enum ComputeBinding : int {
   kNodesBinding = 3,         // uvec4[nodes]: first child, leaf count, order range [lo, hi)
   kOrderBinding = 4,         // uint[triangles]: global triangle ids in leaf order
   kNodeBoxesBinding = 5,     // vec4[2 * nodes]: lo, hi
-  kWorkBinding = 6,          // uvec4[2 * pairs]: per object pair, see kTraverseSource
+  kWorkBinding = 6,          // uvec4[2 * pairs]: per object pair, see kTraverse
   kWorkStartBinding = 7,     // uint[pairs + 1]: prefix sums of the driver triangles
   kCountersBinding = 8,      // uint[kNumCounters]
   kCrossingBinding = 9,      // uvec4[capacity]: certified intersecting pairs
@@ -28,15 +28,16 @@ enum ComputeBinding : int {
   kPairBoxesBinding = 14,    // double[8 * boxes]: pair boxes by low x (lo, slot, hi, 0)
   kSlotsBinding = 15,        // uvec4[slots]: first triangle, triangles, root node, nodes
   kObjectPairsBinding = 16,  // uvec2[pair capacity]: the object pairs found (slot < slot)
-  kDispatchBinding = 17,     // uint[kNumDispatchWords]: the traversal's indirect dispatch
-  kNumBindings = 18,
+  kDispatchBinding = 17,     // uint[kNumDispatchWords]: the traversal's and filters' dispatches
+  kCandidatesBinding = 18,   // uvec4[candidate capacity]: triangle pairs whose boxes meet
+  kNumBindings = 19,
 };
 
 /// The counters the kernels write (kCountersBinding).
 enum ComputeCounter : int {
   kCrossingCount = 0,    // certified intersecting pairs written (may exceed the capacity)
   kUndecidedCount = 1,   // pairs for the CPU written (may exceed the capacity)
-  kBoxPairs = 2,         // triangle pairs whose boxes met (within the slack)
+  kBoxPairs = 2,         // triangle pairs whose boxes met (may exceed the candidate capacity)
   kFloatDecided = 3,     // of those, decided by the float filter
   kDoubleDecided = 4,    // decided by the fp64 filter
   kStackOverflow = 5,    // nonzero: a traversal ran out of stack (never expected: depth checked)
@@ -47,12 +48,15 @@ enum ComputeCounter : int {
 };
 
 /// The words of kDispatchBinding: the traversal's work groups (x, y, z, as
-/// glDispatchComputeIndirect reads them), then its driver triangles and object pairs.
+/// glDispatchComputeIndirect reads them), its driver triangles and object pairs, then the
+/// filters' work groups and candidates.
 enum DispatchWord : int {
   kGroupsX = 0,
   kTraverseItems = 3,
   kTraversePairs = 4,
-  kNumDispatchWords = 5,
+  kFilterGroupsX = 5,
+  kFilterItems = 8,
+  kNumDispatchWords = 9,
 };
 
 /// Threads per work group of every kernel.
@@ -71,12 +75,16 @@ std::string PairWorkSource();
 std::string TriangleBoxesSource();
 /// One node of one level per invocation: the union of its triangles' or its children's boxes.
 std::string RefitSource();
-/// One driver triangle of one object pair per invocation: descends the partner's hierarchy,
-/// and classifies each triangle pair whose boxes meet with the float filter, then the fp64
-/// filter, appending the certified intersecting pairs and the undecided ones. `distance`: the
-/// distance queries' kernel (the pairs proven apart go to the CPU too, but for those proven
-/// farther than it would accept); a separate program, so that the contact queries' kernel
-/// carries none of that code (on llvmpipe it slowed theirs by 12-50%).
-std::string TraverseSource(bool distance);
+/// One driver triangle of one object pair per invocation: descends the partner's hierarchy and
+/// appends each triangle pair whose boxes meet to the candidates (kCandidatesBinding).
+std::string TraverseSource();
+/// One invocation: the filters' dispatch, a work group per 64 candidates.
+std::string FilterDispatchSource();
+/// One candidate per invocation: classified with the float filter, then the fp64 filter; the
+/// certified intersecting pairs and the undecided ones are appended. `distance`: the distance
+/// queries' kernel (the pairs proven apart go to the CPU too, but for those proven farther than
+/// it would accept); a separate program, so that the contact queries' kernel carries none of
+/// that code (on llvmpipe it slowed theirs by 12-50%).
+std::string FilterSource(bool distance);
 
 }  // namespace far::internal

@@ -393,11 +393,12 @@ Result<void> Stages::FilterOnGpu() {
                              answer.runs,
                              world_.compute->topologies_rebuilt(),
                              answer.gpu_refit_ms,
-                             answer.gpu_traverse_ms};
+                             answer.gpu_traverse_ms,
+                             answer.gpu_filter_ms};
   // As the raster methods report their views: CPU issuing, CPU waiting and reading, GPU time.
   state_.stats.gl_prepare_ms += answer.cpu_submit_ms;
   state_.stats.gl_passes_ms += answer.cpu_wait_ms;
-  state_.stats.gl_gpu_ms += answer.gpu_refit_ms + answer.gpu_traverse_ms;
+  state_.stats.gl_gpu_ms += answer.gpu_refit_ms + answer.gpu_traverse_ms + answer.gpu_filter_ms;
   // The primitive PCS, from the GPU's bits (sorted by slot; none when no pair was run).
   std::vector<std::vector<uint32_t>> pcs = std::move(state_.computed.pcs);
   pcs.resize(state_.objects.size());

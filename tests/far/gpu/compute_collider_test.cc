@@ -125,18 +125,30 @@ Eigen::AlignedBox3d BoxOf(const Mesh& mesh) {
   return box;
 }
 
+// The hierarchy TriangleBvh builds over `mesh`, as a ComputeObject takes it (without its boxes).
+bool BuildTopology(const Mesh& mesh, std::vector<ComputeNode>& nodes,
+                   std::vector<uint32_t>& order) {
+  TriangleBvh bvh;
+  if (!bvh.Build(mesh.p_MV, mesh.triangles)) return false;
+  for (const auto& node : bvh.nodes()) nodes.push_back({node.first, node.count});
+  order = bvh.order();
+  return true;
+}
+
 // Runs the collider on `objects` (meshes[i]'s views, their pair boxes the meshes' boxes) and
 // checks that the object pairs are the boxes' and that every intersecting triangle pair is kept
 // (crossing or undecided) and none twice, and that the PCS is the triangles of the kept pairs,
-// by slot; returns how many intersect.
+// by slot; returns how many intersect, and the answer in `answer_out` when given.
 int ExpectEveryIntersectingPairKept(ComputeCollider& collider,
                                     std::span<const ComputeObject> objects,
-                                    const std::vector<Mesh>& meshes, const std::string& where) {
+                                    const std::vector<Mesh>& meshes, const std::string& where,
+                                    ComputeAnswer* answer_out = nullptr) {
   ComputeQuery query;
   query.objects = objects;
   auto answer = collider.Run(query);
   EXPECT_TRUE(answer.ok()) << ToString(answer.error());
   if (!answer.ok()) return 0;
+  if (answer_out != nullptr) *answer_out = *answer;
   const std::vector<SlotPair> pairs = PairsOfBoxes(objects);
   EXPECT_EQ(answer->object_pairs, pairs) << where;
   std::set<SlotContact> found;
@@ -361,10 +373,7 @@ TEST_F(ComputeColliderTest, TraversalFindsEveryIntersectingPairOfMeshes) {
                                        static_cast<uint32_t>(3 * t + 1),
                                        static_cast<uint32_t>(3 * t + 2)});
       }
-      TriangleBvh bvh;
-      ASSERT_TRUE(bvh.Build(meshes[o].p_MV, meshes[o].triangles));
-      for (const auto& node : bvh.nodes()) nodes[o].push_back({node.first, node.count});
-      orders[o] = bvh.order();
+      ASSERT_TRUE(BuildTopology(meshes[o], nodes[o], orders[o]));
       objects[o] = {meshes[o].p_MV,
                     meshes[o].triangles,
                     nodes[o],
@@ -377,6 +386,50 @@ TEST_F(ComputeColliderTest, TraversalFindsEveryIntersectingPairOfMeshes) {
                                                 "scene " + std::to_string(scene));
   }
   EXPECT_GT(expected, 200) << "the scenes should have many intersecting pairs to find";
+}
+
+// Two grids of 300 slivers, one along x and one along y, each tilted at random across z = 0:
+// every box of one meets every box of the other, 90,000 pairs whose boxes meet, more than the
+// candidates' first buffer holds (65,536), so it grows and the kernels run again; every
+// intersecting pair is still found, and the next step needs one run.
+TEST_F(ComputeColliderTest, MorePairsOfBoxesThanTheFirstBufferHolds) {
+  std::mt19937_64 rng(57);
+  std::uniform_real_distribution<double> u(-0.01, 0.01);
+  constexpr int kSlivers = 300;
+  std::vector<Mesh> meshes(2);
+  for (int o = 0; o < 2; ++o) {
+    for (int i = 0; i < kSlivers; ++i) {
+      const double across = (i + 0.5) / kSlivers;
+      // Along x for object 0, along y for object 1, spanning [0, 1] and z in [-0.01, 0.01].
+      const auto at = [&](double along, double side, double z) {
+        return o == 0 ? Vector3d(along, side, z) : Vector3d(side, along, z);
+      };
+      // One end below z = 0, the other above: every box holds z = 0.
+      meshes[o].p_MV.push_back(at(0, across, -std::abs(u(rng))));
+      meshes[o].p_MV.push_back(at(1, across, std::abs(u(rng))));
+      meshes[o].p_MV.push_back(at(0.5, across + 0.4 / kSlivers, u(rng)));
+      meshes[o].triangles.push_back({static_cast<uint32_t>(3 * i), static_cast<uint32_t>(3 * i + 1),
+                                     static_cast<uint32_t>(3 * i + 2)});
+    }
+  }
+  std::vector<std::vector<ComputeNode>> nodes(2);
+  std::vector<std::vector<uint32_t>> orders(2);
+  std::vector<ComputeObject> objects(2);
+  for (int o = 0; o < 2; ++o) {
+    ASSERT_TRUE(BuildTopology(meshes[o], nodes[o], orders[o]));
+    objects[o] = {meshes[o].p_MV,  meshes[o].triangles, nodes[o],        orders[o],
+                  uint64_t(o + 1), uint64_t(o + 1),     BoxOf(meshes[o])};
+  }
+  auto collider = ComputeCollider::Create();  // its buffers as small as at first
+  ASSERT_TRUE(collider.ok()) << ToString(collider.error());
+  ComputeAnswer answer;
+  const int intersecting =
+      ExpectEveryIntersectingPairKept(**collider, objects, meshes, "first step", &answer);
+  EXPECT_EQ(answer.box_pairs, kSlivers * kSlivers);
+  EXPECT_GT(answer.runs, 1) << "the candidates' buffer should have grown";
+  EXPECT_GT(intersecting, 1000);
+  ExpectEveryIntersectingPairKept(**collider, objects, meshes, "second step", &answer);
+  EXPECT_EQ(answer.runs, 1);
 }
 
 // Steps where only some objects move: the others keep the boxes and hierarchies computed when
@@ -397,10 +450,7 @@ TEST_F(ComputeColliderTest, ObjectsThatDidNotMoveKeepTheirBoxes) {
       meshes[o].triangles.push_back({static_cast<uint32_t>(3 * t), static_cast<uint32_t>(3 * t + 1),
                                      static_cast<uint32_t>(3 * t + 2)});
     }
-    TriangleBvh bvh;
-    ASSERT_TRUE(bvh.Build(meshes[o].p_MV, meshes[o].triangles));
-    for (const auto& node : bvh.nodes()) nodes[o].push_back({node.first, node.count});
-    orders[o] = bvh.order();
+    ASSERT_TRUE(BuildTopology(meshes[o], nodes[o], orders[o]));
   }
   int found_total = 0;
   // Object 0 never moves; the others move on the steps that name them (vertices shifted and

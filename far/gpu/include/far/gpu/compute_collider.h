@@ -80,18 +80,18 @@ struct ComputeAnswer {
   int runs = 1;  ///< traversals run: more than one when the output buffers had to grow
   // Where the time went (milliseconds). CPU: issuing the uploads and kernels, then waiting for
   // the GPU and reading the pairs back. GPU (timer queries): the uploads with the boxes and
-  // refit, and the (last) object pairs and traversal.
+  // refit; the (last run's) object pairs and traversal; its filters.
   double cpu_submit_ms = 0, cpu_wait_ms = 0;
-  double gpu_refit_ms = 0, gpu_traverse_ms = 0;
+  double gpu_refit_ms = 0, gpu_traverse_ms = 0, gpu_filter_ms = 0;
 };
 
 /// The GPU-resident part of the `gpu` method, in compute shaders of the current OpenGL 4.5
 /// context: each step uploads the world vertices of the objects that moved (and, when the set
 /// of objects changed, their triangles and hierarchy topologies) and every object's box,
 /// computes every triangle's box, refits every hierarchy, finds the object pairs, descends each
-/// object pair's hierarchies and classifies the
-/// triangle pairs whose boxes meet with a float filter and then an fp64 filter, both with
-/// proven error bounds (docs/culling.md). The pairs are compacted on the GPU and read back
+/// object pair's hierarchies, and classifies the triangle pairs whose boxes meet (one per
+/// invocation) with a float filter and then an fp64 filter, both with proven error bounds
+/// (docs/culling.md). The pairs are compacted on the GPU and read back
 /// once. Never drops a pair the exact predicates would accept.
 /// Threading: far::GlContext's contract; Run takes far::LockGl for its GL work.
 class ComputeCollider {

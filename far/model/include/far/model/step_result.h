@@ -79,6 +79,7 @@ struct GpuFilterCounters {
   int topologies_rebuilt = 0;
   double gpu_refit_ms = 0;     ///< GPU time of the uploads, triangle boxes and refit
   double gpu_traverse_ms = 0;  ///< GPU time of the object pairs and the traversal
+  double gpu_filter_ms = 0;    ///< GPU time of the float and fp64 filters
   bool operator==(const GpuFilterCounters&) const = default;
 };
 
