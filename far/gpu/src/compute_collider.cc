@@ -42,6 +42,15 @@ constexpr size_t kMostPairCapacity = size_t{1} << 22;
 
 using Clock = std::chrono::steady_clock;
 
+// A buffer that overflowed holding `needed` entries grows to this: half as many again, to a
+// power of two, at most `most` (@pre needed <= most). A scene whose count creeps up (contacts
+// growing as cloths settle) would otherwise run the kernels twice each time it passed a power of
+// two: scaling-1000000's 285,378 pairs whose boxes met, at a step after 222,959 had grown the
+// buffer to 2^18.
+size_t GrownCapacity(size_t needed, size_t most) {
+  return std::min(std::bit_ceil(needed + needed / 2), most);
+}
+
 double MsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
@@ -334,31 +343,42 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
 
 // Uploads the world vertices of the objects whose world changed since their last upload: one
 // upload per run of such objects in consecutive slots (each call costs the driver some
-// microseconds; a scene of deforming objects is then one upload).
+// microseconds; a scene of deforming leaves is then one upload), gathered in `staging`, except
+// that an object of kDirectUploadVertices or more goes up on its own, from where it lies: the
+// copy cost more than the call saved (scaling-1000000: 8.5 MB of vertices a step).
 int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> objects) {
+  constexpr size_t kDirectUploadVertices = 4096;
   int64_t uploaded = 0;
   moved.clear();
   const GLuint positions = buffer(internal::kPositionsBinding).id;
+  const auto upload = [&](size_t first_vertex, std::span<const Eigen::Vector3d> vertices) {
+    const size_t bytes = vertices.size() * sizeof(Eigen::Vector3d);
+    glNamedBufferSubData(positions, static_cast<GLintptr>(first_vertex * sizeof(Eigen::Vector3d)),
+                         static_cast<GLsizeiptr>(bytes), vertices.data());
+    uploaded += static_cast<int64_t>(bytes);
+  };
   std::vector<Eigen::Vector3d>& run = staging;
   size_t run_first = 0;  // first vertex of the run
   const auto flush = [&] {
-    if (run.empty()) return;
-    const size_t bytes = run.size() * sizeof(Eigen::Vector3d);
-    glNamedBufferSubData(positions, static_cast<GLintptr>(run_first * sizeof(Eigen::Vector3d)),
-                         static_cast<GLsizeiptr>(bytes), run.data());
-    uploaded += static_cast<int64_t>(bytes);
+    if (!run.empty()) upload(run_first, run);
     run.clear();
   };
   for (size_t s = 0; s < objects.size(); ++s) {
     SlotLayout& at = layout[s];
-    if (at.world_key == objects[s].world_key || objects[s].p_WV.empty()) {
+    const std::span<const Eigen::Vector3d> vertices = objects[s].p_WV;
+    if (at.world_key == objects[s].world_key || vertices.empty()) {
       flush();
       continue;
     }
-    if (run.empty()) run_first = at.vertex_base;
-    run.insert(run.end(), objects[s].p_WV.begin(), objects[s].p_WV.end());
     at.world_key = objects[s].world_key;
     moved.push_back(s);
+    if (vertices.size() >= kDirectUploadVertices) {
+      flush();
+      upload(at.vertex_base, vertices);
+      continue;
+    }
+    if (run.empty()) run_first = at.vertex_base;
+    run.insert(run.end(), vertices.begin(), vertices.end());
   }
   flush();
   return uploaded;
@@ -587,7 +607,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
                                                         std::to_string(kMostPairCapacity) +
                                                         "; 'bvh' answers this scene");
       }
-      pair_capacity = std::bit_ceil(object_pairs);
+      pair_capacity = GrownCapacity(object_pairs, kMostPairCapacity);
       ++answer.runs;
       DispatchPairsAndTraversal();
       continue;
@@ -607,7 +627,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
                              " triangle pairs whose boxes meet, over its limit " +
                              std::to_string(kMostCapacity) + "; 'bvh' answers this scene");
       }
-      candidate_capacity = std::bit_ceil(box_pairs);
+      candidate_capacity = GrownCapacity(box_pairs, kMostCapacity);
       ++answer.runs;
       DispatchPairsAndTraversal();
       continue;
@@ -615,7 +635,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
     const size_t most =
         std::max(counters[internal::kCrossingCount], counters[internal::kUndecidedCount]);
     if (most <= capacity) break;
-    capacity = std::bit_ceil(most);  // at most candidate_capacity
+    capacity = GrownCapacity(most, candidate_capacity);
     ++answer.runs;
     DispatchPairsAndTraversal();
   }
