@@ -176,26 +176,42 @@ std::string Name(const SlotContact& c) {
          std::to_string(Index(c.object_b)) + "/" + std::to_string(c.triangle_b);
 }
 
-// The objects' views, keyed from `key_base`, with pair boxes that make `pairs` the object
-// pairs: a point per pair (2i, 2i + 1) when `pairs` is that, else one point for all.
+// How a check's objects pair: (2i, 2i + 1), or every two.
+enum class Pairing { kConsecutive, kAll };
+
+// The object pairs `pairing` makes of `count` objects, sorted.
+std::vector<SlotPair> PairsOf(size_t count, Pairing pairing) {
+  std::vector<SlotPair> pairs;
+  for (size_t a = 0; a < count; ++a) {
+    if (pairing == Pairing::kConsecutive) {
+      if (a % 2 == 1) pairs.push_back({SlotAt(a - 1), SlotAt(a)});
+      continue;
+    }
+    for (size_t b = a + 1; b < count; ++b) pairs.push_back({SlotAt(a), SlotAt(b)});
+  }
+  return pairs;
+}
+
+// The objects' views, keyed from `key_base`, with pair boxes that make the pairs `pairing`
+// names: a point per pair (2i, 2i + 1), or one point for all.
 std::vector<ComputeObject> Views(const std::vector<CheckObject>& objects, uint64_t key_base,
-                                 bool pairs_of_two) {
+                                 Pairing pairing) {
   std::vector<ComputeObject> views;
   for (size_t i = 0; i < objects.size(); ++i) {
     const CheckObject& object = objects[i];
-    const Vector3d point(pairs_of_two ? static_cast<double>(i / 2) : 0.0, 0, 0);
+    const Vector3d point(pairing == Pairing::kConsecutive ? static_cast<double>(i / 2) : 0.0, 0, 0);
     views.push_back({object.mesh.p_MV, object.mesh.triangles, object.nodes, object.order,
                      key_base + i, key_base + i, Eigen::AlignedBox3d(point, point)});
   }
   return views;
 }
 
-// Runs `pairs` of `objects` (pairs (2i, 2i + 1), or all pairs) and compares with the exact
-// predicates; "" when they agree.
+// Runs the pairs `pairing` makes of `objects` and compares with the exact predicates; "" when
+// they agree.
 Result<std::string> Compare(ComputeCollider& collider, const std::vector<CheckObject>& objects,
-                            const std::vector<SlotPair>& pairs, uint64_t key_base) {
-  const bool pairs_of_two = pairs.size() * 2 == objects.size();
-  const std::vector<ComputeObject> views = Views(objects, key_base, pairs_of_two);
+                            Pairing pairing, uint64_t key_base) {
+  const std::vector<SlotPair> pairs = PairsOf(objects.size(), pairing);
+  const std::vector<ComputeObject> views = Views(objects, key_base, pairing);
   ComputeQuery query;
   query.objects = views;
   auto answer = collider.Run(query);
@@ -277,9 +293,8 @@ Result<std::string> ComparePairs(ComputeCollider& collider, uint64_t key_base) {
 // accepts came back.
 Result<std::string> CompareDistance(ComputeCollider& collider,
                                     const std::vector<CheckObject>& objects, uint64_t key_base) {
-  const std::vector<ComputeObject> views = Views(objects, key_base, true);
-  std::vector<SlotPair> pairs;
-  for (size_t i = 1; i < objects.size(); i += 2) pairs.push_back({SlotAt(i - 1), SlotAt(i)});
+  const std::vector<ComputeObject> views = Views(objects, key_base, Pairing::kConsecutive);
+  const std::vector<SlotPair> pairs = PairsOf(objects.size(), Pairing::kConsecutive);
   ComputeQuery query;
   query.objects = views;
   query.slack = 1.0;  // every pair's boxes meet: the cut alone decides what is dropped
@@ -306,14 +321,7 @@ Result<void> SelfCheckComputeCollider(ComputeCollider& collider) {
   // objects out anew, and the pipeline's objects again on its first step.
   constexpr uint64_t kKeys = uint64_t{1} << 62;
   const std::vector<CheckObject> filters = FilterCases();
-  std::vector<SlotPair> filter_pairs;
-  for (size_t i = 0; i + 1 < filters.size(); i += 2)
-    filter_pairs.push_back({SlotAt(i), SlotAt(i + 1)});
   const std::vector<CheckObject> meshes = TraversalCases();
-  std::vector<SlotPair> mesh_pairs;
-  for (size_t a = 0; a < meshes.size(); ++a) {
-    for (size_t b = a + 1; b < meshes.size(); ++b) mesh_pairs.push_back({SlotAt(a), SlotAt(b)});
-  }
   const auto disagree = [](const char* what, const std::string& disagreement) {
     return MakeError(ErrorCode::kUnavailable,
                      std::string("gpu method: this GL driver's compute results disagree with the "
@@ -321,10 +329,10 @@ Result<void> SelfCheckComputeCollider(ComputeCollider& collider) {
                          what + " (" + disagreement +
                          "); the method is not used on it (docs/culling.md)");
   };
-  for (const auto& [objects, pairs, what] : {std::tuple{&filters, &filter_pairs, "the filters"},
-                                             std::tuple{&meshes, &mesh_pairs, "the traversal"}}) {
-    auto disagreement =
-        Compare(collider, *objects, *pairs, kKeys + (objects == &meshes ? 1 << 20 : 0));
+  for (const auto& [objects, pairing, what, keys] :
+       {std::tuple{&filters, Pairing::kConsecutive, "the filters", kKeys},
+        std::tuple{&meshes, Pairing::kAll, "the traversal", kKeys + (1 << 20)}}) {
+    auto disagreement = Compare(collider, *objects, pairing, keys);
     if (!disagreement) return disagreement.error();
     if (!disagreement->empty()) return disagree(what, *disagreement);
   }
