@@ -105,7 +105,7 @@ class ComputeCollider {
 
   /// Runs one step. Errors: kUnavailable when a hierarchy is too deep for the traversal's
   /// stack or the work is over the kernels' 32-bit counts; kLimitExceeded for more object
-  /// pairs or triangle pairs to read back than its limits; kInternal for a GL error.
+  /// pairs or triangle pairs whose boxes meet than its limits; kInternal for a GL error.
   Result<ComputeAnswer> Run(const ComputeQuery& query);
 
   /// Run in two halves, for a caller that puts several colliders' steps on the GPU together
