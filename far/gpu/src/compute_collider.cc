@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 
@@ -678,30 +679,21 @@ int ComputeCollider::MaxDepth() { return internal::kTraversalStack - 2; }
 Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   const auto lock = LockGl();
   auto impl = std::make_unique<Impl>();
-  auto boxes = CompileCompute(internal::TriangleBoxesSource(), "triangle boxes");
-  if (!boxes) return boxes.error();
-  impl->boxes_program = *boxes;
-  auto refit = CompileCompute(internal::RefitSource(), "refit");
-  if (!refit) return refit.error();
-  impl->refit_program = *refit;
-  auto pairs = CompileCompute(internal::ObjectPairsSource(), "object pairs");
-  if (!pairs) return pairs.error();
-  impl->pairs_program = *pairs;
-  auto work = CompileCompute(internal::PairWorkSource(), "object pairs' work");
-  if (!work) return work.error();
-  impl->work_program = *work;
-  auto traverse = CompileCompute(internal::TraverseSource(), "traversal");
-  if (!traverse) return traverse.error();
-  impl->traverse_program = *traverse;
-  auto filter_dispatch = CompileCompute(internal::FilterDispatchSource(), "filters' dispatch");
-  if (!filter_dispatch) return filter_dispatch.error();
-  impl->filter_dispatch_program = *filter_dispatch;
-  for (bool distance : {false, true}) {
-    auto filter =
-        CompileCompute(internal::FilterSource(distance), distance ? "distance filters" : "filters");
-    if (!filter) return filter.error();
-    Impl::FilterKernel& kernel = impl->filter[distance ? 1 : 0];
-    kernel.program = *filter;
+  const std::tuple<GLuint*, std::string, const char*> kernels[] = {
+      {&impl->boxes_program, internal::TriangleBoxesSource(), "triangle boxes"},
+      {&impl->refit_program, internal::RefitSource(), "refit"},
+      {&impl->pairs_program, internal::ObjectPairsSource(), "object pairs"},
+      {&impl->work_program, internal::PairWorkSource(), "object pairs' work"},
+      {&impl->traverse_program, internal::TraverseSource(), "traversal"},
+      {&impl->filter_dispatch_program, internal::FilterDispatchSource(), "filters' dispatch"},
+      {&impl->filter[0].program, internal::FilterSource(false), "filters"},
+      {&impl->filter[1].program, internal::FilterSource(true), "distance filters"}};
+  for (const auto& [program, source, what] : kernels) {
+    auto compiled = CompileCompute(source, what);
+    if (!compiled) return compiled.error();
+    *program = *compiled;
+  }
+  for (Impl::FilterKernel& kernel : impl->filter) {
     kernel.capacity = glGetUniformLocation(kernel.program, "u_capacity");
     kernel.max_distance = glGetUniformLocation(kernel.program, "u_max_distance");
   }
