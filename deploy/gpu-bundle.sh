@@ -21,10 +21,10 @@ case "$out" in /*) ;; *) out=$root/$out ;; esac
 
 # Binaries, by build-tree path (CMake target names in the same order for the build).
 binaries=(tests/far_gpu_test tests/far_snapshot_test bench/study/far-study
-  bench/study/far_culling_benchmark server/far-daemon tools/far-client/far-client
-  tools/far-snapshot/far-snapshot)
-targets=(far_gpu_test far_snapshot_test far_study far_culling_benchmark far-daemon far-client
-  far-snapshot)
+  bench/study/far_culling_benchmark bench/study/far_compute_benchmark server/far-daemon
+  tools/far-client/far-client tools/far-snapshot/far-snapshot)
+targets=(far_gpu_test far_snapshot_test far_study far_culling_benchmark far_compute_benchmark
+  far-daemon far-client far-snapshot)
 glvnd_debs=(libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
 # Never bundled: glibc (it must match the target's kernel interface and ld.so) and the GL
 # loader and driver libraries (the loader travels as .debs; the driver is the target's own).

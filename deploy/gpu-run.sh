@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The GPU run, on a machine with an NVIDIA GPU and its driver (docs/gpu.md). Checks that an
 # OpenGL 4.5 context comes from the GPU through the EGL device platform, then runs the gpu
-# method's never-miss tests on it, far-study on paper-leaves and on the scaling family to 1M
+# method's never-miss tests on it, its kernels alone (far_compute_benchmark: the GPU's own times
+# of the refit, traversal and filters), far-study on paper-leaves and on the scaling family to 1M
 # triangles (bvh, gpu, auto and FAR side by side), and 16 daemon clients burning CPU per step,
 # each under a time limit so that the whole fits one device call of about 8 minutes. Everything
 # it prints also goes to RESULTS_DIR/log.txt, next to the study's CSVs and RESULTS.md sections.
@@ -10,7 +11,7 @@
 # set, else gpu-results. --smoke: every stage tiny, on the surfaceless platform, a software
 # renderer allowed: the check of a bundle on a machine without a GPU, never for numbers.
 # Environment: FAR_RUN_BUDGET_S (whole run, default 540), FAR_RUN_STAGES (a list of tests,
-# paper, scaling, load: the stages to run, default all), FAR_BUNDLE_CXX=auto|bundle|system
+# kernels, paper, scaling, load: the stages to run, default all), FAR_BUNDLE_CXX=auto|bundle|system
 # (which libstdc++),
 # FAR_GLVND=auto|bundle (bundle: the bundle's unpacked glvnd loader, never the system's).
 set -euo pipefail
@@ -264,6 +265,8 @@ main() {
     --plot-script "$bundle/data/plot_study.gp"
     --scaling-plot-script "$bundle/data/plot_scaling.gp")
   local tests_args=(--gtest_brief=1)
+  local kernels=(--benchmark_repetitions=3 --benchmark_enable_random_interleaving=true
+    --benchmark_report_aggregates_only=true)
 
   # Issue 42: the gpu method held to exact on this GPU's own rasterizer and arithmetic, then
   # timed beside bvh and FAR (far-study, one interleaved run per family), then the shared case
@@ -278,17 +281,21 @@ main() {
     FAR_LOAD_SECONDS=12 FAR_CLIENT_CPU_MS=5 FAR_LOAD_METHODS="bvh gpu auto"
   if [ "$smoke" = 1 ]; then
     gpu_tests='ComputeCollider*:PipelineCullingTest.RejectsBadRequests'
+    kernels=(--benchmark_filter='BM_Gpu/1/0' --benchmark_min_time=0.01)
     paper=(--scenes leaves --methods bvh,gpu --steps 1 --leaves 10 --leaf-cells 2)
     scaling=(--scenes scaling --scaling-sizes 5000 --methods bvh,gpu --steps 1 --distance none)
     FAR_LOAD_SCENE_ARGS="--kind leaves --frames 3 --leaves 6" FAR_LOAD_CLIENTS=2
     FAR_LOAD_SECONDS=1 FAR_CLIENT_CPU_MS=1 FAR_LOAD_METHODS="bvh gpu"
   fi
 
-  # FAR_RUN_STAGES: which of them run (default all: tests paper scaling load).
-  local stages=" ${FAR_RUN_STAGES:-tests paper scaling load} "
+  # FAR_RUN_STAGES: which of them run (default all: tests kernels paper scaling load).
+  local stages=" ${FAR_RUN_STAGES:-tests kernels paper scaling load} "
   [[ "$stages" == *" tests "* ]] &&
   stage "gpu tests" 90 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}" \
     --gtest_filter="$gpu_tests"
+  [[ "$stages" == *" kernels "* ]] &&
+  stage "gpu kernels" 60 "${far_env[@]}" "$bin/far_compute_benchmark" \
+    --gl-platform "$platform" "${kernels[@]}"
   [[ "$stages" == *" paper "* ]] &&
   stage "far-study paper-leaves" 100 "${far_env[@]}" "${study[@]}" "${paper[@]}" \
     --csv paper.csv --results paper.md

@@ -15,11 +15,10 @@
 // device makes a GPU run fail instead of falling back to llvmpipe's surfaceless platform.
 
 #include <cstdio>
-#include <cstring>
 #include <memory>
-#include <string>
 #include <vector>
 
+#include "gl_platform_flag.h"
 #include "test_scenes.h"
 #include <benchmark/benchmark.h>
 
@@ -123,30 +122,7 @@ BENCHMARK(BM_Cull_OcclusionQuery)
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Take --gl-platform=X / --gl-platform X out of argv before Google Benchmark, which rejects
-  // flags it does not know.
-  int kept = 1;
-  for (int i = 1; i < argc; ++i) {
-    std::string value;
-    if (std::strncmp(argv[i], "--gl-platform=", 14) == 0) {
-      value = argv[i] + 14;
-    } else if (std::strcmp(argv[i], "--gl-platform") == 0 && i + 1 < argc) {
-      value = argv[++i];
-    } else {
-      argv[kept++] = argv[i];
-      continue;
-    }
-    const std::optional<far::GlPlatform> platform = far::ParseGlPlatform(value);
-    if (platform) {
-      g_platform = *platform;
-    } else {
-      std::fprintf(stderr, "far_culling_benchmark: --gl-platform: unknown '%s' (%s)\n",
-                   value.c_str(), far::GlPlatformNames().c_str());
-      return 2;
-    }
-  }
-  argc = kept;
-  argv[argc] = nullptr;
+  if (!far_study::TakeGlPlatformFlag(&argc, argv, &g_platform, "far_culling_benchmark")) return 2;
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
