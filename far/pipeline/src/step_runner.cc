@@ -193,6 +193,8 @@ class Stages {
   Result<void> RunWholeScene();
   Result<void> CullObjects();
   void PairObjects();
+  // The step's object pairs (sorted), their count, and for CPU culling the object PCS.
+  void TakeObjectPairs(std::vector<SlotPair> pairs);
   Result<void> CullPrimitives();
   Result<void> TestExactly();
   Result<void> DescendHierarchiesStage();
@@ -273,7 +275,11 @@ void Stages::PairObjects() {
   for (size_t s = 0; s < state_.objects.size(); ++s) {
     if (state_.object_alive[s]) boxes.push_back({SlotAt(s), state_.objects[s]->box_W});
   }
-  state_.answer.object_pairs = world_.sap.Update(boxes, state_.cull_margin);
+  TakeObjectPairs(world_.sap.Update(boxes, state_.cull_margin));
+}
+
+void Stages::TakeObjectPairs(std::vector<SlotPair> pairs) {
+  state_.answer.object_pairs = std::move(pairs);
   state_.stats.object_pairs = static_cast<int64_t>(state_.answer.object_pairs.size());
   // I-COLLIDE: the CPU culling methods' PCS is the set of objects in some overlapping pair.
   if (IsCpuCulling(state_.request.method))
@@ -379,9 +385,7 @@ Result<void> Stages::FilterOnGpu() {
   if (!computed) return computed.error();
   state_.computed = std::move(*computed);
   // The object pairs, found on the GPU as sweep-and-prune finds them for the other methods.
-  state_.answer.object_pairs = std::move(state_.computed.object_pairs);
-  state_.stats.object_pairs = static_cast<int64_t>(state_.answer.object_pairs.size());
-  state_.answer.pcs_objects = SlotsInPairs(state_.answer.object_pairs);
+  TakeObjectPairs(std::move(state_.computed.object_pairs));
   state_.stats.bytes_uploaded += state_.computed.bytes_uploaded;
   state_.stats.pairs_considered = state_.computed.box_pairs;
   const ComputeAnswer& answer = state_.computed;
