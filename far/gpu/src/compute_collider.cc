@@ -217,6 +217,8 @@ struct ComputeCollider::Impl {
   // Waits for the kernels (again, with larger buffers, when some overflowed) and reads the
   // answer back.
   Result<ComputeAnswer> Collect();
+  // Deletes the programs, buffers and queries. @pre the GL lock is held.
+  void DeleteGlObjects();
 };
 
 namespace {
@@ -667,17 +669,22 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
 
 ComputeCollider::ComputeCollider(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
+// Names not made yet are 0, which GL's deletes ignore: this also cleans up after a Create that
+// failed halfway.
+void ComputeCollider::Impl::DeleteGlObjects() {
+  for (Buffer& b : buffers) glDeleteBuffers(1, &b.id);
+  glDeleteQueries(1, &refit_query);
+  glDeleteQueries(1, &traverse_query);
+  glDeleteQueries(1, &filter_query);
+  for (GLuint program :
+       {boxes_program, refit_program, pairs_program, work_program, traverse_program,
+        filter_dispatch_program, filter[0].program, filter[1].program})
+    glDeleteProgram(program);
+}
+
 ComputeCollider::~ComputeCollider() {
   const auto lock = LockGl();
-  for (Buffer& b : impl_->buffers) glDeleteBuffers(1, &b.id);
-  glDeleteQueries(1, &impl_->refit_query);
-  glDeleteQueries(1, &impl_->traverse_query);
-  glDeleteQueries(1, &impl_->filter_query);
-  for (GLuint program :
-       {impl_->boxes_program, impl_->refit_program, impl_->pairs_program, impl_->work_program,
-        impl_->traverse_program, impl_->filter_dispatch_program, impl_->filter[0].program,
-        impl_->filter[1].program})
-    glDeleteProgram(program);
+  impl_->DeleteGlObjects();
 }
 
 int ComputeCollider::MaxDepth() { return internal::kTraversalStack - 2; }
@@ -685,6 +692,14 @@ int ComputeCollider::MaxDepth() { return internal::kTraversalStack - 2; }
 Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   const auto lock = LockGl();
   auto impl = std::make_unique<Impl>();
+  // A kernel that does not compile leaves the programs made before it, and a GL error the
+  // buffers: deleted on the way out, under the lock.
+  struct DeleteUnlessKept {
+    Impl* impl;
+    ~DeleteUnlessKept() {
+      if (impl != nullptr) impl->DeleteGlObjects();
+    }
+  } made{impl.get()};
   const std::tuple<GLuint*, std::string, const char*> kernels[] = {
       {&impl->boxes_program, internal::TriangleBoxesSource(), "triangle boxes"},
       {&impl->refit_program, internal::RefitSource(), "refit"},
@@ -720,6 +735,7 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->filter_query);
   impl->buffer(internal::kCountersBinding).Reserve(internal::kNumCounters * sizeof(uint32_t));
   if (auto ok = CheckGl("gpu method: making its buffers"); !ok) return ok.error();
+  made.impl = nullptr;
   return std::unique_ptr<ComputeCollider>(new ComputeCollider(std::move(impl)));
 }
 
