@@ -96,7 +96,7 @@ struct Row {
   double pairs_tested = 0, subobject_input = 0, queries = 0, draws = 0, primitives_rendered = 0;
   double gl_prepare_ms = 0, gl_passes_ms = 0, gl_gpu_ms = 0;  ///< medians
   /// gpu: medians of its filters' pairs (boxes met, float-decided, fp64-decided, to the CPU)
-  /// and of the GPU time of its refit and traversal.
+  /// and of the GPU time of its refit, traversal and filters.
   double gpu_box_pairs = 0, gpu_float = 0, gpu_double = 0, gpu_cpu = 0, gpu_distance_culled = 0;
   double gpu_refit_ms = 0, gpu_traverse_ms = 0, gpu_filter_ms = 0;
   int64_t contacts = 0, reference_contacts = 0, missed = 0, false_positives = 0;
