@@ -96,17 +96,19 @@ void AutoSelector::Calibrate(const SceneSize& scene) {
   chosen_calibration_ms_ = 0;
 }
 
-bool AutoSelector::NeedsRecheck(const SceneSize& scene) const {
+AutoSelector::Recheck AutoSelector::NeedsRecheck(const SceneSize& scene) const {
   if (Changed(scene.objects, calibrated_for_.objects, kRecheckChange) ||
-      Changed(scene.triangles, calibrated_for_.triangles, kRecheckChange) ||
-      steps_since_calibration_ >= kRecheckSteps) {
-    return true;
+      Changed(scene.triangles, calibrated_for_.triangles, kRecheckChange)) {
+    return Recheck::kScene;
   }
   // The chosen one got much slower than when it was chosen (and not just by noise on a tiny
   // time): its rivals may have become faster.
   const Entry* chosen = Fastest();
-  return chosen != nullptr && chosen_calibration_ms_ > 0 && *chosen->measured_ms > 1.0 &&
-         *chosen->measured_ms > kRecheckDrift * chosen_calibration_ms_;
+  if (chosen != nullptr && chosen_calibration_ms_ > 0 && *chosen->measured_ms > 1.0 &&
+      *chosen->measured_ms > kRecheckDrift * chosen_calibration_ms_) {
+    return Recheck::kDrift;
+  }
+  return steps_since_calibration_ >= recheck_every_ ? Recheck::kPeriodic : Recheck::kNone;
 }
 
 const AutoSelector::Entry* AutoSelector::Fastest() const {
@@ -121,7 +123,20 @@ const AutoSelector::Entry* AutoSelector::Fastest() const {
 
 Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
   structure_ = scene.structure;
-  if (!calibrated_ || NeedsRecheck(scene)) Calibrate(scene);
+  const Recheck recheck = calibrated_ ? NeedsRecheck(scene) : Recheck::kScene;
+  if (recheck != Recheck::kNone) {
+    // A periodic recheck that keeps the choice waits twice as long for the next; any other
+    // recheck, or one that changes the choice, starts the intervals again.
+    const Entry* chosen = calibrated_ ? Fastest() : nullptr;
+    kept_.reset();
+    if (recheck == Recheck::kPeriodic && chosen != nullptr) {
+      kept_ = chosen->candidate;
+      recheck_every_ = std::min(2 * recheck_every_, kRecheckSteps);
+    } else {
+      recheck_every_ = FirstRecheck();
+    }
+    Calibrate(scene);
+  }
   const Entry* best = Fastest();
   std::vector<const Entry*> skipped;
   // The next untried candidate that may be fastest.
@@ -146,7 +161,11 @@ Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
     return entry.candidate;
   }
   trying_ = false;
-  if (chosen_calibration_ms_ == 0) chosen_calibration_ms_ = *best->measured_ms;
+  if (chosen_calibration_ms_ == 0) {  // the calibration's outcome
+    chosen_calibration_ms_ = *best->measured_ms;
+    if (kept_ && !(*kept_ == best->candidate)) recheck_every_ = FirstRecheck();
+    kept_.reset();
+  }
   *reason = "auto: " + best->candidate.Name() + " is the fastest measured (" +
             Ms(*best->measured_ms) +
             (cpu_threads_ > 0 ? ", CPU stages on " + std::to_string(cpu_threads_) + " threads"

@@ -3,6 +3,7 @@
 // chosen configuration drifts.
 #include "far/pipeline/internal/auto_selector.h"
 
+#include <algorithm>
 #include <functional>
 #include <map>
 #include <string>
@@ -187,6 +188,46 @@ TEST(AutoSelectorTest, RecalibratesWhenTheSceneGrowsOrTheChoiceDrifts) {
   // bvh drifts to 10 ms (> 2x its 2 ms): re-calibrated, and the GPU gets its chance again.
   chosen = Steps(selector, {400, 10000}, {{"bvh", 10.0}, {"far/id-buffer/256", 1.0}}, 12);
   EXPECT_EQ(chosen.back(), "far/id-buffer/256");
+}
+
+// A session's gpu steps at calibration queued behind other sessions' one-off GPU setup (16
+// clients starting together on one daemon): gpu measured 40 ms where it takes 4, so bvh (11 ms)
+// won. A periodic recheck soon after runs gpu again and keeps it; the next rechecks, which keep
+// the choice, come twice as far apart each time.
+TEST(AutoSelectorTest, ATransientLossIsRecheckedSoonThenLessOften) {
+  GpuCost probe{50.0, 0.03};  // the raster configurations: never tried
+  probe.compute_fixed_ms = 2.0;
+  probe.compute_ms_per_triangle = 0.0;
+  AutoSelector selector(true, [&] { return std::optional<GpuCost>(probe); });
+  int gpu_runs = 0;
+  std::vector<std::string> chosen;
+  std::vector<int> calibrations;  // the steps at which bvh was tried (each recheck tries it)
+  for (int i = 0; i < 600; ++i) {
+    std::string reason;
+    const Candidate c = selector.Choose({150, 40000}, &reason);
+    chosen.push_back(c.Name());
+    if (c.Name() == "bvh") {
+      if (selector.trying()) calibrations.push_back(i);
+      selector.Record(c, 11.0);
+    } else {
+      ASSERT_EQ(c.Name(), "gpu") << reason;
+      selector.Record(c, ++gpu_runs <= 2 ? 40.0 : 4.0);
+    }
+  }
+  // bvh twice (its first run on the objects runs again), gpu twice (40 ms): bvh wins...
+  EXPECT_EQ(chosen[4], "bvh");
+  // ...until the first recheck, 32 steps later, when gpu takes over.
+  EXPECT_EQ(chosen.back(), "gpu");
+  ASSERT_GE(calibrations.size(), 4u);
+  const int taken_over =
+      static_cast<int>(std::find(chosen.begin() + 4, chosen.end(), "gpu") - chosen.begin());
+  EXPECT_LE(taken_over, 4 + AutoSelector::kFirstRecheckSteps + 2);
+  // Later rechecks (each a bvh step) keep gpu and come at growing intervals.
+  std::vector<int> later(calibrations.begin() + 2, calibrations.end());
+  ASSERT_GE(later.size(), 3u);
+  for (size_t k = 2; k < later.size(); ++k)
+    EXPECT_GT(later[k] - later[k - 1], later[k - 1] - later[k - 2]);
+  EXPECT_LE(later.size(), 6u);  // 600 steps: 32 + 64 + 128 + 256 apart, not one every 32
 }
 
 // Runs `steps` choices on the scenes `scene(i)` gives; a candidate's step costs

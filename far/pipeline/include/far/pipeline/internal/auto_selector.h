@@ -57,7 +57,11 @@ struct SceneSize {
 ///  - then it runs the fastest measured one, with a moving average of its time that leaves out
 ///    its first steps on new objects, and re-calibrates when the scene's object or
 ///    triangle count changed by more than kRecheckChange since, when the chosen one's time has
-///    drifted above kRecheckDrift times what it measured, or every kRecheckSteps steps.
+///    drifted above kRecheckDrift times what it measured, and periodically: kFirstRecheckSteps
+///    steps after a calibration, then twice as long after each periodic one that kept the same
+///    choice, up to kRecheckSteps. A time measured once can be a transient (a session's step
+///    queued behind other sessions' one-off GPU setup, cores busy with a burst): without the
+///    early rechecks a candidate that lost to one stays unused for kRecheckSteps steps.
 /// Every candidate is reliable: cullide, fcl and exact are never chosen.
 /// Thread safety: none (the pipeline's thread).
 class AutoSelector {
@@ -66,6 +70,7 @@ class AutoSelector {
   static constexpr double kRecheckChange = 0.25;
   static constexpr double kRecheckDrift = 2.0;
   static constexpr int64_t kRecheckSteps = 1000;
+  static constexpr int64_t kFirstRecheckSteps = 32;
 
   /// `gpu_cost` measures (once) the renderer's cost of a FAR step and of a gpu step, or gives
   /// nullopt when it cannot; it is only called when there is a GPU. `cpu_threads`: the threads
@@ -98,8 +103,11 @@ class AutoSelector {
     std::optional<uint64_t> ran_on;      // the structure it last ran on (kept across calibrations)
     bool excluded = false;               // never chosen: no prediction for gpu, or its step failed
   };
+  enum class Recheck { kNone, kScene, kDrift, kPeriodic };
   void Calibrate(const SceneSize& scene);
-  bool NeedsRecheck(const SceneSize& scene) const;
+  Recheck NeedsRecheck(const SceneSize& scene) const;
+  // Without a GPU bvh is the only candidate: nothing to recheck early.
+  int64_t FirstRecheck() const { return has_gpu_ ? kFirstRecheckSteps : kRecheckSteps; }
   const Entry* Fastest() const;
 
   bool has_gpu_;
@@ -114,6 +122,8 @@ class AutoSelector {
   bool calibrated_ = false;
   bool trying_ = false;
   int64_t steps_since_calibration_ = 0;
+  int64_t recheck_every_ = kRecheckSteps;  // the periodic recheck's interval now
+  std::optional<Candidate> kept_;          // the choice before a periodic recheck, while it runs
   double chosen_calibration_ms_ = 0;
 };
 
