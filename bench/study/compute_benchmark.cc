@@ -9,8 +9,8 @@
 // thousandth of the scene's diagonal, as far-study's distance pass). Counters, per step: the
 // GPU's own times (refit_ms with the uploads; traverse_ms with the object pairs; filter_ms; 0
 // where the driver's timer gives none: llvmpipe's reads about 0 for compute), the CPU's submit_ms
-// and wait_ms (waiting and reading back), and the pairs: box_pairs (whose boxes met), crossing,
-// undecided (to the CPU's exact predicates).
+// and wait_ms (waiting and reading back; read_ms of it the reading), and the pairs: box_pairs
+// (whose boxes met), crossing, undecided (to the CPU's exact predicates).
 //   far_compute_benchmark --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
 //       --benchmark_report_aggregates_only=true [--gl-platform=device]
 
@@ -153,6 +153,7 @@ void BM_Gpu(benchmark::State& state) {
     sums["filter_ms"] += answer->gpu_filter_ms;
     sums["submit_ms"] += answer->cpu_submit_ms;
     sums["wait_ms"] += answer->cpu_wait_ms;
+    sums["read_ms"] += answer->cpu_read_ms;
     sums["box_pairs"] += static_cast<double>(answer->box_pairs);
     sums["crossing"] += static_cast<double>(answer->crossing.size());
     sums["undecided"] += static_cast<double>(answer->undecided.size());

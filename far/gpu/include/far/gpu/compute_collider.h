@@ -79,9 +79,10 @@ struct ComputeAnswer {
   int64_t bytes_uploaded = 0;
   int runs = 1;  ///< traversals run: more than one when the output buffers had to grow
   // Where the time went (milliseconds). CPU: issuing the uploads and kernels, then waiting for
-  // the GPU and reading the pairs back. GPU (timer queries): the uploads with the boxes and
-  // refit; the (last run's) object pairs and traversal; its filters.
-  double cpu_submit_ms = 0, cpu_wait_ms = 0;
+  // the GPU and reading the pairs back (cpu_read_ms of it: the reading). GPU (timer queries):
+  // the uploads with the boxes and refit; the (last run's) object pairs and traversal; its
+  // filters.
+  double cpu_submit_ms = 0, cpu_wait_ms = 0, cpu_read_ms = 0;
   double gpu_refit_ms = 0, gpu_traverse_ms = 0, gpu_filter_ms = 0;
 };
 
