@@ -1,7 +1,9 @@
 #include "far/gpu/compute_batcher.h"
 
 #include <algorithm>
+#include <chrono>
 #include <condition_variable>
+#include <deque>
 #include <future>
 #include <mutex>
 #include <thread>
@@ -9,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "far/base/timer_slack.h"
 #include "far/gpu/gl_context.h"
 #include "far/gpu/gl_lock.h"
 
@@ -54,10 +57,24 @@ struct ComputeBatcher::Impl {
     Post(std::move(job));
     return done.get();
   }
+  // A step whose GPU work is issued, in the order issued (the GPU's order too).
+  struct InFlight {
+    Job job;
+    ComputeCollider* collider;
+  };
   void Loop(GlPlatform platform, int device, std::promise<Result<void>> started);
-  void RunBatch(std::vector<Job>& batch);
+  // Runs the calls taken, then submits the steps taken (answering at once those that fail).
+  void Start(std::vector<Job>& taken, std::deque<InFlight>& in_flight);
 };
 
+// While steps are on the GPU the thread looks for new ones and for finished ones this often.
+constexpr auto kPoll = std::chrono::microseconds(20);
+
+// Submits the steps waiting as soon as they come, and reads each answer back as soon as its own
+// GPU work is done: the GPU works on the steps in flight while the thread issues the next ones
+// and reads the answers of the finished ones. (Submitting a batch, then waiting for all of it,
+// left the GPU idle while the thread issued and read: on the H200 16 clients got batches of 2.3
+// steps on average, one after another.)
 void ComputeBatcher::Impl::Loop(GlPlatform platform, int device,
                                 std::promise<Result<void>> started) {
   auto context = GlContext::Create(platform, device);
@@ -67,15 +84,30 @@ void ComputeBatcher::Impl::Loop(GlPlatform platform, int device,
   }
   renderer = (*context)->renderer();
   started.set_value({});
+  const ScopedTimerSlack slack(1000);  // the polls' short waits: 20 us, not 70 (WaitAndDelete)
+  std::deque<InFlight> in_flight;
   for (;;) {
-    std::vector<Job> batch;
+    std::vector<Job> taken;
     {
       std::unique_lock lock(mutex);
-      wake.wait(lock, [&] { return !held && (stopping || !jobs.empty()); });
-      if (jobs.empty()) break;  // stopping, and nothing left to do
-      batch.swap(jobs);
+      const auto ready = [&] {
+        return (!held && !jobs.empty()) || (stopping && in_flight.empty());
+      };
+      if (in_flight.empty()) {
+        wake.wait(lock, ready);
+      } else {
+        wake.wait_for(lock, kPoll, ready);
+      }
+      if (!held) taken.swap(jobs);
+      if (stopping && taken.empty() && in_flight.empty()) break;
     }
-    RunBatch(batch);
+    const auto gl = LockGl();
+    Start(taken, in_flight);
+    while (!in_flight.empty() && in_flight.front().collider->Ready()) {
+      InFlight& done = in_flight.front();
+      done.job.answer.set_value(done.collider->Finish());
+      in_flight.pop_front();
+    }
   }
   const auto gl = LockGl();
   colliders.clear();  // their GL objects before the context
@@ -83,38 +115,32 @@ void ComputeBatcher::Impl::Loop(GlPlatform platform, int device,
 }
 
 // The calls first, in order (a session waits for its own add before it steps, and removes only
-// between steps); then every step's GL work is issued, and then each answer is read back: the
-// first read-back waits for the whole batch on the GPU, the others find their work done.
-void ComputeBatcher::Impl::RunBatch(std::vector<Job>& batch) {
-  const auto gl = LockGl();
-  std::vector<Job*> steps;
-  for (Job& job : batch) {
-    if (job.query == nullptr) {
-      job.call();
-    } else {
-      steps.push_back(&job);
-    }
-  }
-  std::vector<ComputeCollider*> runners;
-  std::vector<Result<void>> submitted;
-  for (Job* step : steps) {
-    auto found = colliders.find(step->id);
-    runners.push_back(found == colliders.end() ? nullptr : found->second.get());
-    submitted.push_back(
-        runners.back() == nullptr
-            ? Result<void>(MakeError(ErrorCode::kInternal,
-                                     "gpu method: no collider " + std::to_string(step->id)))
-            : runners.back()->Submit(*step->query));
-  }
-  if (!steps.empty()) {  // counted before any answer: a caller that has one sees its batch
+// between steps, so no call touches a collider whose step is in flight); then the steps.
+void ComputeBatcher::Impl::Start(std::vector<Job>& taken, std::deque<InFlight>& in_flight) {
+  const int64_t steps =
+      std::count_if(taken.begin(), taken.end(), [](const Job& job) { return job.query; });
+  if (steps > 0) {  // counted before any answer: a caller that has one sees its batch
     std::lock_guard lock(mutex);
-    counters.steps += static_cast<int64_t>(steps.size());
+    counters.steps += steps;
     counters.batches += 1;
-    counters.largest_batch = std::max(counters.largest_batch, static_cast<int64_t>(steps.size()));
+    counters.largest_batch = std::max(counters.largest_batch, steps);
   }
-  for (size_t i = 0; i < steps.size(); ++i) {
-    steps[i]->answer.set_value(submitted[i] ? runners[i]->Finish()
-                                            : Result<ComputeAnswer>(submitted[i].error()));
+  for (Job& job : taken) {
+    if (job.query == nullptr) job.call();
+  }
+  for (Job& job : taken) {
+    if (job.query == nullptr) continue;
+    auto found = colliders.find(job.id);
+    if (found == colliders.end()) {
+      job.answer.set_value(
+          MakeError(ErrorCode::kInternal, "gpu method: no collider " + std::to_string(job.id)));
+      continue;
+    }
+    if (auto ok = found->second->Submit(*job.query); !ok) {
+      job.answer.set_value(ok.error());
+      continue;
+    }
+    in_flight.push_back({std::move(job), found->second.get()});
   }
 }
 

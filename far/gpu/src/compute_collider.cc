@@ -57,15 +57,24 @@ double MsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-// Waits for the GL work issued so far with a fence polled between short sleeps: a read-back
-// would wait too, but NVIDIA's driver spins a core while it does (the gpu step's CPU time was
-// its wall time on the H100), and on shared cores the simulators want that core. The sleeps
-// run with 1 us of timer slack: with Linux's default 50 us, a 20 us sleep took 109 us (median,
-// CI machine; 46 us with 1 us of slack), up to 90 us late against a step the goal holds to 500.
-void WaitForGpu() {
+// A fence after the GL work issued so far, flushed so that the GPU has that work now.
+GLsync FenceAndFlush() {
   GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
-  if (fence == nullptr) return;  // the read-back waits instead
   glFlush();
+  return fence;
+}
+
+// Waits for `fence`, then deletes it, polling between short sleeps: NVIDIA's driver spins a core
+// while a blocking wait waits (the gpu step's CPU time was its wall time on the H100), and on
+// shared cores the simulators want that core. The sleeps run with 1 us of timer slack: with
+// Linux's default 50 us, a 20 us sleep took 109 us (median, CI machine; 46 us with 1 us of
+// slack), up to 90 us late against a step the goal holds to 500. A null fence (glFenceSync
+// failed) waits with glFinish: the mapped read-back has no wait of its own.
+void WaitAndDelete(GLsync fence) {
+  if (fence == nullptr) {
+    glFinish();
+    return;
+  }
   if (glClientWaitSync(fence, 0, 0) == GL_TIMEOUT_EXPIRED) {
     const ScopedTimerSlack slack(1000);
     while (glClientWaitSync(fence, 0, 0) == GL_TIMEOUT_EXPIRED)
@@ -227,6 +236,7 @@ struct ComputeCollider::Impl {
     ComputeQuery query;
     bool gl_work = false;  // at least two slots have a pair box: the kernels run
     Clock::time_point submit_start, traverse_start, filter_start;  // the timer queries' begins
+    GLsync fence = nullptr;  // after the step's last command (SubmitGl), until Collect waits
     int64_t uploaded = 0;
     double cpu_submit_ms = 0;
   };
@@ -622,9 +632,10 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
   answer.cpu_submit_ms = pending->cpu_submit_ms;
   answer.bytes_uploaded = pending->uploaded;
   std::array<uint32_t, internal::kNumCounters> counters{};
+  GLsync fence = std::exchange(pending->fence, nullptr);
   for (;;) {
     const auto wait_start = Clock::now();
-    WaitForGpu();
+    WaitAndDelete(fence);
     answer.cpu_wait_ms += MsSince(wait_start);
     if (auto ok = CheckGl("gpu method: the traversal"); !ok) return ok.error();
     if (copies.mapped == nullptr || buffer(internal::kCrossingBinding).mapped == nullptr ||
@@ -650,6 +661,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
       pair_capacity = GrownCapacity(object_pairs, kMostPairCapacity);
       ++answer.runs;
       DispatchPairsAndTraversal();
+      fence = FenceAndFlush();
       continue;
     }
     if (counters[internal::kWorkOverflow] != 0) {
@@ -670,6 +682,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
       candidate_capacity = GrownCapacity(box_pairs, kMostCapacity);
       ++answer.runs;
       DispatchPairsAndTraversal();
+      fence = FenceAndFlush();
       continue;
     }
     const size_t most =
@@ -678,6 +691,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
     capacity = GrownCapacity(most, candidate_capacity);
     ++answer.runs;
     DispatchPairsAndTraversal();
+    fence = FenceAndFlush();
   }
   const auto read_start = Clock::now();
   ReadObjectPairs(counters[internal::kObjectPairCount], answer);
@@ -704,6 +718,7 @@ ComputeCollider::ComputeCollider(std::unique_ptr<Impl> impl) : impl_(std::move(i
 // Names not made yet are 0, which GL's deletes ignore: this also cleans up after a Create that
 // failed halfway.
 void ComputeCollider::Impl::DeleteGlObjects() {
+  if (pending && pending->fence != nullptr) glDeleteSync(pending->fence);
   for (Buffer& b : buffers) glDeleteBuffers(1, &b.id);
   glDeleteBuffers(1, &copies.id);
   glDeleteQueries(1, &refit_query);
@@ -803,6 +818,7 @@ Result<void> ComputeCollider::Impl::SubmitGl() {
   glFlush();
   if (auto ok = CheckGl("gpu method: boxes and refit"); !ok) return ok.error();
   DispatchPairsAndTraversal();
+  step.fence = FenceAndFlush();
   step.uploaded = uploaded;
   step.cpu_submit_ms = MsSince(step.submit_start);
   return {};
@@ -816,6 +832,12 @@ Result<void> ComputeCollider::Submit(const ComputeQuery& query) {
     return ok;
   }
   return {};
+}
+
+bool ComputeCollider::Ready() const {
+  const std::optional<Impl::Pending>& step = impl_->pending;
+  if (!step || !step->gl_work || step->fence == nullptr) return true;
+  return glClientWaitSync(step->fence, 0, 0) != GL_TIMEOUT_EXPIRED;
 }
 
 Result<ComputeAnswer> ComputeCollider::Finish() {

@@ -12,12 +12,13 @@
 namespace far {
 
 /// One GL thread, with an OpenGL context of its own, that runs the gpu method's GPU work for
-/// every pipeline of a process that hands it over (far-daemon's sessions). The steps that are
-/// waiting when the thread turns to them go to the GPU together: every step's uploads and
-/// kernels are issued, then the thread waits for the GPU once and reads each answer back. A step
-/// that arrives while a batch runs goes with the next one. Compared with every session issuing
-/// its step on its own context in turns under the GL lock (ComputeCollider::Run), the GPU gets
-/// one context's work back to back, without a switch between contexts or a wait per step.
+/// every pipeline of a process that hands it over (far-daemon's sessions). The thread issues
+/// the steps waiting (each one's uploads and kernels, then its fence) as soon as it turns to
+/// them, also while earlier steps are still on the GPU, and reads each step's answer back as
+/// soon as its own fence has passed (ComputeCollider::Ready). Compared with every session
+/// issuing its step on its own context in turns under the GL lock (ComputeCollider::Run), the
+/// GPU gets one context's work back to back, without a switch between contexts, and works on
+/// some steps while the thread issues and reads others.
 ///
 /// Each session keeps its own collider (its buffers and hierarchies on the GPU), made, run and
 /// destroyed on the batcher's thread. Thread-safe: any thread may call any method.
@@ -39,8 +40,8 @@ class ComputeBatcher {
   /// Destroys collider `id` on the batcher's thread, after the steps already handed over; returns
   /// at once.
   void RemoveCollider(ColliderId id);
-  /// Runs `query` on collider `id` in the next batch (ComputeCollider::Submit, then Finish once
-  /// the batch's GPU work is issued); blocks until its answer is read back. The query's spans
+  /// Runs `query` on collider `id` (ComputeCollider::Submit when the thread turns to it, Finish
+  /// once its GPU work is done); blocks until its answer is read back. The query's spans
   /// must live until it returns. Errors: ComputeCollider's; kInternal for an unknown id.
   Result<ComputeAnswer> Run(ColliderId id, const ComputeQuery& query);
   /// Runs `work` with collider `id` on the batcher's thread, outside any batch, and returns its
@@ -50,7 +51,8 @@ class ComputeBatcher {
   /// GL_RENDERER of the batcher's context.
   const std::string& renderer() const;
 
-  /// Steps run so far and the batches that carried them.
+  /// Steps run so far and the batches that carried them (a batch: the steps the thread issued
+  /// in one turn).
   struct Counters {
     int64_t steps = 0;
     int64_t batches = 0;

@@ -116,6 +116,10 @@ class ComputeCollider {
   /// GL lock (far::LockGl) across both. Errors: as Run's; Finish fails with kInternal when no
   /// Submit came first.
   Result<void> Submit(const ComputeQuery& query);
+  /// Whether the submitted step's GPU work is done, so that Finish would not wait (true when
+  /// none was submitted). A step's fence follows its last command: another collider's step
+  /// submitted after it does not delay it. @pre the caller holds the GL lock.
+  bool Ready() const;
   Result<ComputeAnswer> Finish();
 
   /// Depth limit of a hierarchy the traversal can descend (root at depth 0).
