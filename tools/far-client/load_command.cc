@@ -27,6 +27,7 @@ using nlohmann::json;
 struct LoadStats {
   std::vector<double> latency_ms;
   std::map<std::string, int> steps_by_method;  // the configuration that answered (auto varies)
+  std::string last_reason;                     // auto's reason for its client's last step
   int errors = 0;
   std::string first_error;
   double cpu_burned_ms = 0;  // --client-cpu-ms, all steps together
@@ -117,6 +118,7 @@ void RunOneClient(LoadRun& run, int i, LoadStats& mine) {
     }
     backoff = std::chrono::milliseconds(0);
     ++mine.steps_by_method[result->stats.method];
+    mine.last_reason = result->stats.method_reason;
     mine.latency_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
 }
@@ -151,6 +153,7 @@ LoadReport Summarize(const std::vector<LoadStats>& stats, double elapsed, double
                                  {"p99_ms", Quantile(s.latency_ms, 0.99)},
                                  {"errors", s.errors},
                                  {"first_error", s.first_error},
+                                 {"last_reason", s.last_reason},
                                  {"client_cpu_ms_total", s.cpu_burned_ms}});
   }
   const std::vector<double>& all = report.all;
@@ -170,6 +173,24 @@ LoadReport Summarize(const std::vector<LoadStats>& stats, double elapsed, double
                     {"client_cpu_ms_per_step", client_cpu_ms},
                     {"client_cpu_ms_total", cpu_burned_ms}};
   return report;
+}
+
+// auto's choice at each client's last step, the clients that share one named together ("auto:
+// gpu is the fastest measured" for 14 clients), with one client's whole reason for each.
+void PrintLastReasons(const LoadReport& report) {
+  std::map<std::string, std::vector<int>> clients_by_choice;
+  for (const auto& c : report.per_client) {
+    const std::string reason = c["last_reason"].get<std::string>();
+    if (reason.empty()) continue;
+    clients_by_choice[reason.substr(0, reason.find(" ("))].push_back(c["client"].get<int>());
+  }
+  for (const auto& [choice, clients] : clients_by_choice) {
+    const std::string& whole =
+        report.per_client[static_cast<size_t>(clients.front())]["last_reason"]
+            .get_ref<const std::string&>();
+    std::printf("last step's reason, %zu client(s): %s\n  client %d: %s\n", clients.size(),
+                choice.c_str(), clients.front(), whole.c_str());
+  }
 }
 
 void PrintTable(const LoadReport& report, double elapsed) {
@@ -195,6 +216,7 @@ void PrintTable(const LoadReport& report, double elapsed) {
     methods += (methods.empty() ? "" : ", ") + method + " " + std::to_string(steps);
   }
   std::printf("steps by method: %s\n", methods.empty() ? "none answered" : methods.c_str());
+  PrintLastReasons(report);
   if (const double per_step = report.overall["client_cpu_ms_per_step"].get<double>();
       per_step > 0) {
     std::printf("client CPU burned: %.1f ms per step before its request, %.1f ms in all\n",
