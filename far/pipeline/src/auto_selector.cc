@@ -129,13 +129,20 @@ Candidate AutoSelector::Choose(const SceneSize& scene, std::string* reason) {
     // recheck, or one that changes the choice, starts the intervals again.
     const Entry* chosen = calibrated_ ? Fastest() : nullptr;
     kept_.reset();
+    std::optional<double> kept_ms;
     if (recheck == Recheck::kPeriodic && chosen != nullptr) {
       kept_ = chosen->candidate;
+      kept_ms = chosen->measured_ms;
       recheck_every_ = std::min(2 * recheck_every_, kRecheckSteps);
     } else {
       recheck_every_ = FirstRecheck();
     }
     Calibrate(scene);
+    // A periodic recheck tries the others against the chosen one's moving average, which says
+    // more than one step of it would.
+    for (Entry& entry : entries_) {
+      if (kept_ && entry.candidate == *kept_) entry.measured_ms = kept_ms;
+    }
   }
   const Entry* best = Fastest();
   std::vector<const Entry*> skipped;

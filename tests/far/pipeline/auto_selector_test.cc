@@ -192,8 +192,8 @@ TEST(AutoSelectorTest, RecalibratesWhenTheSceneGrowsOrTheChoiceDrifts) {
 
 // A session's gpu steps at calibration queued behind other sessions' one-off GPU setup (16
 // clients starting together on one daemon): gpu measured 40 ms where it takes 4, so bvh (11 ms)
-// won. A periodic recheck soon after runs gpu again and keeps it; the next rechecks, which keep
-// the choice, come twice as far apart each time.
+// won. A periodic recheck soon after runs gpu again (against bvh's moving average) and keeps it;
+// the next rechecks, which keep the choice, come twice as far apart each time.
 TEST(AutoSelectorTest, ATransientLossIsRecheckedSoonThenLessOften) {
   GpuCost probe{50.0, 0.03};  // the raster configurations: never tried
   probe.compute_fixed_ms = 2.0;
@@ -222,6 +222,8 @@ TEST(AutoSelectorTest, ATransientLossIsRecheckedSoonThenLessOften) {
   const int taken_over =
       static_cast<int>(std::find(chosen.begin() + 4, chosen.end(), "gpu") - chosen.begin());
   EXPECT_LE(taken_over, 4 + AutoSelector::kFirstRecheckSteps + 2);
+  // That recheck ran gpu against bvh's moving average: bvh was not tried again.
+  EXPECT_GT(calibrations[2], taken_over);
   // Later rechecks (each a bvh step) keep gpu and come at growing intervals.
   std::vector<int> later(calibrations.begin() + 2, calibrations.end());
   ASSERT_GE(later.size(), 3u);

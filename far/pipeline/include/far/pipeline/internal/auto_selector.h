@@ -59,9 +59,11 @@ struct SceneSize {
 ///    triangle count changed by more than kRecheckChange since, when the chosen one's time has
 ///    drifted above kRecheckDrift times what it measured, and periodically: kFirstRecheckSteps
 ///    steps after a calibration, then twice as long after each periodic one that kept the same
-///    choice, up to kRecheckSteps. A time measured once can be a transient (a session's step
-///    queued behind other sessions' one-off GPU setup, cores busy with a burst): without the
-///    early rechecks a candidate that lost to one stays unused for kRecheckSteps steps.
+///    choice, up to kRecheckSteps. A periodic recheck runs the other candidates once each
+///    against the chosen one's moving average. A time measured once can be a transient (a
+///    session's step queued behind other sessions' one-off GPU setup, cores busy with a burst):
+///    without the early rechecks a candidate that lost to one stays unused for kRecheckSteps
+///    steps.
 /// Every candidate is reliable: cullide, fcl and exact are never chosen.
 /// Thread safety: none (the pipeline's thread).
 class AutoSelector {
