@@ -814,8 +814,6 @@ Result<void> ComputeCollider::Impl::SubmitGl() {
   uploaded += RefitMoved();
   glEndQuery(GL_TIME_ELAPSED);
   glUseProgram(0);
-  // The GPU starts on the uploads and the refit while the rest is issued.
-  glFlush();
   if (auto ok = CheckGl("gpu method: boxes and refit"); !ok) return ok.error();
   DispatchPairsAndTraversal();
   step.fence = FenceAndFlush();
