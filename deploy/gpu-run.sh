@@ -67,7 +67,7 @@ stage() {
     return 0
   fi
   echo
-  echo "=== $name (limit ${limit}s)"
+  echo "=== $name (limit ${limit}s, from $(date +%T))"
   local shown=("$@")
   [ "$1" != env ] || shown=("${shown[@]:2}") # env LD_LIBRARY_PATH=...: said once, above
   echo "\$ ${shown[*]}"
@@ -288,6 +288,14 @@ main() {
     FAR_LOAD_SECONDS=1 FAR_CLIENT_CPU_MS=1 FAR_LOAD_METHODS="bvh gpu"
   fi
 
+  # The GPU's clocks and load once a second while the stages run (gpu-clocks.txt): a GPU that
+  # steps in short bursts may stay at low clocks, which the GPU's timers alone cannot tell.
+  local dmon=
+  if [ "$smoke" = 0 ] && command -v nvidia-smi >/dev/null; then
+    nvidia-smi dmon -s pcu -d 1 -o T >"$results/gpu-clocks.txt" 2>&1 &
+    dmon=$!
+  fi
+
   # FAR_RUN_STAGES: which of them run (default all: tests kernels paper scaling load).
   local stages=" ${FAR_RUN_STAGES:-tests kernels paper scaling load} "
   [[ "$stages" == *" tests "* ]] &&
@@ -313,6 +321,8 @@ main() {
   fi
   [[ "$stages" == *" load "* ]] &&
   stage "daemon load (16 clients)" 120 "${netns[@]}" bash -c load_runs
+
+  [ -z "$dmon" ] || kill "$dmon" 2>/dev/null || true
 
   echo
   echo "=== summary ($(($(date +%s) - start))s in all; GL_RENDERER: $renderer)"
