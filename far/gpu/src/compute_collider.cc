@@ -250,6 +250,10 @@ struct ComputeCollider::Impl {
   // pairs, their work, the traversal and the filters, with the buffers at `pair_capacity`,
   // `candidate_capacity` and `capacity`.
   void DispatchPairsAndTraversal();
+  using Counters = std::array<uint32_t, internal::kNumCounters>;
+  // Fails on a stack or count overflow, else grows the buffer that overflowed (the kernels must
+  // run again: true) or says that none did (false).
+  Result<bool> GrowWhatOverflowed(const Counters& counters);
   // Waits for the kernels (again, with larger buffers, when some overflowed) and reads the
   // answer back.
   Result<ComputeAnswer> Collect();
@@ -627,11 +631,53 @@ void ComputeCollider::Impl::DispatchPairsAndTraversal() {
   copy(internal::kPcsBitsBinding, BitsOffset(), bits_bytes);
 }
 
+Result<bool> ComputeCollider::Impl::GrowWhatOverflowed(const Counters& counters) {
+  if (counters[internal::kStackOverflow] != 0) {
+    return MakeError(ErrorCode::kInternal,
+                     "gpu method: a traversal ran out of stack (a hierarchy deeper than checked)");
+  }
+  // Too many object pairs: their work and the traversal saw only the first pair_capacity.
+  const size_t object_pairs = counters[internal::kObjectPairCount];
+  if (object_pairs > pair_capacity) {
+    if (object_pairs > kMostPairCapacity) {
+      return MakeError(ErrorCode::kLimitExceeded, "gpu method: " + std::to_string(object_pairs) +
+                                                      " object pairs, over its limit " +
+                                                      std::to_string(kMostPairCapacity) +
+                                                      "; 'bvh' answers this scene");
+    }
+    pair_capacity = GrownCapacity(object_pairs, kMostPairCapacity);
+    return true;
+  }
+  if (counters[internal::kWorkOverflow] != 0) {
+    return MakeError(ErrorCode::kUnavailable,
+                     "gpu method: over 2^32 triangles to descend in one step; 'bvh' answers "
+                     "this scene");
+  }
+  // Too many triangle pairs whose boxes meet: the filters saw only the first
+  // candidate_capacity (the outputs hold at most as many).
+  const size_t box_pairs = counters[internal::kBoxPairs];
+  if (box_pairs > candidate_capacity) {
+    if (box_pairs > kMostCapacity) {
+      return MakeError(ErrorCode::kLimitExceeded,
+                       "gpu method: " + std::to_string(box_pairs) +
+                           " triangle pairs whose boxes meet, over its limit " +
+                           std::to_string(kMostCapacity) + "; 'bvh' answers this scene");
+    }
+    candidate_capacity = GrownCapacity(box_pairs, kMostCapacity);
+    return true;
+  }
+  const size_t most =
+      std::max(counters[internal::kCrossingCount], counters[internal::kUndecidedCount]);
+  if (most <= capacity) return false;
+  capacity = GrownCapacity(most, candidate_capacity);
+  return true;
+}
+
 Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
   ComputeAnswer answer;
   answer.cpu_submit_ms = pending->cpu_submit_ms;
   answer.bytes_uploaded = pending->uploaded;
-  std::array<uint32_t, internal::kNumCounters> counters{};
+  Counters counters{};
   GLsync fence = std::exchange(pending->fence, nullptr);
   for (;;) {
     const auto wait_start = Clock::now();
@@ -644,51 +690,9 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
                        "gpu method: the driver did not map the read-back buffers");
     }
     std::memcpy(counters.data(), copies.mapped, sizeof(counters));
-    if (counters[internal::kStackOverflow] != 0) {
-      return MakeError(
-          ErrorCode::kInternal,
-          "gpu method: a traversal ran out of stack (a hierarchy deeper than checked)");
-    }
-    // Too many object pairs: their work and the traversal saw only the first pair_capacity.
-    const size_t object_pairs = counters[internal::kObjectPairCount];
-    if (object_pairs > pair_capacity) {
-      if (object_pairs > kMostPairCapacity) {
-        return MakeError(ErrorCode::kLimitExceeded, "gpu method: " + std::to_string(object_pairs) +
-                                                        " object pairs, over its limit " +
-                                                        std::to_string(kMostPairCapacity) +
-                                                        "; 'bvh' answers this scene");
-      }
-      pair_capacity = GrownCapacity(object_pairs, kMostPairCapacity);
-      ++answer.runs;
-      DispatchPairsAndTraversal();
-      fence = FenceAndFlush();
-      continue;
-    }
-    if (counters[internal::kWorkOverflow] != 0) {
-      return MakeError(ErrorCode::kUnavailable,
-                       "gpu method: over 2^32 triangles to descend in one step; 'bvh' answers "
-                       "this scene");
-    }
-    // Too many triangle pairs whose boxes meet: the filters saw only the first
-    // candidate_capacity (the outputs hold at most as many).
-    const size_t box_pairs = counters[internal::kBoxPairs];
-    if (box_pairs > candidate_capacity) {
-      if (box_pairs > kMostCapacity) {
-        return MakeError(ErrorCode::kLimitExceeded,
-                         "gpu method: " + std::to_string(box_pairs) +
-                             " triangle pairs whose boxes meet, over its limit " +
-                             std::to_string(kMostCapacity) + "; 'bvh' answers this scene");
-      }
-      candidate_capacity = GrownCapacity(box_pairs, kMostCapacity);
-      ++answer.runs;
-      DispatchPairsAndTraversal();
-      fence = FenceAndFlush();
-      continue;
-    }
-    const size_t most =
-        std::max(counters[internal::kCrossingCount], counters[internal::kUndecidedCount]);
-    if (most <= capacity) break;
-    capacity = GrownCapacity(most, candidate_capacity);
+    auto grew = GrowWhatOverflowed(counters);
+    if (!grew) return grew.error();
+    if (!*grew) break;
     ++answer.runs;
     DispatchPairsAndTraversal();
     fence = FenceAndFlush();
