@@ -34,3 +34,9 @@ add_test(NAME GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe
                  ${PROJECT_SOURCE_DIR}/deploy/gl-renderer.sh $<TARGET_FILE:far-daemon>)
 set_tests_properties(GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe PROPERTIES
                      LABELS gpu SKIP_RETURN_CODE 77)
+
+# The draw pacer's bound on a piece's screen area: a pure function in a header private to
+# far::gpu, tested through it (no GL).
+far_add_test(far_piece_footprint_test unit far/gpu/piece_footprint_test.cc)
+target_include_directories(far_piece_footprint_test PRIVATE ${PROJECT_SOURCE_DIR}/far/gpu/src)
+target_link_libraries(far_piece_footprint_test PRIVATE far::gpu)

@@ -51,6 +51,16 @@ void ViewMatrix(int axis, const Projection& projection, const Eigen::Isometry3d&
   }
 }
 
+// The view's scale for bounding its pieces' fill (the radius comes with the view's data).
+ViewScale ScaleOf(const AxisView& view, const RasterFormat& raster) {
+  const Eigen::Vector3d size = view.projection.bounds_W.sizes();
+  const int screen_x = (view.axis + 1) % 3, screen_y = (view.axis + 2) % 3;
+  ViewScale scale;
+  scale.px_per_unit = std::max(raster.width / size[screen_x], raster.height / size[screen_y]);
+  scale.view_pixels = static_cast<double>(raster.width) * raster.height;
+  return scale;
+}
+
 std::array<float, 3> ToFloat(const Eigen::Vector3d& v) {
   return {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
 }
@@ -119,27 +129,31 @@ struct CullingRenderer::Impl {
   std::unique_ptr<CullingPrograms> programs;
   std::unique_ptr<CullTargets> targets;
   GLuint object_buffer = 0, alive_buffer = 0;
-  GLuint timer_query = 0;  // GL_TIME_ELAPSED of a view's passes
-  BatchCosts batch_costs;  // what a batch of draws costs here, from view to view
+  GLuint timer_query = 0;     // GL_TIME_ELAPSED of a view's passes
+  GLuint fragment_query = 0;  // a batch's fragment shader invocations (0: not supported)
+  BatchCosts batch_costs;     // what a batch of draws costs here, from view to view
 
   ~Impl() {
     GLuint buffers[] = {object_buffer, alive_buffer};
     glDeleteBuffers(2, buffers);
     glDeleteQueries(1, &timer_query);
+    if (fragment_query != 0) glDeleteQueries(1, &fragment_query);
   }
 
   // Per-object data for the shaders (indexed by slot; slots outside the view are inactive) and
   // the primitives still alive, bound for the vertex shader.
-  void UploadViewData(const AxisView& view, RenderCounters* counters);
+  // Returns the largest radius the view grows an object's pieces by.
+  double UploadViewData(const AxisView& view, RenderCounters* counters);
   // The fixed-function state every view starts from.
   void SetViewState(const RasterFormat& raster) const;
 };
 
-void CullingRenderer::Impl::UploadViewData(const AxisView& view, RenderCounters* counters) {
+double CullingRenderer::Impl::UploadViewData(const AxisView& view, RenderCounters* counters) {
   std::vector<ObjectData> objects(std::max<size_t>(pieces->num_slots(), 1),
                                   ObjectData{{}, 0.f, 0u, 0u, 0u});
   // Unfattened triangles (CULLIDE) get no radius; offsets get r plus their rounding bound.
   const bool fattened = view.sets.empty() || view.sets[0] != PieceSet::kTriangles;
+  double largest_radius = 0;
   for (const ViewObject& object : view.objects) {
     ObjectData& o = objects[object.slot];
     ViewMatrix(view.axis, view.projection, object.X_WA, o.M);
@@ -148,6 +162,7 @@ void CullingRenderer::Impl::UploadViewData(const AxisView& view, RenderCounters*
             ? static_cast<float>(view.radius_scale * (view.projection.radius +
                                                       FloatRoundingBound(object, view.projection)))
             : 0.f;
+    largest_radius = std::max(largest_radius, static_cast<double>(o.radius));
     o.group = object.group;
     o.first_primitive = object.first_primitive;
     o.in_view = 1;
@@ -162,6 +177,7 @@ void CullingRenderer::Impl::UploadViewData(const AxisView& view, RenderCounters*
       static_cast<int64_t>(objects.size() * sizeof(ObjectData) + alive.size() * sizeof(uint32_t));
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, object_buffer);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, alive_buffer);
+  return largest_radius;
 }
 
 void CullingRenderer::Impl::SetViewState(const RasterFormat& raster) const {
@@ -203,6 +219,10 @@ Result<std::unique_ptr<CullingRenderer>> CullingRenderer::Create(const RasterFor
   glCreateBuffers(1, &impl->object_buffer);
   glCreateBuffers(1, &impl->alive_buffer);
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->timer_query);
+  // Pipeline statistics (core in GL 4.6) let the draw pacer bound a batch's fill (draw_pacer.h).
+  // glGenQueries: Mesa 22.3's glCreateQueries refuses their targets (GL_INVALID_ENUM).
+  if (epoxy_gl_version() >= 46 || epoxy_has_gl_extension("GL_ARB_pipeline_statistics_query"))
+    glGenQueries(1, &impl->fragment_query);
   // Depth in [0, 1] straight from clip z: the orthographic map is affine, no precision lost.
   glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
   if (auto status = CheckGl("creating the culling renderer"); !status.ok()) return status.error();
@@ -246,13 +266,14 @@ Result<ViewResult> CullingRenderer::RenderView(const AxisView& view, QueryMechan
     if (timing) begin_timer();
     return stop;
   };
-  DrawPacer pacer(gl.batch_costs, pause, batch_ms_, wanted);
+  DrawPacer pacer(gl.batch_costs, pause, batch_ms_, wanted,
+                  FillBound{ScaleOf(view, raster_), gl.fragment_query});
   // The pieces' uploads (in parts, with pauses), the view's data and draw commands.
   const Clock::time_point prepare_start = Clock::now();
   for (PieceSet set : view.sets) {
     if (!gl.pieces->Sync(set, pacer, counters)) return ViewResult{{}, pacer.stopped()};
   }
-  gl.UploadViewData(view, counters);
+  pacer.set_fill_radius(gl.UploadViewData(view, counters));
   gl.SetViewState(raster_);
   for (PieceSet set : view.sets)
     gl.pieces->PrepareViewDraws(set, view.objects, view.alive, view.triangles_per_primitive,

@@ -12,13 +12,25 @@ double MsSince(DrawPacer::Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(DrawPacer::Clock::now() - start).count();
 }
 
+// A dearer measurement counts at once, a cheaper one half.
+void Blend(double& known, double measured) {
+  known = known < 0 || measured > known ? measured : 0.5 * (known + measured);
+}
+
 }  // namespace
 
 void BatchCosts::Record(PieceSet set, FragmentRole role, uint64_t instances, double ms) {
   if (instances == 0) return;
-  double& known = ms_[static_cast<size_t>(set)][static_cast<size_t>(role)];
-  const double measured = ms / static_cast<double>(instances);
-  known = known < 0 || measured > known ? measured : 0.5 * (known + measured);
+  Blend(ms_[static_cast<size_t>(set)][static_cast<size_t>(role)],
+        ms / static_cast<double>(instances));
+}
+
+void BatchCosts::RecordFragments(FragmentRole role, uint64_t instances, uint64_t fragments,
+                                 double ms) {
+  if (instances == 0) return;
+  const double equivalent =
+      static_cast<double>(fragments) + kInstanceFragments * static_cast<double>(instances);
+  Blend(ms_per_fragment_[static_cast<size_t>(role)], ms / equivalent);
 }
 
 uint64_t DrawPacer::Budget(PieceSet set, FragmentRole role) const {
@@ -34,6 +46,31 @@ uint64_t DrawPacer::Budget(PieceSet set, FragmentRole role) const {
   return last == 0 ? by_cost : std::min(by_cost, kGrowth * last);
 }
 
+bool DrawPacer::TooMuchFill(FragmentRole role, const PieceFootprint& footprint,
+                            uint64_t count) const {
+  const double per_fragment = costs_.ms_per_fragment(role);
+  if (fill_.fragment_query == 0 || per_fragment < 0 || batch_ms_ <= 0) return false;
+  return per_fragment * fill_.scale.Pixels(footprint, count) > kFillSlack * batch_ms_;
+}
+
+uint64_t DrawPacer::WithinFill(const PieceBuffers& pieces, PieceSet set, FragmentRole role,
+                               uint64_t first, uint64_t count) const {
+  if (!TooMuchFill(role, pieces.Footprint(set, first, count), count)) return count;
+  // The bound grows with the instances: the most that keep within it, by bisection.
+  uint64_t fits = 1, over = count;
+  while (over - fits > 1) {
+    const uint64_t mid = fits + (over - fits) / 2;
+    (TooMuchFill(role, pieces.Footprint(set, first, mid), mid) ? over : fits) = mid;
+  }
+  return fits;
+}
+
+void DrawPacer::BeginBatch() {
+  if (fill_.fragment_query == 0 || !PauseWantedNow()) return;
+  glBeginQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB, fill_.fragment_query);
+  counting_fragments_ = true;
+}
+
 bool DrawPacer::DrawCommands(PieceBuffers& pieces, PieceSet set, FragmentRole role,
                              RenderCounters* counters) {
   const size_t commands = pieces.view_commands(set);
@@ -44,9 +81,12 @@ bool DrawPacer::DrawCommands(PieceBuffers& pieces, PieceSet set, FragmentRole ro
     const uint64_t budget = Budget(set, role);
     const auto [first, count] = pieces.ViewCommand(set, next);
     uint64_t drawn = 0;
-    if (done_in_command > 0 || count > budget) {
+    BeginBatch();
+    if (done_in_command > 0 || count > budget ||
+        TooMuchFill(role, pieces.Footprint(set, first, count), count)) {
       // Part of one command (the batch is smaller than it, or its start was drawn).
-      drawn = std::min(budget, count - done_in_command);
+      drawn = WithinFill(pieces, set, role, first + done_in_command,
+                         std::min(budget, count - done_in_command));
       pieces.Draw(set, first + done_in_command, drawn, counters);
       done_in_command += drawn;
       if (done_in_command == count) {
@@ -54,10 +94,18 @@ bool DrawPacer::DrawCommands(PieceBuffers& pieces, PieceSet set, FragmentRole ro
         done_in_command = 0;
       }
     } else {
-      // Whole commands, as many as the budget holds (the first always fits).
+      // Whole commands, as many as the budget and the fill bound hold (the first always fits).
       size_t end = next;
-      while (end < commands && drawn + pieces.ViewCommand(set, end).second <= budget)
-        drawn += pieces.ViewCommand(set, end++).second;
+      PieceFootprint footprint;
+      while (end < commands) {
+        const auto [at, n] = pieces.ViewCommand(set, end);
+        PieceFootprint with = footprint;
+        with += pieces.Footprint(set, at, n);
+        if (end > next && (drawn + n > budget || TooMuchFill(role, with, drawn + n))) break;
+        footprint = with;
+        drawn += n;
+        ++end;
+      }
       pieces.DrawViewCommands(set, next, end, counters);
       next = end;
     }
@@ -70,7 +118,9 @@ bool DrawPacer::DrawRange(PieceBuffers& pieces, PieceSet set, FragmentRole role,
                           uint64_t count, RenderCounters* counters) {
   for (uint64_t done = 0; done < count;) {
     const Clock::time_point start = Clock::now();
-    const uint64_t drawn = std::min(Budget(set, role), count - done);
+    const uint64_t drawn =
+        WithinFill(pieces, set, role, first + done, std::min(Budget(set, role), count - done));
+    BeginBatch();
     pieces.Draw(set, first + done, drawn, counters);
     done += drawn;
     if (!AfterBatch(set, role, drawn, start, done == count)) return false;
@@ -81,6 +131,9 @@ bool DrawPacer::DrawRange(PieceBuffers& pieces, PieceSet set, FragmentRole role,
 bool DrawPacer::AfterBatch(PieceSet set, FragmentRole role, uint64_t instances,
                            Clock::time_point start, bool last) {
   last_batch_[static_cast<size_t>(set)][static_cast<size_t>(role)] = instances;
+  const bool counted = counting_fragments_;
+  if (counted) glEndQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
+  counting_fragments_ = false;
   // A pass small enough, in a view that has been short so far: no pause. Its work is finished
   // by the next pause or by the view's read-back; a pause per pass would cost a GPU a round
   // trip each, for nothing.
@@ -95,7 +148,13 @@ bool DrawPacer::AfterBatch(PieceSet set, FragmentRole role, uint64_t instances,
   if (!PauseWantedNow()) return true;
   glFinish();
   // The batch's GL work (with what was left unfinished before it: counted with it).
-  costs_.Record(set, role, instances, MsSince(start));
+  const double ms = MsSince(start);
+  costs_.Record(set, role, instances, ms);
+  if (counted) {
+    GLuint64 fragments = 0;  // finished: the result is there
+    glGetQueryObjectui64v(fill_.fragment_query, GL_QUERY_RESULT, &fragments);
+    costs_.RecordFragments(role, instances, fragments, ms);
+  }
   return Pause();
 }
 

@@ -12,23 +12,37 @@
 
 #include "culling_shaders.h"
 #include "piece_buffers.h"
+#include "piece_footprint.h"
 
 #include "far/base/step_control.h"
 #include "far/gpu/culling_renderer.h"
 
 namespace far::internal {
 
-/// What one batch of each piece set and role cost: milliseconds of GL work per instance, as
-/// measured (a renderer keeps them from view to view). Batches are sized from them.
+/// What one batch of each piece set and role cost: milliseconds of GL work per instance, and
+/// per fragment of each role, as measured (a renderer keeps them from view to view). Batches are
+/// sized from them. A dearer batch counts at once, a cheaper one half (so that one slow batch
+/// shortens the next at once).
 class BatchCosts {
  public:
+  /// Fragment shader invocations one instance is counted as, beside its own fragments: its
+  /// vertex and setup work, so that a batch of pieces hidden by the depth test (few fragments)
+  /// does not make every fragment look dear.
+  static constexpr double kInstanceFragments = 64;
+
   /// ms per instance of `set` drawn with `role`, or a negative number when not yet measured.
   double ms_per_instance(PieceSet set, FragmentRole role) const {
     return ms_[static_cast<size_t>(set)][static_cast<size_t>(role)];
   }
-  /// Records a batch of `instances` that took `ms`: a dearer batch counts at once, a cheaper one
-  /// half (so that one slow batch shortens the next at once).
+  /// Records a batch of `instances` that took `ms`.
   void Record(PieceSet set, FragmentRole role, uint64_t instances, double ms);
+
+  /// ms per fragment drawn with `role` (see kInstanceFragments), negative when not yet measured.
+  double ms_per_fragment(FragmentRole role) const {
+    return ms_per_fragment_[static_cast<size_t>(role)];
+  }
+  /// Records a batch of `instances` that ran `fragments` fragment shader invocations in `ms`.
+  void RecordFragments(FragmentRole role, uint64_t instances, uint64_t fragments, double ms);
 
  private:
   std::array<std::array<double, kNumRoles>, kNumPieceSets> ms_ = [] {
@@ -36,6 +50,19 @@ class BatchCosts {
     for (auto& set : all) set.fill(-1.0);
     return all;
   }();
+  std::array<double, kNumRoles> ms_per_fragment_ = [] {
+    std::array<double, kNumRoles> all;
+    all.fill(-1.0);
+    return all;
+  }();
+};
+
+/// What bounds a batch's fill before it is drawn: the view's scale (piece_footprint.h) and a
+/// GL_FRAGMENT_SHADER_INVOCATIONS query that measures what a fragment costs (0: the context has
+/// no pipeline statistics, and batches are sized on their instances alone).
+struct FillBound {
+  ViewScale scale;
+  GLuint fragment_query = 0;
 };
 
 /// Draws one view's passes in batches and pauses between them. A pause finishes the GL work
@@ -55,14 +82,23 @@ class DrawPacer {
   /// its set and role): pieces of one view differ in cost, and a batch sized on cheap ones
   /// should not meet a long run of dear ones at full size.
   static constexpr uint64_t kGrowth = 4;
+  /// A batch's pieces may cover at most this many batches' time of fragments, bounded by their
+  /// footprints at the measured cost per fragment. The cost per instance sizes batches on the
+  /// pieces drawn so far, and pieces seen edge-on cost little: a stack of large triangles seen
+  /// edge-on then face-on cost 60x more per piece within one view (one batch held the GL lock
+  /// for 0.4-0.9 s on llvmpipe). The footprint bounds what is about to be drawn. It is loose by
+  /// design (a piece seen edge-on is bounded as if face-on), hence a few batches' time, so that
+  /// it shortens only batches that may be far dearer than the cost per instance says.
+  static constexpr double kFillSlack = 4;
 
   /// All aliased: must outlive *this. `between` may be empty (no pauses but the measuring).
   /// `batch_ms` <= 0: one instance per batch, each followed by a pause (for tests). `wanted`
   /// may be empty (every batch boundary pauses as above); else a boundary pauses only when it
   /// returns true, and until the cost is measured each batch draws kGrowth times the last.
+  /// `fill`: see FillBound (default: batches sized on their instances alone).
   DrawPacer(BatchCosts& costs, const BetweenBatches& between, double batch_ms = kDefaultBatchMs,
-            const PauseWanted& wanted = {})
-      : costs_(costs), between_(between), batch_ms_(batch_ms), wanted_(wanted) {}
+            const PauseWanted& wanted = {}, const FillBound& fill = {})
+      : costs_(costs), between_(between), batch_ms_(batch_ms), wanted_(wanted), fill_(fill) {}
 
   /// Draws the view's commands of `set` (PieceBuffers::PrepareViewDraws) with `role`'s program
   /// bound, in batches. False when the view must stop (stopped() says why).
@@ -75,6 +111,8 @@ class DrawPacer {
   /// work since the last pause may have taken a batch's time, judged by the CPU time spent issuing
   /// it. Returns whether it paused (the work is then finished); stopped() says whether to stop.
   bool MaybePause();
+  /// The view's radius, once its data is uploaded (the pieces' uploads come first).
+  void set_fill_radius(double radius) { fill_.scale.radius = radius; }
   /// Why the view must stop, or kNone.
   StopReason stopped() const { return stopped_; }
   /// How many pauses the view made.
@@ -83,6 +121,13 @@ class DrawPacer {
  private:
   // The instances the next batch of (set, role) may draw.
   uint64_t Budget(PieceSet set, FragmentRole role) const;
+  // The most of the `count` instances from `first` (at least one) whose fill is within bounds.
+  uint64_t WithinFill(const PieceBuffers& pieces, PieceSet set, FragmentRole role, uint64_t first,
+                      uint64_t count) const;
+  // Whether `footprint` of `count` pieces may take longer than kFillSlack batches with `role`.
+  bool TooMuchFill(FragmentRole role, const PieceFootprint& footprint, uint64_t count) const;
+  // Starts counting the next batch's fragments (when its cost will be measured).
+  void BeginBatch();
   // After a batch drawn since `start`; `last`: it ends the pass. False: stop.
   bool AfterBatch(PieceSet set, FragmentRole role, uint64_t instances, Clock::time_point start,
                   bool last);
@@ -96,6 +141,8 @@ class DrawPacer {
   const BetweenBatches& between_;
   double batch_ms_;
   const PauseWanted& wanted_;
+  FillBound fill_;
+  bool counting_fragments_ = false;  // the fragment query runs for the current batch
   StopReason stopped_ = StopReason::kNone;
   int pauses_ = 0;
   Clock::time_point since_pause_ = Clock::now();

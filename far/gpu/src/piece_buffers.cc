@@ -58,10 +58,18 @@ void PieceBuffers::SetPieces(PieceSet set, uint32_t slot, std::vector<PieceInsta
   Store& s = store(set);
   if (slot >= s.slots.size()) {
     s.slots.resize(slot + 1);
+    s.footprint_sums.resize(slot + 1);
     s.dirty.resize(slot + 1, 0);
     s.layout_changed = true;
   }
   if (s.slots[slot].size() != pieces.size()) s.layout_changed = true;
+  std::vector<PieceFootprint>& sums = s.footprint_sums[slot];
+  sums.assign(1, PieceFootprint{});
+  PieceFootprint sum;
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    sum += FootprintOf(set, pieces[i]);
+    if ((i + 1) % kFootprintBlock == 0) sums.push_back(sum);
+  }
   s.slots[slot] = std::move(pieces);
   s.dirty[slot] = 1;
 }
@@ -70,6 +78,7 @@ void PieceBuffers::RemoveSlot(uint32_t slot) {
   for (Store& s : stores_) {
     if (slot < s.slots.size() && !s.slots[slot].empty()) {
       s.slots[slot].clear();
+      s.footprint_sums[slot].assign(1, PieceFootprint{});
       s.layout_changed = true;
     }
   }
@@ -203,6 +212,28 @@ void PieceBuffers::Draw(PieceSet set, uint64_t first, uint64_t count, RenderCoun
                                       static_cast<GLsizei>(count), static_cast<GLuint>(first));
   counters->draws++;
   counters->instances += static_cast<int64_t>(count);
+}
+
+PieceFootprint PieceBuffers::Footprint(PieceSet set, uint64_t first, uint64_t count) const {
+  const Store& s = store(set);
+  // The slot holding `first`: the last one that starts at or before it (empty ones start where
+  // the next does, and hold nothing).
+  const auto after = std::upper_bound(s.first.begin(), s.first.end(), first);
+  if (count == 0 || after == s.first.begin()) return {};
+  const auto slot = static_cast<size_t>(after - s.first.begin() - 1);
+  const uint64_t begin = first - s.first[slot];
+  const uint64_t end = std::min<uint64_t>(begin + count, s.slots[slot].size());
+  if (begin >= end) return {};
+  return FootprintPrefix(set, slot, end) - FootprintPrefix(set, slot, begin);
+}
+
+PieceFootprint PieceBuffers::FootprintPrefix(PieceSet set, size_t slot, uint64_t count) const {
+  const Store& s = store(set);
+  const uint64_t block = count / kFootprintBlock;
+  PieceFootprint sum = s.footprint_sums[slot][block];
+  for (uint64_t i = block * kFootprintBlock; i < count; ++i)
+    sum += FootprintOf(set, s.slots[slot][i]);
+  return sum;
 }
 
 std::pair<uint64_t, uint64_t> PieceBuffers::PrimitiveRange(PieceSet set, const ViewObject& object,

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "culling_shaders.h"
+#include "piece_footprint.h"
 #include <epoxy/gl.h>
 
 #include "far/gpu/culling_renderer.h"
@@ -64,6 +65,9 @@ class PieceBuffers {
   void DrawViewCommands(PieceSet set, size_t begin, size_t end, RenderCounters* counters);
   /// Draws instances [first, first + count) of a set.
   void Draw(PieceSet set, uint64_t first, uint64_t count, RenderCounters* counters);
+  /// The summed footprint of instances [first, first + count) of a set, all of one slot (a view
+  /// command, or part of one).
+  PieceFootprint Footprint(PieceSet set, uint64_t first, uint64_t count) const;
   /// The instance range of sub-object `local` of `object` (the whole object when k = 0).
   std::pair<uint64_t, uint64_t> PrimitiveRange(PieceSet set, const ViewObject& object,
                                                int triangles_per_primitive, int local) const;
@@ -71,6 +75,9 @@ class PieceBuffers {
  private:
   struct Store {
     std::vector<std::vector<PieceInstance>> slots;
+    // Per slot, the footprints of its first j * kFootprintBlock instances summed: a run's sum
+    // from two of them and at most 2 kFootprintBlock pieces' own (1.5 bytes per instance).
+    std::vector<std::vector<PieceFootprint>> footprint_sums;
     std::vector<uint64_t> first;  // first instance of each slot in the GL buffer
     std::vector<uint8_t> dirty;
     bool layout_changed = true;
@@ -79,6 +86,10 @@ class PieceBuffers {
     GLuint indirect_buffer = 0;         // this view's draw commands
     std::vector<DrawCommand> commands;  // the same, on the CPU
   };
+  static constexpr uint64_t kFootprintBlock = 16;
+  // The footprints of slot `slot`'s first `count` instances of `set`, summed.
+  PieceFootprint FootprintPrefix(PieceSet set, size_t slot, uint64_t count) const;
+
   Store& store(PieceSet set) { return stores_[static_cast<size_t>(set)]; }
   const Store& store(PieceSet set) const { return stores_[static_cast<size_t>(set)]; }
 
