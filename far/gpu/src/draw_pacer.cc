@@ -46,11 +46,10 @@ uint64_t DrawPacer::Budget(PieceSet set, FragmentRole role) const {
   return last == 0 ? by_cost : std::min(by_cost, kGrowth * last);
 }
 
-bool DrawPacer::TooMuchFill(FragmentRole role, const PieceFootprint& footprint,
-                            uint64_t count) const {
+double DrawPacer::FillMs(FragmentRole role, const PieceFootprint& footprint, uint64_t count) const {
   const double per_fragment = costs_.ms_per_fragment(role);
-  if (fill_.fragment_query == 0 || per_fragment < 0 || batch_ms_ <= 0) return false;
-  return per_fragment * fill_.scale.Pixels(footprint, count) > kFillSlack * batch_ms_;
+  if (fill_.fragment_query == 0 || per_fragment < 0 || batch_ms_ <= 0) return 0;
+  return per_fragment * fill_.scale.Pixels(footprint, count);
 }
 
 uint64_t DrawPacer::WithinFill(const PieceBuffers& pieces, PieceSet set, FragmentRole role,
@@ -158,8 +157,16 @@ bool DrawPacer::AfterBatch(PieceSet set, FragmentRole role, uint64_t instances,
   return Pause();
 }
 
+void DrawPacer::NoteDrawn(const PieceBuffers& pieces, PieceSet set, FragmentRole role,
+                          uint64_t first, uint64_t count) {
+  const double per_instance = std::max(costs_.ms_per_instance(set, role), 0.0);
+  unfinished_ms_ += std::max(per_instance * static_cast<double>(count),
+                             FillMs(role, pieces.Footprint(set, first, count), count) / kFillSlack);
+}
+
 bool DrawPacer::MaybePause() {
-  if (MsSince(since_pause_) < batch_ms_ || !PauseWantedNow()) return false;
+  const bool long_enough = MsSince(since_pause_) >= batch_ms_ || unfinished_ms_ >= batch_ms_;
+  if (!long_enough || !PauseWantedNow()) return false;
   glFinish();
   Pause();
   return true;

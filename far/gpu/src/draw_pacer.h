@@ -107,8 +107,13 @@ class DrawPacer {
   /// Draws instances [first, first + count) of `set` in batches. False: stop.
   bool DrawRange(PieceBuffers& pieces, PieceSet set, FragmentRole role, uint64_t first,
                  uint64_t count, RenderCounters* counters);
-  /// For work drawn outside the pacer (per-primitive occlusion queries): pauses when the GL
-  /// work since the last pause may have taken a batch's time, judged by the CPU time spent issuing
+  /// For work drawn outside the pacer (per-primitive occlusion queries): counts what instances
+  /// [first, first + count) of `set` drawn with `role` may cost, as a batch of them would be
+  /// judged (their cost per instance, their fill bound over kFillSlack).
+  void NoteDrawn(const PieceBuffers& pieces, PieceSet set, FragmentRole role, uint64_t first,
+                 uint64_t count);
+  /// For work drawn outside the pacer: pauses when the GL work since the last pause may have
+  /// taken a batch's time, judged by what NoteDrawn counted and by the CPU time spent issuing
   /// it. Returns whether it paused (the work is then finished); stopped() says whether to stop.
   bool MaybePause();
   /// The view's radius, once its data is uploaded (the pieces' uploads come first).
@@ -124,8 +129,12 @@ class DrawPacer {
   // The most of the `count` instances from `first` (at least one) whose fill is within bounds.
   uint64_t WithinFill(const PieceBuffers& pieces, PieceSet set, FragmentRole role, uint64_t first,
                       uint64_t count) const;
+  // What `footprint` of `count` pieces may cost with `role` by its fill bound, ms (0: unknown).
+  double FillMs(FragmentRole role, const PieceFootprint& footprint, uint64_t count) const;
   // Whether `footprint` of `count` pieces may take longer than kFillSlack batches with `role`.
-  bool TooMuchFill(FragmentRole role, const PieceFootprint& footprint, uint64_t count) const;
+  bool TooMuchFill(FragmentRole role, const PieceFootprint& footprint, uint64_t count) const {
+    return FillMs(role, footprint, count) > kFillSlack * batch_ms_;
+  }
   // Starts counting the next batch's fragments (when its cost will be measured).
   void BeginBatch();
   // After a batch drawn since `start`; `last`: it ends the pass. False: stop.

@@ -114,6 +114,7 @@ void ViewPass::DrawPrimitive(const ViewObject& object, int local, FragmentRole r
     UseProgram(ShapeOf(set), role);
     auto [first, count] = pieces_.PrimitiveRange(set, object, view_.triangles_per_primitive, local);
     pieces_.Draw(set, first, count, counters_);
+    pacer_.NoteDrawn(pieces_, set, role, first, count);
   }
 }
 
