@@ -251,9 +251,9 @@ TEST(GlBatchTest, AViewPausesOnlyWhenTheStepCanStopOrAnotherThreadWaits) {
 // what a light session beside a heavy one waits for. The crossing stacks' pieces cost 60x more
 // face-on than edge-on, and a view draws one stack edge-on, then the other face-on: a batch
 // sized on the edge-on pieces' cost ran 0.39 s here (0.4-0.9 s in a daemon, 2 cores). Bounded
-// by the pieces' footprints at the measured cost per fragment, the longest ran 36-59 ms. The
-// occlusion queries, judged by their CPU time every 128 queries, ran 264-372 ms; judged by
-// what each may cost, 12-37 ms.
+// by the pieces' footprints at the measured cost per fragment, the longest ran 54-100 ms. The
+// occlusion queries, judged by their CPU time every 128 queries, ran 272-427 ms; judged by
+// what each may cost, 24-54 ms.
 class GlPauseTest : public ::testing::TestWithParam<QueryMechanism> {};
 
 TEST_P(GlPauseTest, NoBatchOfAHeavyViewRunsLongBetweenPauses) {
