@@ -46,15 +46,19 @@ uint64_t DrawPacer::Budget(PieceSet set, FragmentRole role) const {
   return last == 0 ? by_cost : std::min(by_cost, kGrowth * last);
 }
 
+bool DrawPacer::BoundsFill(FragmentRole role) const {
+  return fill_.fragment_query != 0 && costs_.ms_per_fragment(role) >= 0 && batch_ms_ > 0;
+}
+
 double DrawPacer::FillMs(FragmentRole role, const PieceFootprint& footprint, uint64_t count) const {
-  const double per_fragment = costs_.ms_per_fragment(role);
-  if (fill_.fragment_query == 0 || per_fragment < 0 || batch_ms_ <= 0) return 0;
-  return per_fragment * fill_.scale.Pixels(footprint, count);
+  if (!BoundsFill(role)) return 0;
+  return costs_.ms_per_fragment(role) * fill_.scale.Pixels(footprint, count);
 }
 
 uint64_t DrawPacer::WithinFill(const PieceBuffers& pieces, PieceSet set, FragmentRole role,
                                uint64_t first, uint64_t count) const {
-  if (!TooMuchFill(role, pieces.Footprint(set, first, count), count)) return count;
+  if (!BoundsFill(role) || !TooMuchFill(role, pieces.Footprint(set, first, count), count))
+    return count;
   // The bound grows with the instances: the most that keep within it, by bisection.
   uint64_t fits = 1, over = count;
   while (over - fits > 1) {
@@ -81,8 +85,10 @@ bool DrawPacer::DrawCommands(PieceBuffers& pieces, PieceSet set, FragmentRole ro
     const auto [first, count] = pieces.ViewCommand(set, next);
     uint64_t drawn = 0;
     BeginBatch();
+    // (Footprints are summed only where the fill is bounded: not before its cost is measured.)
+    const bool bounded = BoundsFill(role);
     if (done_in_command > 0 || count > budget ||
-        TooMuchFill(role, pieces.Footprint(set, first, count), count)) {
+        (bounded && TooMuchFill(role, pieces.Footprint(set, first, count), count))) {
       // Part of one command (the batch is smaller than it, or its start was drawn).
       drawn = WithinFill(pieces, set, role, first + done_in_command,
                          std::min(budget, count - done_in_command));
@@ -99,8 +105,9 @@ bool DrawPacer::DrawCommands(PieceBuffers& pieces, PieceSet set, FragmentRole ro
       while (end < commands) {
         const auto [at, n] = pieces.ViewCommand(set, end);
         PieceFootprint with = footprint;
-        with += pieces.Footprint(set, at, n);
-        if (end > next && (drawn + n > budget || TooMuchFill(role, with, drawn + n))) break;
+        if (bounded) with += pieces.Footprint(set, at, n);
+        if (end > next && (drawn + n > budget || (bounded && TooMuchFill(role, with, drawn + n))))
+          break;
         footprint = with;
         drawn += n;
         ++end;
@@ -160,8 +167,9 @@ bool DrawPacer::AfterBatch(PieceSet set, FragmentRole role, uint64_t instances,
 void DrawPacer::NoteDrawn(const PieceBuffers& pieces, PieceSet set, FragmentRole role,
                           uint64_t first, uint64_t count) {
   const double per_instance = std::max(costs_.ms_per_instance(set, role), 0.0);
-  unfinished_ms_ += std::max(per_instance * static_cast<double>(count),
-                             FillMs(role, pieces.Footprint(set, first, count), count) / kFillSlack);
+  const double fill_ms =
+      BoundsFill(role) ? FillMs(role, pieces.Footprint(set, first, count), count) : 0;
+  unfinished_ms_ += std::max(per_instance * static_cast<double>(count), fill_ms / kFillSlack);
 }
 
 bool DrawPacer::MaybePause() {

@@ -129,6 +129,9 @@ class DrawPacer {
   // The most of the `count` instances from `first` (at least one) whose fill is within bounds.
   uint64_t WithinFill(const PieceBuffers& pieces, PieceSet set, FragmentRole role, uint64_t first,
                       uint64_t count) const;
+  // Whether batches of `role` are bounded by their fill: pipeline statistics, and the cost of
+  // a fragment measured.
+  bool BoundsFill(FragmentRole role) const;
   // What `footprint` of `count` pieces may cost with `role` by its fill bound, ms (0: unknown).
   double FillMs(FragmentRole role, const PieceFootprint& footprint, uint64_t count) const;
   // Whether `footprint` of `count` pieces may take longer than kFillSlack batches with `role`.
