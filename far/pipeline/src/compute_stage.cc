@@ -145,7 +145,7 @@ Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> 
       state.X_WM = X_WM;
       state.world_key = next_key_++;
     }
-    views[s] = {object.p_WV,
+    views[s] = {object.p_WV(),
                 object.mesh.triangles,
                 state.nodes,
                 state.order,

@@ -1,6 +1,7 @@
 #include "scene_cache.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "far/offsets/bounding_offset.h"
 
@@ -98,29 +99,61 @@ StopReason SceneCache::RefreshGpuGeometry(ThreadPool& pool, const StepControl& c
   return stopper.reason();
 }
 
-void SceneCache::RefreshWorld() {
+namespace {
+
+// Whether FlushTinyCoordinates changes `c` (to +0: -0 is flushed too, so that the world
+// vertices are the same bits whether or not p_MV stands in for them).
+bool FlushChanges(double c) {
+  return std::abs(c) < kTinyWorldCoordinate && (c != 0.0 || std::signbit(c));
+}
+
+// Places one object's vertices in the world. The identity pose maps each vertex to itself
+// exactly (1 x + 0 y + 0 z + 0 is x): a deformable object that keeps it (the usual case) reads
+// its world vertices from p_MV unless one needs flushing, and is only scanned for its box.
+void PlaceInWorld(CachedObject& object) {
+  const std::vector<Eigen::Vector3d>& p_MV = object.mesh.p_MV;
+  object.box_W.setEmpty();
+  if (object.X_WM.matrix() == Eigen::Matrix4d::Identity()) {
+    bool flushes = false;
+    for (const Eigen::Vector3d& p : p_MV) {
+      object.box_W.extend(p);
+      flushes = flushes || FlushChanges(p.x()) || FlushChanges(p.y()) || FlushChanges(p.z());
+    }
+    object.world_is_model = !flushes;
+    if (object.world_is_model) {
+      object.placed_WV = {};
+      return;
+    }
+  }
+  object.world_is_model = false;
+  object.placed_WV.resize(p_MV.size());
+  object.box_W.setEmpty();
+  for (size_t v = 0; v < p_MV.size(); ++v) {
+    object.placed_WV[v] = FlushTinyCoordinates(object.X_WM * p_MV[v]);
+    object.box_W.extend(object.placed_WV[v]);
+  }
+}
+
+// Below this many vertices to place in all, a step places them on its own thread: waking the
+// pool would cost more than it saves.
+constexpr size_t kParallelPlacement = 1 << 15;
+
+}  // namespace
+
+void SceneCache::RefreshWorld(ThreadPool& pool) {
+  std::vector<CachedObject*> dirty;
+  size_t vertices = 0;
   for (auto& slot : slots_) {
     if (!slot || !slot->world_dirty) continue;
-    CachedObject& object = *slot;
-    object.p_WV.resize(object.mesh.p_MV.size());
-    object.box_W.setEmpty();
-    const auto place = [&object](auto to_world) {
-      for (size_t v = 0; v < object.p_WV.size(); ++v) {
-        object.p_WV[v] = FlushTinyCoordinates(to_world(object.mesh.p_MV[v]));
-        object.box_W.extend(object.p_WV[v]);
-      }
-    };
-    // Deformable objects usually keep the identity pose, which maps each vertex to itself
-    // exactly (1 x + 0 y + 0 z + 0 is x, the flush makes -0 +0 either way): no products.
-    if (object.X_WM.matrix() == Eigen::Matrix4d::Identity()) {
-      place([](const Eigen::Vector3d& p_MV) { return p_MV; });
-    } else {
-      place(
-          [&object](const Eigen::Vector3d& p_MV) -> Eigen::Vector3d { return object.X_WM * p_MV; });
-    }
-    object.world_dirty = false;
-    counters_.world_updates++;
+    dirty.push_back(&*slot);
+    vertices += slot->mesh.p_MV.size();
   }
+  const size_t grain = vertices < kParallelPlacement ? dirty.size() : 1;
+  pool.ParallelFor(dirty.size(), grain, [&dirty](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) PlaceInWorld(*dirty[i]);
+  });
+  for (CachedObject* object : dirty) object->world_dirty = false;
+  counters_.world_updates += static_cast<int64_t>(dirty.size());
 }
 
 StopReason SceneCache::RefreshHierarchies(std::span<const ObjectSlot> slots, ThreadPool& pool,
@@ -167,7 +200,7 @@ std::vector<const CachedObject*> SceneCache::Objects() const {
 std::vector<WorldObjectView> SceneCache::WorldViews() const {
   std::vector<WorldObjectView> world(slots_.size());
   for (size_t s = 0; s < slots_.size(); ++s) {
-    if (slots_[s]) world[s] = {slots_[s]->p_WV, slots_[s]->mesh.triangles};
+    if (slots_[s]) world[s] = {slots_[s]->p_WV(), slots_[s]->mesh.triangles};
   }
   return world;
 }

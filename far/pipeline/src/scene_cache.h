@@ -37,13 +37,21 @@ struct CachedObject {
   Eigen::AlignedBox3d rect_box_M;                      ///< union of rect_boxes_M
   // From p_MV and the pose:
   bool world_dirty = true;
-  std::vector<Eigen::Vector3d> p_WV;
-  Eigen::AlignedBox3d box_W;  ///< AABB of the world vertices
+  /// World vertices equal to p_MV (the identity pose, no tiny coordinate to flush): p_WV() is
+  /// p_MV itself, so a deformable object's vertices are not copied every step.
+  bool world_is_model = false;
+  std::vector<Eigen::Vector3d> placed_WV;  ///< the world vertices, unless world_is_model
+  Eigen::AlignedBox3d box_W;               ///< AABB of the world vertices
   // The hierarchy of p_MV (the bvh method), built on first use, refit when p_MV changes:
   TriangleBvh bvh;
   uint64_t bvh_stamp = 0;  ///< geometry_stamp the hierarchy was made for (0: never)
 
   Eigen::Isometry3d X_WA() const { return X_WM * Eigen::Translation3d(anchor_M); }
+  /// The world vertices flush(X_WM p_MV) (FlushTinyCoordinates), what every exact test reads.
+  /// Valid after RefreshWorld, until the next update of this object.
+  std::span<const Eigen::Vector3d> p_WV() const {
+    return world_is_model ? std::span<const Eigen::Vector3d>(mesh.p_MV) : placed_WV;
+  }
 };
 
 /// The objects of a pipeline by slot, kept up to date by updates that the scene model has
@@ -55,8 +63,9 @@ class SceneCache {
   /// Returns the slot an object removal freed (its GPU pieces and FCL model must go).
   std::optional<ObjectSlot> Apply(SceneUpdate update);
 
-  /// Recomputes the world-frame vertices of objects that moved or deformed.
-  void RefreshWorld();
+  /// Recomputes the world-frame vertices of objects that moved or deformed, an object per
+  /// chunk on `pool`.
+  void RefreshWorld(ThreadPool& pool);
 
   /// Every slot's object (null: a free slot), indexed by slot; valid until the next Apply.
   std::vector<const CachedObject*> Objects() const;

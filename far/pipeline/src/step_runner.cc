@@ -137,7 +137,7 @@ Result<std::vector<std::vector<uint32_t>>> TrianglesInPartnerBoxes(const StepSta
             return StopError(reason, Stage::kPrimitiveCull, state.control);
         }
         Eigen::AlignedBox3d box;
-        for (uint32_t v : object.mesh.triangles[t]) box.extend(object.p_WV[v]);
+        for (uint32_t v : object.mesh.triangles[t]) box.extend(object.p_WV()[v]);
         if (box.intersects(partner)) subsets[Index(self)].push_back(static_cast<uint32_t>(t));
       }
     }
@@ -471,7 +471,7 @@ Result<void> Stages::RunStages(StageTimer& timer) {
     return {};
   };
   auto ok = stage(Stage::kUpdate, [&]() -> Result<void> {
-    world_.cache.RefreshWorld();
+    world_.cache.RefreshWorld(world_.pool);
     state_.objects = world_.cache.Objects();
     state_.views = world_.cache.WorldViews();
     state_.cull_margin = CullMargin(state_);
