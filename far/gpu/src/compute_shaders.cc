@@ -71,7 +71,8 @@ float FloatBelow(double x) {
 float FloatAbove(double x) { return -FloatBelow(-x); }
 
 // The triangles of the objects that moved: ranges[r] = (first global triangle, invocations
-// before this range), u_ranges of them.
+// before this range), u_ranges of them. Each box is stored at its triangle's place in the leaf
+// order (an object's places are its own triangles' range): a leaf's boxes lie side by side.
 uniform uint u_ranges;
 
 void main() {
@@ -83,14 +84,15 @@ void main() {
       if (ranges[mid].y <= item) r = mid;
       else past = mid;
     }
-    uint t = ranges[r].x + (item - ranges[r].y);
+    uint at = ranges[r].x + (item - ranges[r].y);
+    uint t = order[at];
     dvec3 a = Vertex(tri_vertex[3u * t]);
     dvec3 b = Vertex(tri_vertex[3u * t + 1u]);
     dvec3 c = Vertex(tri_vertex[3u * t + 2u]);
     dvec3 lo = min(min(a, b), c);
     dvec3 hi = max(max(a, b), c);
-    tri_box[2u * t] = vec4(FloatBelow(lo.x), FloatBelow(lo.y), FloatBelow(lo.z), 0.0);
-    tri_box[2u * t + 1u] = vec4(FloatAbove(hi.x), FloatAbove(hi.y), FloatAbove(hi.z), 0.0);
+    tri_box[2u * at] = vec4(FloatBelow(lo.x), FloatBelow(lo.y), FloatBelow(lo.z), 0.0);
+    tri_box[2u * at + 1u] = vec4(FloatAbove(hi.x), FloatAbove(hi.y), FloatAbove(hi.z), 0.0);
   }
 }
 )";
@@ -203,9 +205,8 @@ void main() {
       lo = vec3(inf);
       hi = vec3(-inf);
       for (uint k = nd.z; k < nd.w; ++k) {
-        uint t = order[k];
-        lo = min(lo, tri_box[2u * t].xyz);
-        hi = max(hi, tri_box[2u * t + 1u].xyz);
+        lo = min(lo, tri_box[2u * k].xyz);
+        hi = max(hi, tri_box[2u * k + 1u].xyz);
       }
     }
     node_box[2u * n] = vec4(lo, 0.0);
@@ -232,11 +233,11 @@ bool Apart(vec3 alo, vec3 ahi, vec3 blo, vec3 bhi) {
   return any(greaterThan(blo - ahi, vec3(u_slack))) || any(greaterThan(alo - bhi, vec3(u_slack)));
 }
 
-// driver_tri's pairs with the triangles order[first + k] for the bits k of `hits`, appended
-// with one atomic for all of them.
-void AppendCandidates(uint driver_tri, uint first, uint hits, uvec4 w0, uvec4 w1) {
+// The pairs of the driver's triangle at leaf-order place `driver` with the triangles at places
+// first + k for the bits k of `hits`, appended with one atomic for all of them.
+void AppendCandidates(uint driver, uint first, uint hits, uvec4 w0, uvec4 w1) {
   uint at = atomicAdd(counters[2], uint(bitCount(hits)));
-  uint a = driver_tri - w0.x;
+  uint a = order[driver] - w0.x;
   for (; hits != 0u; hits &= hits - 1u, ++at) {
     if (at >= u_candidate_capacity) return;  // counted: the host grows the buffer and runs again
     uint b = order[first + uint(findLSB(hits))] - w0.y;
@@ -268,9 +269,10 @@ void main() {
     }
     uvec4 w0 = work[2u * lo];
     uvec4 w1 = work[2u * lo + 1u];
-    uint driver_tri = w0.x + (item - work_start[lo]);
-    vec3 tlo = tri_box[2u * driver_tri].xyz;
-    vec3 thi = tri_box[2u * driver_tri + 1u].xyz;
+    // The driver's triangles, in their leaf order (where their boxes are).
+    uint driver = w0.x + (item - work_start[lo]);
+    vec3 tlo = tri_box[2u * driver].xyz;
+    vec3 thi = tri_box[2u * driver + 1u].xyz;
     if (!Meets(tlo, thi, w0.z)) continue;
     // Every node n reached meets the driver's box. An inner node tests both children (their
     // boxes lie side by side) and goes on into one that meets, keeping the other on the stack
@@ -300,11 +302,10 @@ void main() {
         for (uint first = nd.z; first < nd.w; first += 32u) {
           uint hits = 0u;
           for (uint k = first; k < min(nd.w, first + 32u); ++k) {
-            uint other_tri = order[k];
-            if (!Apart(tlo, thi, tri_box[2u * other_tri].xyz, tri_box[2u * other_tri + 1u].xyz))
+            if (!Apart(tlo, thi, tri_box[2u * k].xyz, tri_box[2u * k + 1u].xyz))
               hits |= 1u << (k - first);
           }
-          if (hits != 0u) AppendCandidates(driver_tri, first, hits, w0, w1);
+          if (hits != 0u) AppendCandidates(driver, first, hits, w0, w1);
         }
       }
       if (top == 0u) break;
@@ -618,14 +619,13 @@ std::string Classify(const std::string& name, const std::string& side) {
 }  // namespace
 
 std::string TriangleBoxesSource() {
-  return Kernel({kPositionsBinding, kTrianglesBinding, kTriBoxesBinding, kRangesBinding},
-                kTriangleBoxes);
+  return Kernel(
+      {kPositionsBinding, kTrianglesBinding, kTriBoxesBinding, kOrderBinding, kRangesBinding},
+      kTriangleBoxes);
 }
 
 std::string RefitSource() {
-  return Kernel(
-      {kTriBoxesBinding, kNodesBinding, kOrderBinding, kNodeBoxesBinding, kRefitListBinding},
-      kRefit);
+  return Kernel({kTriBoxesBinding, kNodesBinding, kNodeBoxesBinding, kRefitListBinding}, kRefit);
 }
 
 std::string ObjectPairsSource() {

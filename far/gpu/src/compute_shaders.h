@@ -13,7 +13,7 @@ namespace far::internal {
 enum ComputeBinding : int {
   kPositionsBinding = 0,     // double[3 * vertices]: world vertices, every object one after another
   kTrianglesBinding = 1,     // uint[3 * triangles]: global vertex indices
-  kTriBoxesBinding = 2,      // vec4[2 * triangles]: lo, hi (float, rounded outward)
+  kTriBoxesBinding = 2,      // vec4[2 * triangles]: lo, hi (float, rounded outward), in leaf order
   kNodesBinding = 3,         // uvec4[nodes]: first child, leaf count, order range [lo, hi)
   kOrderBinding = 4,         // uint[triangles]: global triangle ids in leaf order
   kNodeBoxesBinding = 5,     // vec4[2 * nodes]: lo, hi
