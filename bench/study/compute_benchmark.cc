@@ -69,7 +69,7 @@ far::Result<ComputeScene> MakeComputeScene(const std::string& name) {
     StepObject& to = scene.objects.emplace_back();
     const Eigen::Isometry3d X_WO = object.X_WO.ToIsometry();
     for (const Eigen::Vector3d& p : object.mesh.p_MV) {
-      to.p_WV.push_back(far::FlushTinyCoordinates(X_WO * p));
+      to.p_WV.push_back(far::WorldVertex(X_WO, p));
       to.box.extend(to.p_WV.back());
     }
     to.triangles = object.mesh.triangles;

@@ -112,7 +112,7 @@ class BruteForceScene {
       const Eigen::Isometry3d X_WO = object.X_WO.ToIsometry();
       auto& points = p_WV.emplace_back();
       points.reserve(object.mesh.p_MV.size());
-      for (const auto& p : object.mesh.p_MV) points.push_back(X_WO * p);
+      for (const auto& p : object.mesh.p_MV) points.push_back(far::WorldVertex(X_WO, p));
     }
     std::vector<far::WorldObjectView> views;
     std::vector<uint32_t> ids;  // by slot

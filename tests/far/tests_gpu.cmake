@@ -40,3 +40,6 @@ set_tests_properties(GlContextTest.DevicePlatformWithoutAGpuIsAnErrorNotLlvmpipe
 far_add_test(far_piece_footprint_test unit far/gpu/piece_footprint_test.cc)
 target_include_directories(far_piece_footprint_test PRIVATE ${PROJECT_SOURCE_DIR}/far/gpu/src)
 target_link_libraries(far_piece_footprint_test PRIVATE far::gpu)
+far_add_test(far_placement_probe_test unit far/gpu/placement_probe_test.cc)
+target_include_directories(far_placement_probe_test PRIVATE ${PROJECT_SOURCE_DIR}/far/gpu/src)
+target_link_libraries(far_placement_probe_test PRIVATE far::gpu)

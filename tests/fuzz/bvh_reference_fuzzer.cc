@@ -84,8 +84,7 @@ Object ReadObject(FuzzInput& in, double step, const Eigen::Vector3d& shift,
   }
   // As the pipeline places an object: the world corners are X_WM applied to the mesh's, with
   // tiny coordinates taken as 0.
-  for (const Eigen::Vector3d& p : object.p_MV)
-    object.p_WV.push_back(FlushTinyCoordinates(object.X_WM * p));
+  for (const Eigen::Vector3d& p : object.p_MV) object.p_WV.push_back(WorldVertex(object.X_WM, p));
   return object;
 }
 

@@ -12,7 +12,7 @@ WorldScene PlaceInWorld(const std::vector<SceneObject>& objects) {
     std::vector<Eigen::Vector3d> points;
     points.reserve(object.mesh.p_MV.size());
     // As the pipeline places objects: tiny world coordinates are 0.
-    for (const auto& p : object.mesh.p_MV) points.push_back(FlushTinyCoordinates(X * p));
+    for (const auto& p : object.mesh.p_MV) points.push_back(WorldVertex(X, p));
     world.p_WV.push_back(std::move(points));
   }
   for (size_t i = 0; i < objects.size(); ++i) {

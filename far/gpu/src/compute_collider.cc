@@ -19,10 +19,12 @@
 #include "compute_shaders.h"
 #include "gl_program.h"
 #include "gl_timer.h"
+#include "placement_probe.h"
 #include <epoxy/gl.h>
 
 #include "far/base/timer_slack.h"
 #include "far/gpu/gl_lock.h"
+#include "far/model/world_vertex.h"
 
 namespace far {
 
@@ -141,6 +143,7 @@ struct SlotLayout {
   uint32_t triangles = 0, nodes = 0;
   uint64_t topology_key = 0;
   uint64_t world_key = 0;                     // uploaded; 0: not yet
+  uint64_t model_key = 0;                     // p_MV in the model buffer; 0: not there
   std::vector<std::vector<uint32_t>> levels;  // global node indices by depth (root: 0)
 };
 
@@ -156,7 +159,8 @@ Result<GLuint> CompileCompute(const std::string& source, const char* what) {
 }  // namespace
 
 struct ComputeCollider::Impl {
-  GLuint boxes_program = 0, refit_program = 0, pairs_program = 0, work_program = 0;
+  GLuint place_program = 0, boxes_program = 0, refit_program = 0, pairs_program = 0,
+         work_program = 0;
   GLuint traverse_program = 0, filter_dispatch_program = 0;
   // The filters: [0] for contact queries, [1] for distance queries (FilterSource).
   struct FilterKernel {
@@ -179,7 +183,12 @@ struct ComputeCollider::Impl {
   size_t pair_capacity = kFirstPairCapacity;
   size_t num_pair_boxes = 0;             // uploaded by UploadPairBoxes
   std::vector<Eigen::Vector3d> staging;  // the vertices of one upload
-  std::vector<size_t> moved;             // slots whose vertices this step uploaded
+  std::vector<size_t> moved;             // slots whose vertices this step uploaded or placed
+  // The posed objects this step places on the GPU (the placement kernel's entries), and their
+  // vertices in all; whether the device places them exactly (PlacesOnGpu).
+  std::vector<std::array<double, 16>> placements;
+  uint32_t placed_vertices = 0;
+  bool places_exactly = false;
   // The refit's work for one set of moved slots, on the GPU already (kRangesBinding,
   // kRefitListBinding): a scene whose same objects move every step (deforming leaves, cloth)
   // builds and uploads it once, until the set or the layout changes.
@@ -191,6 +200,7 @@ struct ComputeCollider::Impl {
   };
   RefitPlan refit_plan;
   // Uniform locations, looked up once.
+  GLint place_count = -1, place_placements = -1, place_tiny = -1;
   GLint boxes_count = -1, boxes_ranges = -1, refit_count = -1, refit_first = -1;
   GLint pairs_boxes = -1, pairs_capacity = -1, work_capacity = -1;
   GLint traverse_slack = -1, traverse_capacity = -1, filter_dispatch_capacity = -1;
@@ -215,6 +225,14 @@ struct ComputeCollider::Impl {
   }
   Result<int64_t> EnsureLayout(std::span<const ComputeObject> objects);
   int64_t UploadVertices(std::span<const ComputeObject> objects);
+  // Adds `object` (posed, in slot `at`) to this step's placements, uploading its own vertices
+  // first when the model buffer does not hold them; returns the bytes uploaded.
+  int64_t AddPlacement(SlotLayout& at, const ComputeObject& object);
+  // Uploads the placements and dispatches the placement kernel; returns the bytes uploaded.
+  int64_t PlaceMoved();
+  // Runs the placement kernel on probe vertices and poses and compares its positions with
+  // WorldVertex's, bit for bit (Create, once).
+  bool CheckPlacement();
   // The slots' triangle and node ranges (kSlotsBinding); returns the bytes.
   int64_t UploadSlots(std::span<const SlotLayout> slots);
   // The pair boxes of the objects that pair at all, sorted by low x; returns the bytes.
@@ -238,6 +256,7 @@ struct ComputeCollider::Impl {
     Clock::time_point submit_start, traverse_start, filter_start;  // the timer queries' begins
     GLsync fence = nullptr;  // after the step's last command (SubmitGl), until Collect waits
     int64_t uploaded = 0;
+    int64_t vertices_placed = 0;
     double cpu_submit_ms = 0;
   };
   std::optional<Pending> pending;
@@ -335,6 +354,7 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
                static_cast<uint32_t>(object.nodes.size()),
                object.topology_key,
                0,
+               0,
                {}};
     vertices += object.p_WV.size();
     triangles += object.triangles.size();
@@ -373,6 +393,9 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
     for (uint32_t t : object.order) order.push_back(at.triangle_base + t);
   }
   buffer(internal::kPositionsBinding).Reserve(3 * vertices * sizeof(double));
+  // Reserved here, where every slot's model_key starts again at 0: a buffer that grows loses
+  // what it held.
+  if (places_exactly) buffer(internal::kModelBinding).Reserve(3 * vertices * sizeof(double));
   buffer(internal::kTrianglesBinding).Reserve(triangle_vertices.size() * sizeof(uint32_t));
   buffer(internal::kTriBoxesBinding).Reserve(2 * triangles * 4 * sizeof(float));
   buffer(internal::kNodesBinding).Reserve(node_data.size() * 4 * sizeof(uint32_t));
@@ -401,6 +424,8 @@ int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> obj
   constexpr size_t kDirectUploadVertices = 4096;
   int64_t uploaded = 0;
   moved.clear();
+  placements.clear();
+  placed_vertices = 0;
   const GLuint positions = buffer(internal::kPositionsBinding).id;
   const auto upload = [&](size_t first_vertex, std::span<const Eigen::Vector3d> vertices) {
     const size_t bytes = vertices.size() * sizeof(Eigen::Vector3d);
@@ -423,6 +448,11 @@ int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> obj
     }
     at.world_key = objects[s].world_key;
     moved.push_back(s);
+    if (places_exactly && objects[s].model_key != 0 && objects[s].p_MV.size() == vertices.size()) {
+      flush();
+      uploaded += AddPlacement(at, objects[s]);
+      continue;
+    }
     if (vertices.size() >= kDirectUploadVertices) {
       flush();
       upload(at.vertex_base, vertices);
@@ -433,6 +463,77 @@ int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> obj
   }
   flush();
   return uploaded;
+}
+
+int64_t ComputeCollider::Impl::AddPlacement(SlotLayout& at, const ComputeObject& object) {
+  int64_t uploaded = 0;
+  if (at.model_key != object.model_key) {
+    const size_t bytes = object.p_MV.size() * sizeof(Eigen::Vector3d);
+    glNamedBufferSubData(buffer(internal::kModelBinding).id,
+                         static_cast<GLintptr>(at.vertex_base * sizeof(Eigen::Vector3d)),
+                         static_cast<GLsizeiptr>(bytes), object.p_MV.data());
+    at.model_key = object.model_key;
+    uploaded = static_cast<int64_t>(bytes);
+  }
+  std::array<double, 16> entry{};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 4; ++j) entry[4 * i + j] = object.X_WM(i, j);
+  }
+  entry[12] = at.vertex_base;
+  entry[13] = static_cast<double>(object.p_MV.size());
+  entry[14] = placed_vertices;
+  placements.push_back(entry);
+  placed_vertices += static_cast<uint32_t>(object.p_MV.size());
+  return uploaded;
+}
+
+int64_t ComputeCollider::Impl::PlaceMoved() {
+  if (placements.empty()) return 0;
+  const int64_t uploaded = Upload(internal::kPlacementsBinding, placements.data(),
+                                  placements.size() * sizeof(placements[0]));
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, internal::kPlacementsBinding,
+                   buffer(internal::kPlacementsBinding).id);
+  glUseProgram(place_program);
+  glProgramUniform1ui(place_program, place_count, placed_vertices);
+  glProgramUniform1ui(place_program, place_placements, static_cast<GLuint>(placements.size()));
+  glDispatchCompute(Groups(placed_vertices), 1, 1);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  return uploaded;
+}
+
+bool ComputeCollider::Impl::CheckPlacement() {
+  const internal::PlacementProbe probe = internal::MakePlacementProbe();
+  const size_t vertices = probe.p_MV.size();
+  buffer(internal::kPositionsBinding).Reserve(3 * vertices * sizeof(double));
+  buffer(internal::kModelBinding).Reserve(3 * vertices * sizeof(double));
+  placements.clear();
+  placed_vertices = 0;
+  for (size_t k = 0; k < probe.X_WM.size(); ++k) {
+    ComputeObject object;
+    object.p_MV =
+        std::span(probe.p_MV)
+            .subspan(k * internal::PlacementProbe::kVertices, internal::PlacementProbe::kVertices);
+    object.X_WM = probe.X_WM[k];
+    object.model_key = 1;
+    SlotLayout at;
+    at.vertex_base = static_cast<uint32_t>(k * internal::PlacementProbe::kVertices);
+    AddPlacement(at, object);
+  }
+  BindBuffers();
+  PlaceMoved();
+  glUseProgram(0);
+  std::vector<Eigen::Vector3d> placed(vertices);
+  glGetNamedBufferSubData(buffer(internal::kPositionsBinding).id, 0,
+                          static_cast<GLsizeiptr>(vertices * sizeof(Eigen::Vector3d)),
+                          placed.data());
+  placements.clear();
+  placed_vertices = 0;
+  for (size_t v = 0; v < vertices; ++v) {
+    const Eigen::Vector3d expected =
+        WorldVertex(probe.X_WM[v / internal::PlacementProbe::kVertices], probe.p_MV[v]);
+    if (std::memcmp(expected.data(), placed[v].data(), sizeof(expected)) != 0) return false;
+  }
+  return true;
 }
 
 int64_t ComputeCollider::Impl::UploadSlots(std::span<const SlotLayout> slots) {
@@ -677,6 +778,7 @@ Result<ComputeAnswer> ComputeCollider::Impl::Collect() {
   ComputeAnswer answer;
   answer.cpu_submit_ms = pending->cpu_submit_ms;
   answer.bytes_uploaded = pending->uploaded;
+  answer.vertices_placed = pending->vertices_placed;
   Counters counters{};
   GLsync fence = std::exchange(pending->fence, nullptr);
   for (;;) {
@@ -729,7 +831,7 @@ void ComputeCollider::Impl::DeleteGlObjects() {
   glDeleteQueries(1, &traverse_query);
   glDeleteQueries(1, &filter_query);
   for (GLuint program :
-       {boxes_program, refit_program, pairs_program, work_program, traverse_program,
+       {place_program, boxes_program, refit_program, pairs_program, work_program, traverse_program,
         filter_dispatch_program, filter[0].program, filter[1].program})
     glDeleteProgram(program);
 }
@@ -738,6 +840,8 @@ ComputeCollider::~ComputeCollider() {
   const auto lock = LockGl();
   impl_->DeleteGlObjects();
 }
+
+bool ComputeCollider::PlacesOnGpu() const { return impl_->places_exactly; }
 
 int ComputeCollider::MaxDepth() { return internal::kTraversalStack - 2; }
 
@@ -753,6 +857,7 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
     }
   } made{impl.get()};
   const std::tuple<GLuint*, std::string, const char*> kernels[] = {
+      {&impl->place_program, internal::PlaceSource(), "placement"},
       {&impl->boxes_program, internal::TriangleBoxesSource(), "triangle boxes"},
       {&impl->refit_program, internal::RefitSource(), "refit"},
       {&impl->pairs_program, internal::ObjectPairsSource(), "object pairs"},
@@ -774,6 +879,10 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   impl->traverse_capacity = glGetUniformLocation(impl->traverse_program, "u_candidate_capacity");
   impl->filter_dispatch_capacity =
       glGetUniformLocation(impl->filter_dispatch_program, "u_candidate_capacity");
+  impl->place_count = glGetUniformLocation(impl->place_program, "u_count");
+  impl->place_placements = glGetUniformLocation(impl->place_program, "u_placements");
+  impl->place_tiny = glGetUniformLocation(impl->place_program, "u_tiny");
+  glProgramUniform1d(impl->place_program, impl->place_tiny, kTinyWorldCoordinate);
   impl->boxes_count = glGetUniformLocation(impl->boxes_program, "u_count");
   impl->boxes_ranges = glGetUniformLocation(impl->boxes_program, "u_ranges");
   impl->refit_count = glGetUniformLocation(impl->refit_program, "u_count");
@@ -789,6 +898,8 @@ Result<std::unique_ptr<ComputeCollider>> ComputeCollider::Create() {
   glCreateQueries(GL_TIME_ELAPSED, 1, &impl->filter_query);
   impl->buffer(internal::kCountersBinding).Reserve(internal::kNumCounters * sizeof(uint32_t));
   if (auto ok = CheckGl("gpu method: making its buffers"); !ok) return ok.error();
+  impl->places_exactly = impl->CheckPlacement();
+  if (auto ok = CheckGl("gpu method: checking its placement"); !ok) return ok.error();
   made.impl = nullptr;
   return std::unique_ptr<ComputeCollider>(new ComputeCollider(std::move(impl)));
 }
@@ -815,6 +926,8 @@ Result<void> ComputeCollider::Impl::SubmitGl() {
   int64_t uploaded = *laid_out + UploadVertices(step.query.objects);
   uploaded += UploadPairBoxes(step.query.objects);
   BindBuffers();
+  uploaded += PlaceMoved();
+  step.vertices_placed = placed_vertices;
   uploaded += RefitMoved();
   glEndQuery(GL_TIME_ELAPSED);
   glUseProgram(0);

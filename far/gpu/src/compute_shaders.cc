@@ -28,6 +28,8 @@ constexpr const char* kBlocks[kNumBindings] = {
     "buffer ObjectPairs { uvec2 object_pair[]; };",
     "buffer Dispatch { uint dispatch[]; };",
     "buffer Candidates { uvec4 candidate[]; };",
+    "readonly buffer Model { double model[]; };",
+    "readonly buffer Placements { double placement[]; };",
 };
 
 // What every kernel shares.
@@ -53,6 +55,41 @@ std::string Kernel(std::initializer_list<ComputeBinding> blocks, const std::stri
   if (positions) text += kVertex;
   return text + body;
 }
+
+// The vertices of the posed objects that moved: placement[16 r, 16 r + 12) is object r's X_WM
+// row by row, then its first vertex, its vertices and the invocations before it (integers below
+// 2^32 in doubles: exact), u_placements objects in all. Every product and sum is rounded once,
+// in far::WorldVertex's order: `precise` forbids fusing them into an fma or reordering them, and
+// fp64 add and mul are correctly rounded (IEEE 754), so each position is the very double the
+// CPU's exact predicates read. ComputeCollider checks that on the device before it relies on it.
+static_assert(kPositionsBinding == 0, "the placement kernel writes binding 0");
+constexpr const char* kPlace = R"(
+layout(std430, binding = 0) writeonly buffer PlacedPositions { double placed[]; };
+uniform uint u_placements;
+uniform double u_tiny;  // kTinyWorldCoordinate: smaller magnitudes are flushed to +0
+
+void main() {
+  for (uint item = gl_GlobalInvocationID.x; item < u_count; item += Stride()) {
+    uint r = 0u;
+    uint past = u_placements;
+    while (past - r > 1u) {
+      uint mid = (r + past) / 2u;
+      if (uint(placement[16u * mid + 14u]) <= item) r = mid;
+      else past = mid;
+    }
+    uint at = 16u * r;
+    uint v = uint(placement[at + 12u]) + (item - uint(placement[at + 14u]));
+    dvec3 p = dvec3(model[3u * v], model[3u * v + 1u], model[3u * v + 2u]);
+    for (uint i = 0u; i < 3u; ++i) {
+      precise double sum = placement[at + 4u * i] * p.x;
+      sum = sum + placement[at + 4u * i + 1u] * p.y;
+      sum = sum + placement[at + 4u * i + 2u] * p.z;
+      sum = sum + placement[at + 4u * i + 3u];
+      placed[3u * v + i] = abs(sum) < u_tiny ? 0.0LF : sum;
+    }
+  }
+}
+)";
 
 constexpr const char* kTriangleBoxes = R"(
 // A float <= x: x rounded, and one float step down when the rounding went up. The comparison is
@@ -617,6 +654,8 @@ std::string Classify(const std::string& name, const std::string& side) {
 }
 
 }  // namespace
+
+std::string PlaceSource() { return Kernel({kModelBinding, kPlacementsBinding}, kPlace); }
 
 std::string TriangleBoxesSource() {
   return Kernel(

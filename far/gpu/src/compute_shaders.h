@@ -30,7 +30,9 @@ enum ComputeBinding : int {
   kObjectPairsBinding = 16,  // uvec2[pair capacity]: the object pairs found (slot < slot)
   kDispatchBinding = 17,     // uint[kNumDispatchWords]: the traversal's and filters' dispatches
   kCandidatesBinding = 18,   // uvec4[candidate capacity]: triangle pairs whose boxes meet
-  kNumBindings = 19,
+  kModelBinding = 19,        // double[3 * vertices]: posed objects' own vertices p_MV, as positions
+  kPlacementsBinding = 20,  // double[16 * placements]: X_WM row by row, first vertex, count, before
+  kNumBindings = 21,
 };
 
 /// The counters the kernels write (kCountersBinding).
@@ -70,6 +72,10 @@ std::string ObjectPairsSource();
 /// One work group: each object pair's traversal work (its driver, the smaller object, whose
 /// triangles descend the other's hierarchy), their prefix sums and the traversal's dispatch.
 std::string PairWorkSource();
+/// One vertex of a posed object that moved per invocation: its world position from its own
+/// (kModelBinding) and the object's pose (kPlacementsBinding), the doubles far::WorldVertex
+/// computes (each product and sum rounded once, in its order: `precise`).
+std::string PlaceSource();
 /// One triangle of a moved object per invocation: its world box from its double corners,
 /// rounded outward to float.
 std::string TriangleBoxesSource();

@@ -12,7 +12,7 @@
 #include "far/base/assert.h"
 
 // Why the descent never drops a pair the exact predicates accept. The exact stage tests the
-// world vertices p_WV = flush(fl(X_WM p_MV)) (FlushTinyCoordinates, world_object.h). A node's
+// world vertices p_WV = flush(fl(X_WM p_MV)) (WorldVertex, far/model/world_vertex.h). A node's
 // box holds its triangles' p_MV exactly, so the exactly transformed triangles lie in the node's
 // box moved by X_WM (an oriented box). Each world vertex is within delta <= 8 eps (sqrt(3) |p_M|
 // + |t|) + 2^-255 of its exact image (eps = 2^-53: three products and sums per coordinate; the

@@ -152,6 +152,13 @@ Result<ComputeAnswer> ComputeStage::Filter(std::span<const CachedObject* const> 
                 state.topology_key,
                 state.world_key,
                 SweepAndPrune::GrownBox(object.box_W, object_margin)};
+    // A posed object's world vertices are WorldVertex(X_WM, p_MV) (SceneCache::RefreshWorld):
+    // the collider may place them on the GPU from the pose.
+    if (object.X_WM.matrix() != Eigen::Matrix4d::Identity()) {
+      views[s].p_MV = object.mesh.p_MV;
+      views[s].X_WM = X_WM;
+      views[s].model_key = object.geometry_stamp;
+    }
   }
   ComputeQuery query;
   query.objects = views;

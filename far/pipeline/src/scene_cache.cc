@@ -126,10 +126,11 @@ void PlaceInWorld(CachedObject& object) {
     }
   }
   object.world_is_model = false;
+  const Eigen::Matrix<double, 3, 4> X_WM = object.X_WM.matrix().topRows<3>();
   object.placed_WV.resize(p_MV.size());
   object.box_W.setEmpty();
   for (size_t v = 0; v < p_MV.size(); ++v) {
-    object.placed_WV[v] = FlushTinyCoordinates(object.X_WM * p_MV[v]);
+    object.placed_WV[v] = WorldVertex(X_WM, p_MV[v]);
     object.box_W.extend(object.placed_WV[v]);
   }
 }

@@ -19,6 +19,7 @@
 
 #include "far/geometry/triangle_tests.h"
 #include "far/gpu/gl_context.h"
+#include "far/model/world_vertex.h"
 #include "far/pairs/sweep_and_prune.h"
 #include "far/pairs/triangle_bvh.h"
 
@@ -474,6 +475,84 @@ TEST_F(ComputeColliderTest, ObjectsThatDidNotMoveKeepTheirBoxes) {
                                                    "step " + std::to_string(step));
   }
   EXPECT_GT(found_total, 50);
+}
+
+// The device places posed objects' vertices itself: its placement kernel gave WorldVertex's
+// doubles, bit for bit, on Create's probe (every GL 4.5 device with fp64 that honours `precise`
+// does; one that fused or reordered the sums would fall back to uploads, and this would say so).
+TEST_F(ComputeColliderTest, TheDevicePlacesPosedObjectsExactly) {
+  EXPECT_TRUE(collider_->PlacesOnGpu());
+}
+
+// Rigid objects at random poses over several steps (object 0 holds still on odd steps, object 2
+// changes its own vertices at step 4): placed on the GPU from their poses, the collider gives
+// the very answer another gives when their world vertices are uploaded, finds every
+// intersecting pair, and uploads less.
+TEST_F(ComputeColliderTest, PosedObjectsPlacedOnTheGpuFindWhatUploadedOnesFind) {
+  std::mt19937_64 rng(77);
+  constexpr int kObjects = 5;
+  std::vector<Mesh> meshes(kObjects), world(kObjects);
+  std::vector<std::vector<ComputeNode>> nodes(kObjects);
+  std::vector<std::vector<uint32_t>> orders(kObjects);
+  std::vector<uint64_t> model_key(kObjects), world_key(kObjects);
+  std::vector<Eigen::Isometry3d> X_WM(kObjects);
+  for (int o = 0; o < kObjects; ++o) {
+    for (int t = 0; t < 40 + 30 * o; ++t) {
+      const Vector3d c = RandomPoint(rng, 0.5);
+      for (int k = 0; k < 3; ++k) meshes[o].p_MV.push_back(c + RandomPoint(rng, 0.15));
+      meshes[o].triangles.push_back({static_cast<uint32_t>(3 * t), static_cast<uint32_t>(3 * t + 1),
+                                     static_cast<uint32_t>(3 * t + 2)});
+    }
+    ASSERT_TRUE(BuildTopology(meshes[o], nodes[o], orders[o]));
+    model_key[o] = static_cast<uint64_t>(o + 1);
+  }
+  auto placing = ComputeCollider::Create();
+  auto uploading = ComputeCollider::Create();
+  ASSERT_TRUE(placing.ok() && uploading.ok());
+  ASSERT_TRUE((*placing)->PlacesOnGpu());
+  for (int step = 0; step < 8; ++step) {
+    if (step == 4) {
+      for (Vector3d& p : meshes[2].p_MV) p += RandomPoint(rng, 0.02);
+      model_key[2] = 100;
+    }
+    int64_t moved_vertices = 0;
+    for (int o = 0; o < kObjects; ++o) {
+      if (o == 0 && step % 2 == 1) continue;  // holds still: nothing of it is uploaded or placed
+      Eigen::Quaterniond q(RandomPoint(rng, 1.0).norm() + 0.1, RandomPoint(rng, 1.0).x(),
+                           RandomPoint(rng, 1.0).y(), RandomPoint(rng, 1.0).z());
+      X_WM[o] = Eigen::Translation3d(RandomPoint(rng, 0.6)) * q.normalized();
+      world[o] = {{}, meshes[o].triangles};
+      for (const Vector3d& p : meshes[o].p_MV) world[o].p_MV.push_back(WorldVertex(X_WM[o], p));
+      world_key[o] = static_cast<uint64_t>(100 * step + o + 1);
+      moved_vertices += static_cast<int64_t>(meshes[o].p_MV.size());
+    }
+    std::vector<ComputeObject> placed(kObjects), uploaded(kObjects);
+    for (int o = 0; o < kObjects; ++o) {
+      uploaded[o] = {world[o].p_MV,   world[o].triangles, nodes[o],       orders[o],
+                     uint64_t(o + 1), world_key[o],       BoxOf(world[o])};
+      placed[o] = uploaded[o];
+      placed[o].p_MV = meshes[o].p_MV;
+      placed[o].X_WM = X_WM[o].matrix().topRows<3>();
+      placed[o].model_key = model_key[o];
+    }
+    const std::string where = "step " + std::to_string(step);
+    ComputeAnswer by_pose, by_upload;
+    ExpectEveryIntersectingPairKept(**placing, placed, world, where, &by_pose);
+    ExpectEveryIntersectingPairKept(**uploading, uploaded, world, where, &by_upload);
+    EXPECT_EQ(by_pose.vertices_placed, moved_vertices) << where;
+    EXPECT_EQ(by_upload.vertices_placed, 0) << where;
+    if (step > 0 && step != 4) {
+      EXPECT_LT(by_pose.bytes_uploaded, by_upload.bytes_uploaded) << where;
+    }
+    for (ComputeAnswer* answer : {&by_pose, &by_upload}) {
+      std::sort(answer->crossing.begin(), answer->crossing.end());
+      std::sort(answer->undecided.begin(), answer->undecided.end());
+    }
+    EXPECT_EQ(by_pose.object_pairs, by_upload.object_pairs) << where;
+    EXPECT_EQ(by_pose.crossing, by_upload.crossing) << where;
+    EXPECT_EQ(by_pose.undecided, by_upload.undecided) << where;
+    EXPECT_EQ(by_pose.pcs, by_upload.pcs) << where;
+  }
 }
 
 // The object pairs are sweep-and-prune's for the same boxes and margin: boxes with small integer

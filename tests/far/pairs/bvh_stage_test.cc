@@ -31,7 +31,7 @@ struct Object {
 
   void Place() {
     p_WV.clear();
-    for (const auto& p : p_MV) p_WV.push_back(FlushTinyCoordinates(X_WM * p));  // as the pipeline
+    for (const auto& p : p_MV) p_WV.push_back(WorldVertex(X_WM, p));  // as the pipeline
   }
   WorldObjectView View() const { return {p_WV, triangles}; }
 };

@@ -39,6 +39,15 @@ struct ComputeObject {
   /// whose pair boxes overlap, closed, on every axis are an object pair. Empty or not finite:
   /// the object pairs with nothing.
   Eigen::AlignedBox3d pair_box;
+  /// A posed object (not at the identity pose): its own vertices and pose, with p_WV[v] ==
+  /// WorldVertex(X_WM, p_MV[v]) (far/model/world_vertex.h). The collider then uploads p_MV
+  /// once (until model_key changes) and X_WM when the world changed, and places the vertices
+  /// on the GPU, where the device computes those same doubles (PlacesOnGpu). Empty p_MV: p_WV
+  /// is uploaded whenever it changed.
+  std::span<const Eigen::Vector3d> p_MV = {};
+  Eigen::Matrix<double, 3, 4> X_WM = Eigen::Matrix<double, 3, 4>::Zero();
+  /// Changes whenever p_MV changes (0: no p_MV).
+  uint64_t model_key = 0;
 };
 
 /// What a GPU step is asked: the object pairs whose pair boxes meet, and the triangle pairs of
@@ -77,17 +86,20 @@ struct ComputeAnswer {
   int64_t double_decided = 0;   ///< decided by the fp64 filter (the float one could not)
   int64_t distance_culled = 0;  ///< a distance query's pairs dropped by max_distance
   int64_t bytes_uploaded = 0;
+  /// World vertices of posed objects placed on the GPU from their pose, not uploaded.
+  int64_t vertices_placed = 0;
   int runs = 1;  ///< traversals run: more than one when the output buffers had to grow
   // Where the time went (milliseconds). CPU: issuing the uploads and kernels, then waiting for
   // the GPU and reading the pairs back (cpu_read_ms of it: the reading). GPU (timer queries):
-  // the uploads with the boxes and refit; the (last run's) object pairs and traversal; its
-  // filters.
+  // the uploads with the placement, boxes and refit; the (last run's) object pairs and
+  // traversal; its filters.
   double cpu_submit_ms = 0, cpu_wait_ms = 0, cpu_read_ms = 0;
   double gpu_refit_ms = 0, gpu_traverse_ms = 0, gpu_filter_ms = 0;
 };
 
 /// The GPU-resident part of the `gpu` method, in compute shaders of the current OpenGL 4.5
-/// context: each step uploads the world vertices of the objects that moved (and, when the set
+/// context: each step uploads the world vertices of the objects that moved, or the pose of a
+/// posed one whose own vertices are on the GPU already (and, when the set
 /// of objects changed, their triangles and hierarchy topologies) and every object's box,
 /// computes every triangle's box, refits every hierarchy, finds the object pairs, descends each
 /// object pair's hierarchies, and classifies the triangle pairs whose boxes meet (one per
@@ -121,6 +133,12 @@ class ComputeCollider {
   /// submitted after it does not delay it. @pre the caller holds the GL lock.
   bool Ready() const;
   Result<ComputeAnswer> Finish();
+
+  /// Whether posed objects are placed on the GPU: Create ran the placement kernel on probe
+  /// vertices and poses (magnitudes from 2^-260 to 1e12, sums that cancel) and it gave
+  /// WorldVertex's doubles for every one. False on a device that fuses or reorders them
+  /// despite `precise`: every world vertex is then uploaded, as computed on the CPU.
+  bool PlacesOnGpu() const;
 
   /// Depth limit of a hierarchy the traversal can descend (root at depth 0).
   static int MaxDepth();
