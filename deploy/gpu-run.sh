@@ -281,7 +281,7 @@ main() {
     FAR_LOAD_SECONDS=12 FAR_CLIENT_CPU_MS=5 FAR_LOAD_METHODS="bvh gpu auto"
   if [ "$smoke" = 1 ]; then
     gpu_tests='ComputeCollider*:PipelineCullingTest.RejectsBadRequests'
-    kernels=(--benchmark_filter='BM_Gpu/1/0' --benchmark_min_time=0.01)
+    kernels=(--benchmark_filter='BM_Gpu/1/0/' --benchmark_min_time=0.01)
     paper=(--scenes leaves --methods bvh,gpu --steps 1 --leaves 10 --leaf-cells 2)
     scaling=(--scenes scaling --scaling-sizes 5000 --methods bvh,gpu --steps 1 --distance none)
     FAR_LOAD_SCENE_ARGS="--kind leaves --frames 3 --leaves 6" FAR_LOAD_CLIENTS=2

@@ -6,11 +6,14 @@
 // The study's step times add the CPU's update, exact tests and answer around this; comparing two
 // builds of the kernels needs only this. Scenes: 0 paper-leaves, 1 scaling-50000,
 // 2 scaling-150000, 3 scaling-1000000; the second argument 1 asks for distance pairs (D a
-// thousandth of the scene's diagonal, as far-study's distance pass). Counters, per step: the
+// thousandth of the scene's diagonal, as far-study's distance pass); the third 1 hands posed
+// objects over with their pose, as the pipeline does (placed on the GPU where the device places
+// exactly), 0 with their world vertices only (uploaded as they move). Counters, per step: the
 // GPU's own times (refit_ms with the uploads; traverse_ms with the object pairs; filter_ms; 0
 // where the driver's timer gives none: llvmpipe's reads about 0 for compute), the CPU's submit_ms
 // and wait_ms (waiting and reading back; read_ms of it the reading), and the pairs: box_pairs
-// (whose boxes met), crossing, undecided (to the CPU's exact predicates).
+// (whose boxes met), crossing, undecided (to the CPU's exact predicates), uploaded_MB and placed
+// (world vertices placed on the GPU).
 //   far_compute_benchmark --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
 //       --benchmark_report_aggregates_only=true [--gl-platform=device]
 
@@ -39,9 +42,12 @@ const char* const kScenes[] = {"paper-leaves", "scaling-50000", "scaling-150000"
                                "scaling-1000000"};
 
 // One object as the gpu method's stage hands it over: world vertices, its hierarchy's topology
-// (TriangleBvh's, built here from those vertices), its world box.
+// (TriangleBvh's, built here from those vertices), its world box, and a posed object's own
+// vertices and pose.
 struct StepObject {
   std::vector<Eigen::Vector3d> p_WV;
+  std::vector<Eigen::Vector3d> p_MV;  // empty: at the identity pose
+  Eigen::Matrix<double, 3, 4> X_WM = Eigen::Matrix<double, 3, 4>::Zero();
   std::vector<far::TriangleIndices> triangles;
   std::vector<far::ComputeNode> nodes;
   std::vector<uint32_t> order;
@@ -74,6 +80,10 @@ far::Result<ComputeScene> MakeComputeScene(const std::string& name) {
     }
     to.triangles = object.mesh.triangles;
     to.moves = object.motion != far::Motion::kStatic;
+    if (X_WO.matrix() != Eigen::Matrix4d::Identity()) {
+      to.p_MV = object.mesh.p_MV;
+      to.X_WM = X_WO.matrix().topRows<3>();
+    }
     far::TriangleBvh bvh;
     if (!bvh.Build(to.p_WV, to.triangles)) {
       return far::MakeError(far::ErrorCode::kInternal, "could not build a hierarchy");
@@ -118,6 +128,9 @@ void BM_Gpu(benchmark::State& state) {
     return;
   }
   const bool distance = state.range(1) != 0;
+  // As the pipeline hands posed objects over (placed on the GPU from their pose where the device
+  // places exactly), or with their world vertices only (uploaded whenever they move).
+  const bool posed = state.range(2) != 0;
   const double max_distance = 0.001 * scene->diagonal;
   const double slack = distance ? far::CullSlack(max_distance, scene->magnitude) : 0.0;
   std::vector<far::ComputeObject> views;
@@ -125,6 +138,11 @@ void BM_Gpu(benchmark::State& state) {
     const StepObject& object = scene->objects[s];
     views.push_back({object.p_WV, object.triangles, object.nodes, object.order, s + 1, 1,
                      far::SweepAndPrune::GrownBox(object.box, slack)});
+    if (posed && !object.p_MV.empty()) {
+      views.back().p_MV = object.p_MV;
+      views.back().X_WM = object.X_WM;
+      views.back().model_key = s + 1;
+    }
   }
   far::ComputeQuery query;
   query.objects = views;
@@ -154,6 +172,8 @@ void BM_Gpu(benchmark::State& state) {
     sums["submit_ms"] += answer->cpu_submit_ms;
     sums["wait_ms"] += answer->cpu_wait_ms;
     sums["read_ms"] += answer->cpu_read_ms;
+    sums["uploaded_MB"] += 1e-6 * static_cast<double>(answer->bytes_uploaded);
+    sums["placed"] += static_cast<double>(answer->vertices_placed);
     sums["box_pairs"] += static_cast<double>(answer->box_pairs);
     sums["crossing"] += static_cast<double>(answer->crossing.size());
     sums["undecided"] += static_cast<double>(answer->undecided.size());
@@ -161,11 +181,13 @@ void BM_Gpu(benchmark::State& state) {
   for (const auto& [name, sum] : sums) {
     state.counters[name] = benchmark::Counter(sum, benchmark::Counter::kAvgIterations);
   }
-  state.SetLabel(std::string(kScenes[state.range(0)]) + (distance ? ", distance" : ""));
+  state.SetLabel(std::string(kScenes[state.range(0)]) + (distance ? ", distance" : "") +
+                 (posed ? "" : ", world vertices uploaded"));
 }
+// Arguments: the scene (kScenes), a distance query, posed objects handed over with their pose.
 BENCHMARK(BM_Gpu)
-    ->ArgsProduct({{0, 1, 2, 3}, {0}})
-    ->Args({0, 1})
+    ->ArgsProduct({{0, 1, 2, 3}, {0}, {1, 0}})
+    ->Args({0, 1, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
