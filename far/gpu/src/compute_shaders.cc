@@ -70,14 +70,7 @@ uniform double u_tiny;  // kTinyWorldCoordinate: smaller magnitudes are flushed 
 
 void main() {
   for (uint item = gl_GlobalInvocationID.x; item < u_count; item += Stride()) {
-    uint r = 0u;
-    uint past = u_placements;
-    while (past - r > 1u) {
-      uint mid = (r + past) / 2u;
-      if (uint(placement[16u * mid + 14u]) <= item) r = mid;
-      else past = mid;
-    }
-    uint at = 16u * r;
+    uint at = 16u * PlacementOf(item, u_placements);
     uint v = uint(placement[at + 12u]) + (item - uint(placement[at + 14u]));
     dvec3 p = dvec3(model[3u * v], model[3u * v + 1u], model[3u * v + 2u]);
     for (uint i = 0u; i < 3u; ++i) {
@@ -114,13 +107,7 @@ uniform uint u_ranges;
 
 void main() {
   for (uint item = gl_GlobalInvocationID.x; item < u_count; item += Stride()) {
-    uint r = 0u;
-    uint past = u_ranges;
-    while (past - r > 1u) {
-      uint mid = (r + past) / 2u;
-      if (ranges[mid].y <= item) r = mid;
-      else past = mid;
-    }
+    uint r = RangeOf(item, u_ranges);
     uint at = ranges[r].x + (item - ranges[r].y);
     uint t = order[at];
     dvec3 a = Vertex(tri_vertex[3u * t]);
@@ -653,14 +640,37 @@ std::string Classify(const std::string& name, const std::string& side) {
   return text;
 }
 
+// The GLSL function `uint NAME(uint item, uint count)`: the last of `count` entries whose first
+// invocation (FIRST, of entry `mid`) is at most `item` (entry 0's is 0), by bisection.
+std::string LastStartingBy(const std::string& name, const std::string& first) {
+  std::string text = R"(
+uint NAME(uint item, uint count) {
+  uint r = 0u;
+  uint past = count;
+  while (past - r > 1u) {
+    uint mid = (r + past) / 2u;
+    if (FIRST <= item) r = mid;
+    else past = mid;
+  }
+  return r;
+}
+)";
+  ReplaceAll(text, "NAME", name);
+  ReplaceAll(text, "FIRST", first);
+  return text;
+}
+
 }  // namespace
 
-std::string PlaceSource() { return Kernel({kModelBinding, kPlacementsBinding}, kPlace); }
+std::string PlaceSource() {
+  return Kernel({kModelBinding, kPlacementsBinding},
+                LastStartingBy("PlacementOf", "uint(placement[16u * mid + 14u])") + kPlace);
+}
 
 std::string TriangleBoxesSource() {
   return Kernel(
       {kPositionsBinding, kTrianglesBinding, kTriBoxesBinding, kOrderBinding, kRangesBinding},
-      kTriangleBoxes);
+      LastStartingBy("RangeOf", "ranges[mid].y") + kTriangleBoxes);
 }
 
 std::string RefitSource() {
