@@ -228,6 +228,13 @@ struct ComputeCollider::Impl {
   // Adds `object` (posed, in slot `at`) to this step's placements, uploading its own vertices
   // first when the model buffer does not hold them; returns the bytes uploaded.
   int64_t AddPlacement(SlotLayout& at, const ComputeObject& object);
+  // Whether `object` (in slot `at`) is placed on the GPU: posed, on a device that places
+  // exactly, with room for its own vertices in the model buffer.
+  bool Placeable(const SlotLayout& at, const ComputeObject& object) const {
+    const size_t end = (size_t{at.vertex_base} + object.p_MV.size()) * sizeof(Eigen::Vector3d);
+    return places_exactly && object.model_key != 0 && object.p_MV.size() == object.p_WV.size() &&
+           end <= buffers[internal::kModelBinding].bytes;
+  }
   // Uploads the placements and dispatches the placement kernel; returns the bytes uploaded.
   int64_t PlaceMoved();
   // Runs the placement kernel on probe vertices and poses and compares its positions with
@@ -393,9 +400,13 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
     for (uint32_t t : object.order) order.push_back(at.triangle_base + t);
   }
   buffer(internal::kPositionsBinding).Reserve(3 * vertices * sizeof(double));
-  // Reserved here, where every slot's model_key starts again at 0: a buffer that grows loses
-  // what it held.
-  if (places_exactly) buffer(internal::kModelBinding).Reserve(3 * vertices * sizeof(double));
+  // Reserved here, where every slot's model_key starts again at 0 (a buffer that grows loses
+  // what it held), and only for a scene with posed objects: an object posed later, beyond what
+  // the buffer holds, is uploaded as its world vertices until the layout changes.
+  const bool posed = std::any_of(objects.begin(), objects.end(),
+                                 [](const ComputeObject& object) { return object.model_key != 0; });
+  if (places_exactly && posed)
+    buffer(internal::kModelBinding).Reserve(3 * vertices * sizeof(double));
   buffer(internal::kTrianglesBinding).Reserve(triangle_vertices.size() * sizeof(uint32_t));
   buffer(internal::kTriBoxesBinding).Reserve(2 * triangles * 4 * sizeof(float));
   buffer(internal::kNodesBinding).Reserve(node_data.size() * 4 * sizeof(uint32_t));
@@ -448,7 +459,7 @@ int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> obj
     }
     at.world_key = objects[s].world_key;
     moved.push_back(s);
-    if (places_exactly && objects[s].model_key != 0 && objects[s].p_MV.size() == vertices.size()) {
+    if (Placeable(at, objects[s])) {
       flush();
       uploaded += AddPlacement(at, objects[s]);
       continue;

@@ -555,6 +555,58 @@ TEST_F(ComputeColliderTest, PosedObjectsPlacedOnTheGpuFindWhatUploadedOnesFind) 
   }
 }
 
+// A layout made without posed objects has no room for their own vertices on the GPU: an
+// object posed later is uploaded as its world vertices, with the same answer, until the layout
+// changes and makes room.
+TEST_F(ComputeColliderTest, ObjectsPosedAfterTheLayoutWasMadeAreUploadedUntilItChanges) {
+  std::mt19937_64 rng(78);
+  constexpr int kObjects = 2;
+  std::vector<Mesh> meshes(kObjects), world(kObjects);
+  std::vector<std::vector<ComputeNode>> nodes(kObjects);
+  std::vector<std::vector<uint32_t>> orders(kObjects);
+  for (int o = 0; o < kObjects; ++o) {
+    for (int t = 0; t < 300; ++t) {  // 900 vertices each: more than the device check's probe
+      const Vector3d c = RandomPoint(rng, 0.5);
+      for (int k = 0; k < 3; ++k) meshes[o].p_MV.push_back(c + RandomPoint(rng, 0.1));
+      meshes[o].triangles.push_back({static_cast<uint32_t>(3 * t), static_cast<uint32_t>(3 * t + 1),
+                                     static_cast<uint32_t>(3 * t + 2)});
+    }
+    ASSERT_TRUE(BuildTopology(meshes[o], nodes[o], orders[o]));
+  }
+  auto collider = ComputeCollider::Create();
+  ASSERT_TRUE(collider.ok());
+  // Step 0 at the identity pose; steps 1 and 2 posed, step 2 with new topology keys.
+  const int64_t expected_placed[] = {0, 0, 2 * 900};
+  for (int step = 0; step < 3; ++step) {
+    std::vector<ComputeObject> objects(kObjects);
+    for (int o = 0; o < kObjects; ++o) {
+      Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
+      if (step > 0)
+        X_WM = Eigen::Translation3d(RandomPoint(rng, 0.2)) *
+               Eigen::AngleAxisd(0.3 * step + o, Vector3d::UnitZ());
+      world[o] = {{}, meshes[o].triangles};
+      for (const Vector3d& p : meshes[o].p_MV) world[o].p_MV.push_back(WorldVertex(X_WM, p));
+      objects[o] = {world[o].p_MV,
+                    world[o].triangles,
+                    nodes[o],
+                    orders[o],
+                    static_cast<uint64_t>(step == 2 ? 10 + o : 1 + o),
+                    static_cast<uint64_t>(10 * step + o + 1),
+                    BoxOf(world[o])};
+      if (step > 0) {
+        objects[o].p_MV = meshes[o].p_MV;
+        objects[o].X_WM = X_WM.matrix().topRows<3>();
+        objects[o].model_key = static_cast<uint64_t>(o + 1);
+      }
+    }
+    ComputeAnswer answer;
+    const std::string where = "step " + std::to_string(step);
+    EXPECT_GT(ExpectEveryIntersectingPairKept(**collider, objects, world, where, &answer), 0)
+        << where;
+    EXPECT_EQ(answer.vertices_placed, expected_placed[step]) << where;
+  }
+}
+
 // The object pairs are sweep-and-prune's for the same boxes and margin: boxes with small integer
 // corners (many touch on a face, an edge or a corner), some empty or not finite, some objects
 // without triangles (paired, never descended), at margins 0 and 1; 2,000 objects make over
