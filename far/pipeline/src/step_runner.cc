@@ -396,6 +396,7 @@ Result<void> Stages::FilterOnGpu() {
                              answer.distance_culled,
                              answer.runs,
                              world_.compute->topologies_rebuilt(),
+                             answer.vertices_placed,
                              answer.gpu_refit_ms,
                              answer.gpu_traverse_ms,
                              answer.gpu_filter_ms};

@@ -510,6 +510,59 @@ TEST_F(PipelineCullingTest, GpuRebuildsADeformableTopologyThatHasGrownLoose) {
               gpu_stage_ms[1] / std::max(steps[1], 1));
 }
 
+// The gpu method places a rigid object that moved on the GPU from its pose: after the first
+// step, the sphere's vertices are placed there and only its pose goes up, while the cloth
+// (deformable, at the identity pose) still uploads its vertices; every step's contacts are
+// exact's.
+TEST_F(PipelineCullingTest, GpuPlacesMovedRigidObjectsFromTheirPoses) {
+  SceneObject cloth;
+  cloth.id = 1;
+  cloth.motion = Motion::kDeformable;
+  constexpr int kSide = 20;
+  for (int i = 0; i < kSide; ++i) {
+    for (int j = 0; j < kSide; ++j)
+      cloth.mesh.p_MV.emplace_back(i / (kSide - 1.0), j / (kSide - 1.0), 0.0);
+  }
+  for (int i = 0; i + 1 < kSide; ++i) {
+    for (int j = 0; j + 1 < kSide; ++j) {
+      const uint32_t v = static_cast<uint32_t>(i * kSide + j);
+      cloth.mesh.triangles.push_back({v, v + kSide, v + 1});
+      cloth.mesh.triangles.push_back({v + 1, v + kSide, v + kSide + 1});
+    }
+  }
+  SceneObject sphere;
+  sphere.id = 2;
+  sphere.motion = Motion::kRigid;
+  sphere.mesh = testing::SphereMesh(Eigen::Vector3d::Zero(), 0.2, 10, 20);
+  const int64_t sphere_vertices = static_cast<int64_t>(sphere.mesh.p_MV.size());
+  Load({cloth, sphere});
+  StepRequest gpu;
+  gpu.method = Method::kGpu;
+  StepRequest exact;
+  exact.method = Method::kExact;
+  for (int step = 0; step < 6; ++step) {
+    Pose pose;
+    pose.rotation =
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.4 * step, Eigen::Vector3d(1, 2, 3).normalized()));
+    pose.translation = Eigen::Vector3d(0.3 + 0.08 * step, 0.5, 0.1 - 0.02 * step);
+    ASSERT_TRUE(pipeline_->SetPose(2, pose).ok());
+    std::vector<Eigen::Vector3d> vertices = cloth.mesh.p_MV;
+    for (auto& p : vertices) p.z() = 0.01 * std::sin(3 * p.x() + step);
+    ASSERT_TRUE(pipeline_->SetVertices(1, vertices).ok());
+    const StepResult result = Run(gpu);
+    const StepResult truth = Run(exact);
+    EXPECT_GT(truth.contacts.size(), 0u) << "step " << step;
+    EXPECT_EQ(result.contacts, truth.contacts) << "step " << step;
+    EXPECT_EQ(result.stats.gpu_filter.vertices_placed, sphere_vertices) << "step " << step;
+    if (step > 0) {
+      // The cloth's vertices, its pose's few bytes and the object boxes: not the sphere's.
+      const int64_t cloth_bytes = kSide * kSide * 24;
+      EXPECT_LT(result.stats.bytes_uploaded, cloth_bytes + sphere_vertices * 24 / 2)
+          << "step " << step;
+    }
+  }
+}
+
 TEST_F(PipelineCullingTest, StagesPastTheDeepestOutputDoNotRun) {
   Load(RandomSoup(9, 6, 10, 2.0, 0.6));
   const std::pair<Output, std::vector<std::string>> cases[] = {

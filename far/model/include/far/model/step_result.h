@@ -77,6 +77,8 @@ struct GpuFilterCounters {
   int traversals = 0;  ///< GPU traversals run (more than 1: its buffers grew)
   /// Deformable objects whose hierarchy topology was rebuilt, refitting having made it loose.
   int topologies_rebuilt = 0;
+  /// World vertices of posed objects placed on the GPU from their poses (not uploaded).
+  int64_t vertices_placed = 0;
   double gpu_refit_ms = 0;     ///< GPU time of the uploads, triangle boxes and refit
   double gpu_traverse_ms = 0;  ///< GPU time of the object pairs and the traversal
   double gpu_filter_ms = 0;    ///< GPU time of the float and fp64 filters
