@@ -302,7 +302,7 @@ main() {
   stage "gpu tests" 90 "${far_env[@]}" "$bin/far_gpu_test" "${tests_args[@]}" \
     --gtest_filter="$gpu_tests"
   [[ "$stages" == *" kernels "* ]] &&
-  stage "gpu kernels" 60 "${far_env[@]}" "$bin/far_compute_benchmark" \
+  stage "gpu kernels" 90 "${far_env[@]}" "$bin/far_compute_benchmark" \
     --gl-platform "$platform" "${kernels[@]}"
   [[ "$stages" == *" paper "* ]] &&
   stage "far-study paper-leaves" 100 "${far_env[@]}" "${study[@]}" "${paper[@]}" \
