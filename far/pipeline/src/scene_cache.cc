@@ -2,10 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "far/offsets/bounding_offset.h"
 
 namespace far::internal {
+
+static_assert(std::is_nothrow_move_constructible_v<CachedObject>,
+              "slots_ grows by moving its objects, not copying them");
 
 std::optional<ObjectSlot> SceneCache::Apply(SceneUpdate update) {
   return std::visit(

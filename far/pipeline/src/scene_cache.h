@@ -23,6 +23,15 @@ namespace far::internal {
 /// One object of a pipeline's scene and what is derived from it. Vertex-derived data is
 /// recomputed only when the vertices change, world data only when the pose or vertices change.
 struct CachedObject {
+  CachedObject() = default;
+  CachedObject(const CachedObject&) = default;
+  CachedObject& operator=(const CachedObject&) = default;
+  // Moves that cannot throw, said so: Eigen's AlignedBox does not say it, and without this a
+  // growing vector of objects (SceneCache::slots_) copied every mesh, vertex and hierarchy it
+  // held instead of moving them.
+  CachedObject(CachedObject&&) noexcept = default;
+  CachedObject& operator=(CachedObject&&) noexcept = default;
+
   uint32_t id = 0;
   ObjectSlot slot{};  ///< its index in every array of a step (object_slot.h)
   Motion motion = Motion::kStatic;
