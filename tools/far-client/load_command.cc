@@ -7,6 +7,7 @@
 #include <iostream>
 #include <map>
 #include <thread>
+#include <utility>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -118,7 +119,7 @@ void RunOneClient(LoadRun& run, int i, LoadStats& mine) {
     }
     backoff = std::chrono::milliseconds(0);
     ++mine.steps_by_method[result->stats.method];
-    mine.last_reason = result->stats.method_reason;
+    mine.last_reason = std::move(result->stats.method_reason);
     mine.latency_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
 }
