@@ -60,8 +60,9 @@ std::string Kernel(std::initializer_list<ComputeBinding> blocks, const std::stri
 // row by row, then its first vertex, its vertices and the invocations before it (integers below
 // 2^32 in doubles: exact), u_placements objects in all. Every product and sum is rounded once,
 // in far::WorldVertex's order: `precise` forbids fusing them into an fma or reordering them, and
-// fp64 add and mul are correctly rounded (IEEE 754), so each position is the very double the
-// CPU's exact predicates read. ComputeCollider checks that on the device before it relies on it.
+// with IEEE binary64 arithmetic (which the fp64 filter assumes too; GLSL itself promises doubles
+// only float's precision) add and mul are correctly rounded, so each position is the very double
+// the CPU's exact predicates read. ComputeCollider checks that on the device before relying on it.
 static_assert(kPositionsBinding == 0, "the placement kernel writes binding 0");
 constexpr const char* kPlace = R"(
 layout(std430, binding = 0) writeonly buffer PlacedPositions { double placed[]; };
