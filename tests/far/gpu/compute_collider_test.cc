@@ -484,6 +484,29 @@ TEST_F(ComputeColliderTest, TheDevicePlacesPosedObjectsExactly) {
   EXPECT_TRUE(collider_->PlacesOnGpu());
 }
 
+// Objects of `triangles[o]` separate random triangles each (corners within `size` of a center
+// within 0.5 of the origin), in their own frames, with their hierarchies' topologies.
+struct RandomObjects {
+  std::vector<Mesh> meshes;
+  std::vector<std::vector<ComputeNode>> nodes;
+  std::vector<std::vector<uint32_t>> orders;
+};
+RandomObjects MakeRandomObjects(std::mt19937_64& rng, const std::vector<int>& triangles,
+                                double size) {
+  RandomObjects made;
+  for (int n : triangles) {
+    Mesh& mesh = made.meshes.emplace_back();
+    for (int t = 0; t < n; ++t) {
+      const Vector3d c = RandomPoint(rng, 0.5);
+      for (int k = 0; k < 3; ++k) mesh.p_MV.push_back(c + RandomPoint(rng, size));
+      mesh.triangles.push_back({static_cast<uint32_t>(3 * t), static_cast<uint32_t>(3 * t + 1),
+                                static_cast<uint32_t>(3 * t + 2)});
+    }
+    EXPECT_TRUE(BuildTopology(mesh, made.nodes.emplace_back(), made.orders.emplace_back()));
+  }
+  return made;
+}
+
 // Rigid objects at random poses over several steps (object 0 holds still on odd steps, object 2
 // changes its own vertices at step 4): placed on the GPU from their poses, the collider gives
 // the very answer another gives when their world vertices are uploaded, finds every
@@ -491,21 +514,10 @@ TEST_F(ComputeColliderTest, TheDevicePlacesPosedObjectsExactly) {
 TEST_F(ComputeColliderTest, PosedObjectsPlacedOnTheGpuFindWhatUploadedOnesFind) {
   std::mt19937_64 rng(77);
   constexpr int kObjects = 5;
-  std::vector<Mesh> meshes(kObjects), world(kObjects);
-  std::vector<std::vector<ComputeNode>> nodes(kObjects);
-  std::vector<std::vector<uint32_t>> orders(kObjects);
-  std::vector<uint64_t> model_key(kObjects), world_key(kObjects);
+  auto [meshes, nodes, orders] = MakeRandomObjects(rng, {40, 70, 100, 130, 160}, 0.15);
+  std::vector<Mesh> world(kObjects);
+  std::vector<uint64_t> model_key = {1, 2, 3, 4, 5}, world_key(kObjects);
   std::vector<Eigen::Isometry3d> X_WM(kObjects);
-  for (int o = 0; o < kObjects; ++o) {
-    for (int t = 0; t < 40 + 30 * o; ++t) {
-      const Vector3d c = RandomPoint(rng, 0.5);
-      for (int k = 0; k < 3; ++k) meshes[o].p_MV.push_back(c + RandomPoint(rng, 0.15));
-      meshes[o].triangles.push_back({static_cast<uint32_t>(3 * t), static_cast<uint32_t>(3 * t + 1),
-                                     static_cast<uint32_t>(3 * t + 2)});
-    }
-    ASSERT_TRUE(BuildTopology(meshes[o], nodes[o], orders[o]));
-    model_key[o] = static_cast<uint64_t>(o + 1);
-  }
   auto placing = ComputeCollider::Create();
   auto uploading = ComputeCollider::Create();
   ASSERT_TRUE(placing.ok() && uploading.ok());
@@ -561,18 +573,9 @@ TEST_F(ComputeColliderTest, PosedObjectsPlacedOnTheGpuFindWhatUploadedOnesFind) 
 TEST_F(ComputeColliderTest, ObjectsPosedAfterTheLayoutWasMadeAreUploadedUntilItChanges) {
   std::mt19937_64 rng(78);
   constexpr int kObjects = 2;
-  std::vector<Mesh> meshes(kObjects), world(kObjects);
-  std::vector<std::vector<ComputeNode>> nodes(kObjects);
-  std::vector<std::vector<uint32_t>> orders(kObjects);
-  for (int o = 0; o < kObjects; ++o) {
-    for (int t = 0; t < 300; ++t) {  // 900 vertices each: more than the device check's probe
-      const Vector3d c = RandomPoint(rng, 0.5);
-      for (int k = 0; k < 3; ++k) meshes[o].p_MV.push_back(c + RandomPoint(rng, 0.1));
-      meshes[o].triangles.push_back({static_cast<uint32_t>(3 * t), static_cast<uint32_t>(3 * t + 1),
-                                     static_cast<uint32_t>(3 * t + 2)});
-    }
-    ASSERT_TRUE(BuildTopology(meshes[o], nodes[o], orders[o]));
-  }
+  // 900 vertices each: more than the device check's probe left room for.
+  const auto [meshes, nodes, orders] = MakeRandomObjects(rng, {300, 300}, 0.1);
+  std::vector<Mesh> world(kObjects);
   auto collider = ComputeCollider::Create();
   ASSERT_TRUE(collider.ok());
   // Step 0 at the identity pose; steps 1 and 2 posed, step 2 with new topology keys.
