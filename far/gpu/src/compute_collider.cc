@@ -225,6 +225,11 @@ struct ComputeCollider::Impl {
   }
   Result<int64_t> EnsureLayout(std::span<const ComputeObject> objects);
   int64_t UploadVertices(std::span<const ComputeObject> objects);
+  // The model buffer for `vertices` (a new layout's), if any of `objects` is posed. Reserved
+  // only with a new layout, where every slot's model_key starts again at 0 (a buffer that grows
+  // loses what it held): an object posed later, beyond what the buffer holds, is uploaded as its
+  // world vertices until the layout changes.
+  void ReserveModel(std::span<const ComputeObject> objects, size_t vertices);
   // Adds `object` (posed, in slot `at`) to this step's placements, uploading its own vertices
   // first when the model buffer does not hold them; returns the bytes uploaded.
   int64_t AddPlacement(SlotLayout& at, const ComputeObject& object);
@@ -400,17 +405,9 @@ Result<int64_t> ComputeCollider::Impl::EnsureLayout(std::span<const ComputeObjec
     for (uint32_t t : object.order) order.push_back(at.triangle_base + t);
   }
   buffer(internal::kPositionsBinding).Reserve(3 * vertices * sizeof(double));
-  // Reserved here, where every slot's model_key starts again at 0 (a buffer that grows loses
-  // what it held), and only for a scene with posed objects: an object posed later, beyond what
-  // the buffer holds, is uploaded as its world vertices until the layout changes.
-  const bool posed = std::any_of(objects.begin(), objects.end(),
-                                 [](const ComputeObject& object) { return object.model_key != 0; });
-  if (places_exactly && posed)
-    buffer(internal::kModelBinding).Reserve(3 * vertices * sizeof(double));
-  buffer(internal::kTrianglesBinding).Reserve(triangle_vertices.size() * sizeof(uint32_t));
+  ReserveModel(objects, vertices);
+  // (The triangles, nodes and order are reserved by their uploads below.)
   buffer(internal::kTriBoxesBinding).Reserve(2 * triangles * 4 * sizeof(float));
-  buffer(internal::kNodesBinding).Reserve(node_data.size() * 4 * sizeof(uint32_t));
-  buffer(internal::kOrderBinding).Reserve(order.size() * sizeof(uint32_t));
   buffer(internal::kNodeBoxesBinding).Reserve(2 * nodes * 4 * sizeof(float));
   buffer(internal::kPcsBitsBinding).Reserve((triangles + 31) / 32 * sizeof(uint32_t));
   int64_t uploaded = Upload(internal::kTrianglesBinding, triangle_vertices.data(),
@@ -474,6 +471,13 @@ int64_t ComputeCollider::Impl::UploadVertices(std::span<const ComputeObject> obj
   }
   flush();
   return uploaded;
+}
+
+void ComputeCollider::Impl::ReserveModel(std::span<const ComputeObject> objects, size_t vertices) {
+  const bool posed = std::any_of(objects.begin(), objects.end(),
+                                 [](const ComputeObject& object) { return object.model_key != 0; });
+  if (places_exactly && posed)
+    buffer(internal::kModelBinding).Reserve(3 * vertices * sizeof(double));
 }
 
 int64_t ComputeCollider::Impl::AddPlacement(SlotLayout& at, const ComputeObject& object) {
